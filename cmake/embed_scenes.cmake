@@ -1,0 +1,12 @@
+# Writes a C++ file holding every scenes/*.json as a raw string, keyed by file stem.
+file(GLOB files ${DIR}/*.json)
+list(SORT files)
+set(body "// Generated from scenes/*.json by cmake/embed_scenes.cmake. Do not edit.\n#include <string_view>\n#include <utility>\n#include <vector>\nnamespace penumbra::detail {\nconst std::vector<std::pair<std::string_view, std::string_view>>& embeddedScenes() {\n  static const std::vector<std::pair<std::string_view, std::string_view>> scenes = {\n")
+foreach(f ${files})
+  get_filename_component(stem ${f} NAME_WE)
+  file(READ ${f} text)
+  string(APPEND body "    {\"${stem}\", R\"penumbra_json(${text})penumbra_json\"},\n")
+endforeach()
+string(APPEND body "  };\n  return scenes;\n}\n}  // namespace penumbra::detail\n")
+file(WRITE ${OUT}.tmp "${body}")
+file(COPY_FILE ${OUT}.tmp ${OUT} ONLY_IF_DIFFERENT)

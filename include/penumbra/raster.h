@@ -1,0 +1,47 @@
+// The software rasterizer's products: the camera G-buffer and light-space depth + object-id maps.
+// The rasterizer itself (src/raster/rasterizer.h) is internal; these are what techniques consume.
+#pragma once
+
+#include <cstdint>
+
+#include "penumbra/gbuffer.h"
+#include "penumbra/image.h"
+#include "penumbra/light.h"
+#include "penumbra/math.h"
+#include "penumbra/scene.h"
+
+namespace penumbra {
+
+// Rasterizes the camera view of `scene` into a width x height G-buffer (pixel centres sampled).
+GBuffer renderGBuffer(const Scene& scene, int width, int height);
+
+// The scene seen from the light's centre sample: a size x size map of light-space depth and object
+// id. Local lights use a perspective projection, directional lights an orthographic one; either is
+// fitted to the scene bounds so every object lands in the map.
+struct LightMap {
+  int size = 0;
+  bool orthographic = false;
+  Vec3 wsOrigin{0.0f};  //!< light-space origin: the centre sample (directional: behind the scene)
+  Frame lsFrame;        //!< light-space axes in world space; +z along the light's axis
+  // Projection of light-space (x, y) to map coordinates, one of:
+  //  perspective: s = size/2 * (1 + x / (z tanHalfFov)), t = size/2 * (1 - y / (z tanHalfFov))
+  //  orthographic: s = size/2 * (1 + x / halfWidth),    t = size/2 * (1 - y / halfWidth)
+  float tanHalfFov = 1.0f;  //!< perspective
+  float halfWidth = 1.0f;   //!< orthographic, world units
+  float zNear = 0.0f, zFar = 1.0f;  //!< light-space depth range that holds the scene
+  Image<float> lsDepth;     //!< light-space depth z (distance along +z); kInfinity where empty
+  Image<int32_t> objectId;  //!< kNoObject where empty
+
+  Vec3 lightFromRender(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
+  // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
+  // light-space depth z.
+  Vec3 project(const Vec3& wsP) const;
+  // World point at map coordinates (s, t) and light-space depth z (the inverse of project).
+  Vec3 unproject(float s, float t, float z) const;
+  // Size of one texel in world units at light-space depth z.
+  float texelWorldSize(float z) const;
+};
+
+LightMap renderLightMap(const Scene& scene, const Light& light, int size);
+
+}  // namespace penumbra

@@ -1,0 +1,29 @@
+// Scene files (docs/scene-format.md) and the built-in scenes (scenes/*.json, compiled in).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "penumbra/scene.h"
+
+namespace penumbra {
+
+struct BuiltinScene {
+  std::string name;
+  std::string description;  //!< one line, from the scene's "description"
+};
+
+std::vector<BuiltinScene> builtinScenes();
+
+// A built-in scene name or a path to a JSON scene file. Throws Error naming the file and field.
+Scene loadScene(const std::string& nameOrPath);
+// Parses scene JSON text; `source` names it in messages, `baseDir` resolves relative mesh paths.
+Scene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir = ".");
+// Writes a scene as JSON that parseScene reads back to the same scene (meshes inline).
+std::string sceneToJson(const Scene& scene);
+
+// Imports a mesh file through assimp (OBJ, PLY, glTF/GLB, STL, ...), all meshes merged, in the
+// file's own coordinates. Throws Error naming the file on failure or when it holds no triangles.
+Mesh importMesh(const std::string& path);
+
+}  // namespace penumbra

@@ -1,0 +1,36 @@
+#include "penumbra/scene.h"
+
+namespace penumbra {
+
+Bounds3 Mesh::bounds() const {
+  Bounds3 b;
+  for (const Vec3& p : positions) b.extend(p);
+  return b;
+}
+
+Vec3 Mesh::faceNormal(size_t i) const {
+  const glm::uvec3& t = triangles[i];
+  const Vec3 n = glm::cross(positions[t.y] - positions[t.x], positions[t.z] - positions[t.x]);
+  const float len = glm::length(n);
+  return len > 0.0f ? n / len : Vec3(0.0f);
+}
+
+Bounds3 Scene::bounds() const {
+  Bounds3 b;
+  for (const Object& o : objects) b.extend(o.mesh.bounds());
+  return b;
+}
+
+size_t Scene::triangleCount() const {
+  size_t n = 0;
+  for (const Object& o : objects) n += o.mesh.triangleCount();
+  return n;
+}
+
+const Object* Scene::findObject(int32_t id) const {
+  for (const Object& o : objects)
+    if (o.id == id) return &o;
+  return nullptr;
+}
+
+}  // namespace penumbra
