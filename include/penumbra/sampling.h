@@ -37,9 +37,17 @@ class CmjSampler {
   }
   uint32_t count() const { return count_; }
 
-  Vec2 sample(uint32_t index, uint32_t pattern) const {
-    const uint32_t N = m_ * n_;
-    const uint32_t s = permute(index, N, pattern * 0x51633e2du);
+  Vec2 sample(uint32_t index, uint32_t pattern) const { return sampleInStratum(stratum(index, pattern), pattern); }
+
+  // The m x n grid the samples are stratified on: m columns in x, n rows in y.
+  uint32_t columns() const { return m_; }
+  uint32_t rows() const { return n_; }
+  // The grid cell of sample `index` (row-major: column s % m, row s / m), and the sample of a cell:
+  // sample(i, p) == sampleInStratum(stratum(i, p), p). When count == m*n every cell holds exactly one
+  // sample, so a caller that needs the whole set may visit the cells in any order (the reference
+  // visits them in compact tiles so that each ray packet aims at one small patch of the light).
+  uint32_t stratum(uint32_t index, uint32_t pattern) const { return permute(index, m_ * n_, pattern * 0x51633e2du); }
+  Vec2 sampleInStratum(uint32_t s, uint32_t pattern) const {
     const uint32_t sx = permute(s % m_, m_, pattern * 0x68bc21ebu);
     const uint32_t sy = permute(s / m_, n_, pattern * 0x02e5be93u);
     const float jx = randomFloat(s, pattern * 0x967a889bu);

@@ -1,0 +1,108 @@
+// Image files: shaded images as 8-bit sRGB PNG (stb_image_write), visibility buffers as
+// single-channel 32-bit float EXR (OpenEXR, channel "V", so V round-trips bit-exactly).
+// sRGB encoding is the IEC 61966-2-1 piecewise curve; linear values are clamped to [0, 1] first
+// (an exposure-normalized image clips only its few brightest pixels; see shade.h).
+#include "penumbra/image_io.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+
+#include "penumbra/error.h"
+
+namespace penumbra {
+
+namespace {
+
+uint8_t toByte(float unit) {
+  const float c = std::isnan(unit) ? 0.0f : std::clamp(unit, 0.0f, 1.0f);
+  return static_cast<uint8_t>(std::lround(c * 255.0f));
+}
+
+float srgbEncode(float linear) {
+  const float c = std::isnan(linear) ? 0.0f : std::clamp(linear, 0.0f, 1.0f);
+  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+void requireNonEmpty(const std::string& path, int width, int height) {
+  if (width <= 0 || height <= 0) fail("cannot write '{}': the image is empty ({}x{})", path, width, height);
+}
+
+void writePngBytes(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& bytes) {
+  errno = 0;
+  if (!stbi_write_png(path.c_str(), width, height, channels, bytes.data(), width * channels))
+    fail("cannot write PNG '{}': {} (check that the directory exists and is writable)", path,
+         errno ? std::strerror(errno) : "write failed");
+}
+
+}  // namespace
+
+void writePng(const std::string& path, const Image<Vec3>& linearRgb) {
+  requireNonEmpty(path, linearRgb.width(), linearRgb.height());
+  std::vector<uint8_t> bytes(linearRgb.size() * 3);
+  for (size_t i = 0; i < linearRgb.size(); ++i)
+    for (int c = 0; c < 3; ++c) bytes[3 * i + c] = toByte(srgbEncode(linearRgb[i][c]));
+  writePngBytes(path, linearRgb.width(), linearRgb.height(), 3, bytes);
+}
+
+void writePngGray(const std::string& path, const Image<float>& values) {
+  requireNonEmpty(path, values.width(), values.height());
+  std::vector<uint8_t> bytes(values.size());
+  for (size_t i = 0; i < values.size(); ++i) bytes[i] = toByte(values[i]);
+  writePngBytes(path, values.width(), values.height(), 1, bytes);
+}
+
+void writeExr(const std::string& path, const Image<float>& values) {
+  requireNonEmpty(path, values.width(), values.height());
+  try {
+    Imf::Header header(values.width(), values.height());
+    header.channels().insert("V", Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer frameBuffer;
+    // OpenEXR only reads through the slice; the cast drops const for its char* API.
+    char* base = reinterpret_cast<char*>(const_cast<float*>(values.data()));
+    frameBuffer.insert("V", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * values.width()));
+    file.setFrameBuffer(frameBuffer);
+    file.writePixels(values.height());
+  } catch (const std::exception& e) {
+    fail("cannot write EXR '{}': {} (check that the directory exists and is writable)", path, e.what());
+  }
+}
+
+Image<float> readExr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    if (!file.header().channels().findChannel("V"))
+      fail("cannot read EXR '{}': it has no channel \"V\" (penumbra writes visibility as channel \"V\")", path);
+    const int width = window.max.x - window.min.x + 1;
+    const int height = window.max.y - window.min.y + 1;
+    Image<float> values(width, height, 0.0f);
+    Imf::FrameBuffer frameBuffer;
+    // The slice base is offset so that the data window's first pixel lands at values(0, 0).
+    char* base = reinterpret_cast<char*>(values.data()) -
+                 (static_cast<std::ptrdiff_t>(window.min.x) + static_cast<std::ptrdiff_t>(window.min.y) * width) *
+                     static_cast<std::ptrdiff_t>(sizeof(float));
+    frameBuffer.insert("V", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * width));
+    file.setFrameBuffer(frameBuffer);
+    file.readPixels(window.min.y, window.max.y);
+    return values;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail("cannot read EXR '{}': {}", path, e.what());
+  }
+}
+
+}  // namespace penumbra
