@@ -1,0 +1,120 @@
+// renderGBuffer (include/penumbra/raster.h): the camera G-buffer by rasterization.
+//
+// The projection is the camera's own: Camera::cameraFromRender and the x/y rows of
+// Camera::clipFromCamera, so pixel (x, y) sees what Camera::generateRay(x + 0.5, y + 0.5) sees, up
+// to float rounding and the rasterizer's 1/256-pixel vertex snapping (which can only move
+// silhouette pixels). The depth row is replaced by a reversed, infinite-far key (z_clip = -zNear,
+// so the key -zNear / viewDepth keeps float's relative precision at every depth); zNear is fitted to
+// the scene bounds: just in front of the nearest bounds corner when the camera is outside the
+// bounds, so nothing in front of the camera is lost, and 1e-6 of the farthest corner's depth when
+// the camera is inside them (only geometry closer than that is clipped).
+//
+// Per pixel: world position and shading normal interpolated perspective-correctly (vertex normals
+// where the mesh has one per vertex, else the face normal), the face normal, object and triangle
+// id, and the view depth (clip w). Both normals are turned towards the camera together, following
+// the geometric normal (as traceGBuffer does), so that at a smooth silhouette, where the
+// interpolated normal may lean slightly away, it still describes the visible side.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/raster.h"
+#include "rasterizer.h"
+
+namespace penumbra {
+
+GBuffer renderGBuffer(const Scene& scene, int width, int height) {
+  if (width < 1 || height < 1 || width > raster::kMaxImageSize || height > raster::kMaxImageSize)
+    fail("renderGBuffer: image size must be within 1..{} pixels per side (got {} x {})", raster::kMaxImageSize,
+         width, height);
+  const Camera& camera = scene.camera;
+  camera.validate();
+  GBuffer g(width, height);
+  const Bounds3 bounds = scene.bounds();
+  if (bounds.empty()) return g;
+
+  const Mat4 cameraFromRender = camera.cameraFromRender();
+  float minDepth = kInfinity, maxDepth = -kInfinity;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 corner((i & 1) ? bounds.upper.x : bounds.lower.x, (i & 2) ? bounds.upper.y : bounds.lower.y,
+                      (i & 4) ? bounds.upper.z : bounds.lower.z);
+    const float depth = -(cameraFromRender * Vec4(corner, 1.0f)).z;
+    minDepth = std::min(minDepth, depth);
+    maxDepth = std::max(maxDepth, depth);
+  }
+  if (!(maxDepth > 0.0f)) return g;  // the whole scene is behind the camera
+  const float zNear = std::max(minDepth * 0.999f, maxDepth * 1e-6f);
+  const float zFar = std::max(maxDepth * 1.001f, zNear * 2.0f);  // only for clipFromCamera's x/y rows
+  Mat4 clipFromCamera = camera.clipFromCamera(static_cast<float>(width) / static_cast<float>(height), zNear, zFar);
+  clipFromCamera[2][2] = 0.0f;  // z_clip = -zNear: reversed, infinite-far depth key
+  clipFromCamera[3][2] = -zNear;
+  const Mat4 clipFromRender = clipFromCamera * cameraFromRender;
+
+  // Flatten the scene: one vertex array, triangles indexing into it, payload = object index.
+  size_t vertexCount = 0, triangleCount = 0;
+  std::vector<size_t> firstVertex, firstTriangle;
+  for (const Object& object : scene.objects) {
+    firstVertex.push_back(vertexCount);
+    firstTriangle.push_back(triangleCount);
+    vertexCount += object.mesh.positions.size();
+    triangleCount += object.mesh.triangleCount();
+  }
+  std::vector<Vec4> clip(vertexCount);
+  std::vector<glm::uvec3> triangles(triangleCount);
+  std::vector<int32_t> objectIndex(triangleCount);
+  std::vector<Vec3> faceNormals(triangleCount);  // once per triangle rather than per pixel
+  tbb::parallel_for(size_t(0), scene.objects.size(), [&](size_t o) {
+    const Mesh& mesh = scene.objects[o].mesh;
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+      clip[firstVertex[o] + i] = clipFromRender * Vec4(mesh.positions[i], 1.0f);
+    const auto offset = static_cast<uint32_t>(firstVertex[o]);
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      triangles[firstTriangle[o] + t] = mesh.triangles[t] + glm::uvec3(offset);
+      objectIndex[firstTriangle[o] + t] = static_cast<int32_t>(o);
+      faceNormals[firstTriangle[o] + t] = mesh.faceNormal(t);
+    }
+  });
+
+  raster::RasterInput input;
+  input.width = width;
+  input.height = height;
+  input.clipPositions = clip;
+  input.triangles = triangles;
+  // Written straight from the rasterizer's resolved tiles: no intermediate attribute images.
+  raster::rasterize(input, [&](const raster::TileSamples& samples) {
+    for (int j = 0; j < samples.height; ++j)
+      for (int i = 0; i < samples.width; ++i) {
+        const int k = j * raster::kTileSize + i;
+        const int32_t triangle = samples.triangle[k];
+        if (triangle < 0) continue;
+        const int x = samples.x0 + i, y = samples.y0 + j;
+        const auto o = static_cast<size_t>(objectIndex[static_cast<size_t>(triangle)]);
+        const Object& object = scene.objects[o];
+        const Mesh& mesh = object.mesh;
+        const size_t local = static_cast<size_t>(triangle) - firstTriangle[o];
+        const glm::uvec3& t = mesh.triangles[local];
+        const Vec3& b = samples.barycentrics[k];
+        const Vec3 wsP = b.x * mesh.positions[t.x] + b.y * mesh.positions[t.y] + b.z * mesh.positions[t.z];
+        Vec3 ng = faceNormals[static_cast<size_t>(triangle)];
+        Vec3 ns = ng;
+        if (!mesh.normals.empty() && mesh.normals.size() == mesh.positions.size()) {
+          const Vec3 n = b.x * mesh.normals[t.x] + b.y * mesh.normals[t.y] + b.z * mesh.normals[t.z];
+          const float len = glm::length(n);
+          if (len > 0.0f && std::isfinite(len)) ns = n / len;
+        }
+        if (glm::dot(ng, wsP - camera.position) > 0.0f) {
+          ng = -ng;
+          ns = -ns;
+        }
+        g.wsPosition(x, y) = wsP;
+        g.wsNormal(x, y) = ns;
+        g.wsGeometricNormal(x, y) = ng;
+        g.objectId(x, y) = object.id;
+        g.triangleId(x, y) = static_cast<int32_t>(local);
+        g.csDepth(x, y) = samples.clipW[k];
+      }
+  });
+  return g;
+}
+
+}  // namespace penumbra
