@@ -1,0 +1,53 @@
+// The `reference` technique (DESIGN.md, "Reference"): V estimated by stratified Monte Carlo ray
+// tracing over the light's emitting area with Embree occlusion rays, deterministic for a seed, with
+// a per-pixel standard error. Declared here (rather than only registered) so that callers can read
+// the standard-error image of the last run.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "penumbra/image.h"
+#include "penumbra/light.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/technique.h"
+
+namespace penumbra {
+
+struct ReferenceOptions {
+  uint32_t samplesPerPixel = 256;  //!< shadow rays per pixel, >= 1 (CMJ-stratified over the light)
+  uint64_t seed = 1;               //!< selects the sample patterns; pattern of pixel i = hashCombine(seed, i)
+};
+
+class ReferenceTechnique final : public ShadowTechnique {
+ public:
+  explicit ReferenceTechnique(const ReferenceOptions& options);
+
+  std::string_view name() const override { return "reference"; }
+  void prepare(const Scene& scene, const Light& light) override;
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override;
+  PassTimings timings() const override { return timings_; }
+  // "rays", "rays_per_second", "mean_std_error", "max_std_error" (the last two over pixels that hit
+  // geometry) of the last visibility() pass.
+  std::vector<std::pair<std::string, double>> stats() const override;
+
+  // Per-pixel standard error of V of the last visibility() pass (0 where the pixel sees nothing):
+  // the sample standard deviation of the weighted estimate over sqrt(spp). For stratified samples
+  // this overestimates the true error, so it is a conservative bound.
+  const Image<float>& standardError() const { return stdError_; }
+  const ReferenceOptions& options() const { return options_; }
+
+ private:
+  ReferenceOptions options_;
+  std::unique_ptr<RayScene> rays_;
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
+  Image<float> stdError_;
+  PassTimings timings_;
+  double rayCount_ = 0.0;
+  double meanStdError_ = 0.0;
+  double maxStdError_ = 0.0;
+};
+
+}  // namespace penumbra

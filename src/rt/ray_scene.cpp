@@ -1,0 +1,208 @@
+// RayScene: the Embree 3 wrapper of include/penumbra/ray_scene.h. One device and one scene per
+// RayScene, one triangle geometry per object whose geometry id is the object's index, so a hit maps
+// to (object id, triangle index) without a lookup table keyed by Embree's own numbering.
+//
+// The scene is built with RTC_SCENE_FLAG_ROBUST (Embree's watertight, conservative traversal: no
+// rays slip through shared edges of a closed mesh, at a small cost in speed) and high build quality
+// (more build time for faster rays: the reference traces billions of rays against one BVH).
+// Embree's error callback only records the message; it is turned into a penumbra::Error after each
+// call that can fail, because throwing through Embree's C frames is not allowed.
+// Single precision throughout, as Embree is.
+#include "penumbra/ray_scene.h"
+
+#include <algorithm>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "penumbra/error.h"
+
+namespace penumbra {
+
+struct RayScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::vector<int32_t> objectIds;  // geometry id (= object index) -> object id
+
+  std::mutex errorMutex;
+  std::string firstError;  // first message reported by Embree since the last check
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  static void onError(void* userPtr, RTCError code, const char* message) {
+    auto* self = static_cast<Impl*>(userPtr);
+    std::lock_guard<std::mutex> lock(self->errorMutex);
+    if (self->firstError.empty()) self->firstError = fmt::format("{} (code {})", message ? message : "no message", static_cast<int>(code));
+  }
+
+  // Throws the recorded Embree error, if any, naming what was being done.
+  void check(std::string_view what) {
+    const RTCError code = device ? rtcGetDeviceError(device) : RTC_ERROR_UNKNOWN;
+    std::string message;
+    {
+      std::lock_guard<std::mutex> lock(errorMutex);
+      message.swap(firstError);
+    }
+    if (code != RTC_ERROR_NONE || !message.empty())
+      fail("ray tracing (Embree): {} failed: {}", what, message.empty() ? fmt::format("error code {}", static_cast<int>(code)) : message);
+  }
+};
+
+namespace {
+
+// Embree's single-ray layout from ours. mask = all bits so no geometry masking applies.
+inline void fillRay(RTCRay& r, const Ray& ray) {
+  r.org_x = ray.origin.x;
+  r.org_y = ray.origin.y;
+  r.org_z = ray.origin.z;
+  r.tnear = ray.tMin;
+  r.dir_x = ray.direction.x;
+  r.dir_y = ray.direction.y;
+  r.dir_z = ray.direction.z;
+  r.time = 0.0f;
+  r.tfar = ray.tMax;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+}  // namespace
+
+RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  Impl& im = *impl_;
+  im.device = rtcNewDevice(nullptr);
+  if (!im.device) fail("ray tracing (Embree): could not create a device (error code {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+  rtcSetDeviceErrorFunction(im.device, &Impl::onError, &im);
+
+  im.scene = rtcNewScene(im.device);
+  im.check("creating the scene");
+  rtcSetSceneFlags(im.scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(im.scene, RTC_BUILD_QUALITY_HIGH);
+
+  im.objectIds.reserve(scene.objects.size());
+  for (size_t index = 0; index < scene.objects.size(); ++index) {
+    const Object& object = scene.objects[index];
+    const Mesh& mesh = object.mesh;
+    im.objectIds.push_back(object.id);
+    if (mesh.triangles.empty() || mesh.positions.empty()) continue;  // nothing to hit; keeps ids = indices
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const glm::uvec3& tri = mesh.triangles[t];
+      if (tri.x >= mesh.positions.size() || tri.y >= mesh.positions.size() || tri.z >= mesh.positions.size())
+        fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name, t,
+             std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
+    }
+
+    RTCGeometry geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // rtcSetNewGeometryBuffer pads the buffer so Embree's 16-byte loads of the last vertex stay inside it.
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+    auto* indices = static_cast<uint32_t*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangles.size()));
+    if (!vertices || !indices) {
+      rtcReleaseGeometry(geom);
+      im.check(fmt::format("allocating the buffers of object '{}'", object.name));
+      fail("ray tracing (Embree): could not allocate the buffers of object '{}'", object.name);
+    }
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      vertices[3 * i + 0] = mesh.positions[i].x;
+      vertices[3 * i + 1] = mesh.positions[i].y;
+      vertices[3 * i + 2] = mesh.positions[i].z;
+    }
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+      indices[3 * i + 0] = mesh.triangles[i].x;
+      indices[3 * i + 1] = mesh.triangles[i].y;
+      indices[3 * i + 2] = mesh.triangles[i].z;
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(im.scene, geom, static_cast<unsigned>(index));
+    rtcReleaseGeometry(geom);  // the scene holds its own reference
+    im.check(fmt::format("adding object '{}'", object.name));
+  }
+  // Degenerate (zero-area) and non-finite triangles are dropped by Embree's builder; they cannot be hit.
+  rtcCommitScene(im.scene);
+  im.check("building the BVH");
+}
+
+RayScene::~RayScene() = default;
+RayScene::RayScene(RayScene&&) noexcept = default;
+RayScene& RayScene::operator=(RayScene&&) noexcept = default;
+
+bool RayScene::occluded(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay r;
+  fillRay(r, ray);
+  rtcOccluded1(impl_->scene, &context, &r);
+  return r.tfar < 0.0f;  // Embree sets tfar to -inf on an occlusion
+}
+
+void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
+  if (count <= 0) return;
+  if (count > 16) fail("internal: occluded16 takes at most 16 rays (got {})", count);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  // The caller groups rays that share an origin region and direction cone (one pixel's shadow rays).
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[16];
+  RTCRay16 packet;  // 64-byte aligned by its declaration
+  for (int i = 0; i < 16; ++i) {
+    // Inactive lanes copy ray 0, so they hold valid numbers; the mask keeps Embree from tracing them.
+    const Ray& ray = rays[i < count ? i : 0];
+    valid[i] = i < count ? -1 : 0;
+    packet.org_x[i] = ray.origin.x;
+    packet.org_y[i] = ray.origin.y;
+    packet.org_z[i] = ray.origin.z;
+    packet.tnear[i] = ray.tMin;
+    packet.dir_x[i] = ray.direction.x;
+    packet.dir_y[i] = ray.direction.y;
+    packet.dir_z[i] = ray.direction.z;
+    packet.time[i] = 0.0f;
+    packet.tfar[i] = ray.tMax;
+    packet.mask[i] = 0xffffffffu;
+    packet.id[i] = static_cast<unsigned>(i);
+    packet.flags[i] = 0;
+  }
+  rtcOccluded16(valid, impl_->scene, &context, &packet);
+  for (int i = 0; i < count; ++i) out[i] = packet.tfar[i] < 0.0f;
+}
+
+std::optional<RayHit> RayScene::intersect(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  fillRay(rh.ray, ray);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  RayHit hit;
+  hit.t = rh.ray.tfar;
+  hit.objectId = impl_->objectIds[rh.hit.geomID];
+  hit.triangleId = static_cast<int32_t>(rh.hit.primID);
+  hit.barycentrics = Vec2(rh.hit.u, rh.hit.v);
+  // Embree's Ng is (v1 - v0) x (v2 - v0), unnormalized: the winding's normal, as Mesh::faceNormal.
+  const Vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  const float len = glm::length(ng);
+  hit.wsGeometricNormal = len > 0.0f ? ng / len : Vec3(0.0f);
+  return hit;
+}
+
+float shadowRayEpsilon(const Bounds3& sceneBounds) {
+  // A float position of magnitude M is exact to about M * 2^-23 ~ 1.2e-7 M, and a hit point
+  // interpolated from three vertices to a few times that. 1e-4 of the scene's scale is ~1000 such
+  // ulps (no self-shadowing "acne" even on large, grazing receivers) while occluders are far thicker
+  // than 1e-4 of the scene (a 10 m scene would need a 1 mm gap or plate to leak). The scale is the
+  // larger of the scene's size and its distance from the origin, since float spacing grows with |p|.
+  if (sceneBounds.empty()) return 1e-4f;
+  const Vec3 farCorner = glm::max(glm::abs(sceneBounds.lower), glm::abs(sceneBounds.upper));
+  const float scale = std::max(sceneBounds.radius(), std::max(farCorner.x, std::max(farCorner.y, farCorner.z)));
+  return 1e-4f * std::max(scale, 1e-6f);
+}
+
+}  // namespace penumbra

@@ -1,0 +1,92 @@
+// `raytraced-hard`: one shadow ray per pixel to the light's centre sample — the exact hard shadow of
+// a point light there (the "shadow volumes" row of Lawlor 2006, Fig. 10). V is 0 or 1; it is the
+// baseline that shows how much of a soft shadow a single-sample technique must invent.
+// Rays start off the surface and stop short of the centre exactly as the reference's do
+// (src/rt/shadow_ray.h), so the two agree wherever the reference is 0 or 1.
+#include <algorithm>
+#include <memory>
+#include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "rt/shadow_ray.h"
+
+namespace penumbra {
+namespace {
+
+class RaytracedHardTechnique final : public ShadowTechnique {
+ public:
+  std::string_view name() const override { return "raytraced-hard"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    // Every light shape has a centre sample, so every shape is supported.
+    timings_ = {};
+    Timer timer;
+    rays_ = std::make_unique<RayScene>(scene);
+    light_ = light;
+    epsilon_ = shadowRayEpsilon(scene.bounds());
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (!rays_ || !light_) fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
+    Timer timer;
+    const int width = gbuffer.width(), height = gbuffer.height();
+    v = Image<float>(width, height, 1.0f);
+    const Light& light = *light_;
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+      Ray packet[16];
+      int xs[16];
+      bool occluded[16];
+      for (int y = range.begin(); y < range.end(); ++y) {
+        // Neighbouring pixels of a row aim at the same point: a coherent packet.
+        int count = 0;
+        auto flush = [&] {
+          rays_->occluded16(packet, count, occluded);
+          for (int i = 0; i < count; ++i) v(xs[i], y) = occluded[i] ? 0.0f : 1.0f;
+          count = 0;
+        };
+        for (int x = 0; x < width; ++x) {
+          if (!gbuffer.hit(x, y)) continue;
+          const Vec3 wsP = gbuffer.wsPosition(x, y);
+          const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon_);
+          packet[count] = rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon_);
+          xs[count++] = x;
+          if (count == 16) flush();
+        }
+        if (count > 0) flush();
+      }
+    });
+    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
+                                         [](const auto& p) { return p.first == "visibility"; }),
+                          timings_.passes.end());
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  std::unique_ptr<RayScene> rays_;
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
+  PassTimings timings_;
+};
+
+}  // namespace
+
+TechniqueInfo raytracedHardTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "raytraced-hard";
+  info.summary = "one shadow ray per pixel to the light's centre: the exact hard shadow";
+  info.source = "baseline (the \"shadow volumes\" row of Lawlor 2006)";
+  info.create = [](const Params&) -> std::unique_ptr<ShadowTechnique> { return std::make_unique<RaytracedHardTechnique>(); };
+  return info;
+}
+
+}  // namespace penumbra

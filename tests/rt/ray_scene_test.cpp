@@ -1,0 +1,210 @@
+// Tests of the Embree wrapper (src/rt/ray_scene.cpp): closest hits and occlusion on quads whose
+// answers are known exactly (t, object id, triangle id, barycentrics, normal), packets against
+// single rays, the empty scene, degenerate triangles, bad indices, and the shadow-ray epsilon.
+#include <gtest/gtest.h>
+
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/sampling.h"
+#include "rt/rt_test_scenes.h"
+
+namespace penumbra {
+namespace {
+
+using testing::makeObject;
+using testing::makeScene;
+using testing::quadMesh;
+
+Ray makeRay(const Vec3& o, const Vec3& d, float tMin = 0.0f, float tMax = kInfinity) {
+  Ray r;
+  r.origin = o;
+  r.direction = d;
+  r.tMin = tMin;
+  r.tMax = tMax;
+  return r;
+}
+
+// Quad A (id 3) spans [-1, 1]^2 at z = 0 facing +z; quad B (id 9) spans [0, 2] x [-1, 1] at z = 1 facing -z.
+Scene twoQuads() {
+  return makeScene({makeObject(3, quadMesh(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)), "a"),
+                    makeObject(9, quadMesh(Vec3(1, 0, 1), Vec3(0, 1, 0), Vec3(1, 0, 0)), "b")});
+}
+
+TEST(RayScene, IntersectReportsTheExactHit) {
+  const Scene scene = twoQuads();
+  const RayScene rays(scene);
+  // x < 0: only quad A is below.
+  const auto hit = rays.intersect(makeRay(Vec3(-0.2f, 0.3f, 5.0f), Vec3(0, 0, -1)));
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_FLOAT_EQ(hit->t, 5.0f);
+  EXPECT_EQ(hit->objectId, 3);
+  // The diagonal from (-1,-1) to (1,1) splits the quad: triangle 0 below it (x > y), triangle 1 above.
+  EXPECT_EQ(hit->triangleId, 1);
+  const Mesh& mesh = scene.objects[0].mesh;
+  const glm::uvec3 tri = mesh.triangles[1];
+  const Vec2 b = hit->barycentrics;
+  const Vec3 p = (1.0f - b.x - b.y) * mesh.positions[tri.x] + b.x * mesh.positions[tri.y] + b.y * mesh.positions[tri.z];
+  EXPECT_NEAR(p.x, -0.2f, 1e-6f);
+  EXPECT_NEAR(p.y, 0.3f, 1e-6f);
+  EXPECT_NEAR(p.z, 0.0f, 1e-6f);
+  EXPECT_NEAR(glm::length(hit->wsGeometricNormal - mesh.faceNormal(1)), 0.0f, 1e-6f);
+  EXPECT_NEAR(hit->wsGeometricNormal.z, 1.0f, 1e-6f);
+
+  // x > 0 from above: quad B (z = 1) first; its winding faces -z and is reported as wound, not flipped.
+  const auto hitB = rays.intersect(makeRay(Vec3(0.5f, -0.25f, 5.0f), Vec3(0, 0, -1)));
+  ASSERT_TRUE(hitB.has_value());
+  EXPECT_FLOAT_EQ(hitB->t, 4.0f);
+  EXPECT_EQ(hitB->objectId, 9);
+  EXPECT_NEAR(hitB->wsGeometricNormal.z, -1.0f, 1e-6f);
+  EXPECT_EQ(hitB->triangleId, 0);  // local (u, v) = (y, x - 1) = (-0.25, -0.5): below the diagonal u > v
+
+  // From below, going up: A is first at t = 1.
+  const auto hitUp = rays.intersect(makeRay(Vec3(0.5f, -0.25f, -1.0f), Vec3(0, 0, 1)));
+  ASSERT_TRUE(hitUp.has_value());
+  EXPECT_EQ(hitUp->objectId, 3);
+  EXPECT_FLOAT_EQ(hitUp->t, 1.0f);
+}
+
+TEST(RayScene, RayParameterIsInUnitsOfTheDirection) {
+  const RayScene rays(twoQuads());
+  const auto hit = rays.intersect(makeRay(Vec3(-0.5f, 0, 5.0f), Vec3(0, 0, -2.0f)));
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_FLOAT_EQ(hit->t, 2.5f);
+}
+
+TEST(RayScene, IntervalIsRespected) {
+  const RayScene rays(twoQuads());
+  const Vec3 o(0.5f, 0.0f, 5.0f), d(0, 0, -1);
+  EXPECT_FALSE(rays.intersect(makeRay(o, d, 0.0f, 3.9f)).has_value());
+  EXPECT_FALSE(rays.occluded(makeRay(o, d, 0.0f, 3.9f)));
+  EXPECT_TRUE(rays.occluded(makeRay(o, d, 0.0f, 4.1f)));
+  // Starting past B (t = 4) finds A at t = 5.
+  const auto hit = rays.intersect(makeRay(o, d, 4.5f));
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_EQ(hit->objectId, 3);
+  EXPECT_FLOAT_EQ(hit->t, 5.0f);
+  EXPECT_FALSE(rays.occluded(makeRay(o, d, 5.5f)));
+  EXPECT_FALSE(rays.occluded(makeRay(Vec3(5.0f, 5.0f, 5.0f), d)));  // misses everything
+}
+
+TEST(RayScene, Occluded16MatchesSingleRays) {
+  const RayScene rays(twoQuads());
+  // Deterministic pseudo-random rays from above towards z = 0.5 +- 1, half of them hitting something.
+  std::vector<Ray> all;
+  for (uint32_t i = 0; i < 160; ++i) {
+    auto u = [&](uint32_t k) { return static_cast<float>(hash32(i * 8u + k) >> 8) * (1.0f / 16777216.0f); };
+    const Vec3 o(4.0f * u(0) - 2.0f, 4.0f * u(1) - 2.0f, 3.0f);
+    const Vec3 target(4.0f * u(2) - 2.0f, 4.0f * u(3) - 2.0f, -0.5f);
+    all.push_back(makeRay(o, target - o, 0.0f, 0.2f + 1.2f * u(4)));
+  }
+  int hits = 0;
+  for (int count = 1; count <= 16; ++count) {
+    for (size_t first = 0; first + count <= all.size(); first += 16) {
+      bool out[16];
+      rays.occluded16(&all[first], count, out);
+      for (int i = 0; i < count; ++i) {
+        EXPECT_EQ(out[i], rays.occluded(all[first + i])) << "ray " << first + i << " of a packet of " << count;
+        hits += out[i];
+      }
+    }
+  }
+  EXPECT_GT(hits, 100);  // both answers occur
+  EXPECT_LT(hits, 1000);
+}
+
+TEST(RayScene, EmptySceneHitsNothing) {
+  const RayScene rays(makeScene({}));
+  const Ray r = makeRay(Vec3(0.0f), Vec3(0, 0, -1));
+  EXPECT_FALSE(rays.intersect(r).has_value());
+  EXPECT_FALSE(rays.occluded(r));
+  Ray packet[16];
+  for (Ray& p : packet) p = r;
+  bool out[16];
+  std::fill(std::begin(out), std::end(out), true);
+  rays.occluded16(packet, 16, out);
+  for (bool o : out) EXPECT_FALSE(o);
+  // Objects without triangles are as empty, and later objects keep their ids.
+  Scene s = makeScene({makeObject(1, Mesh{}, "empty"), makeObject(2, quadMesh(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0)))});
+  const RayScene rays2(s);
+  const auto hit = rays2.intersect(r);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_EQ(hit->objectId, 2);
+}
+
+TEST(RayScene, DegenerateTrianglesDoNotCrashOrHit) {
+  Mesh m;
+  m.positions = {Vec3(-1, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0),  // collinear
+                 Vec3(0, 1, 0),                                  // for a repeated-index triangle
+                 Vec3(-1, -1, -1), Vec3(1, -1, -1), Vec3(0, 1, -1)};
+  m.triangles = {{0, 1, 2}, {3, 3, 3}, {1, 3, 3}, {4, 5, 6}};
+  const RayScene rays(makeScene({makeObject(4, m)}));
+  // Straight down through the degenerate line at x = 0.5: passes it, hits the real triangle at z = -1.
+  const auto hit = rays.intersect(makeRay(Vec3(0.5f, 0.0f, 1.0f), Vec3(0, 0, -1)));
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_EQ(hit->triangleId, 3);
+  EXPECT_FLOAT_EQ(hit->t, 2.0f);
+  EXPECT_FALSE(rays.occluded(makeRay(Vec3(0.5f, 0.0f, 1.0f), Vec3(0, 0, -1), 0.0f, 1.5f)));
+}
+
+TEST(RayScene, BadIndexIsAnErrorNamingTheObject) {
+  Mesh m = quadMesh(Vec3(0.0f), Vec3(1, 0, 0), Vec3(0, 1, 0));
+  m.triangles.push_back({0, 1, 7});
+  try {
+    const RayScene rays(makeScene({makeObject(1, m, "broken-quad")}));
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("broken-quad"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("7"), std::string::npos) << msg;
+  }
+}
+
+TEST(RayScene, MovedSceneStillWorks) {
+  RayScene a(twoQuads());
+  RayScene b(std::move(a));
+  EXPECT_TRUE(b.occluded(makeRay(Vec3(0.0f, 0.0f, 5.0f), Vec3(0, 0, -1))));
+}
+
+TEST(ShadowRayEpsilon, ScalesWithTheSceneAndItsDistanceFromTheOrigin) {
+  Bounds3 unit;
+  unit.extend(Vec3(-1.0f));
+  unit.extend(Vec3(1.0f));
+  Bounds3 big;
+  big.extend(Vec3(-100.0f));
+  big.extend(Vec3(100.0f));
+  Bounds3 far;  // small but far from the origin: float spacing there is coarse
+  far.extend(Vec3(1000.0f));
+  far.extend(Vec3(1001.0f));
+  const float e1 = shadowRayEpsilon(unit), e100 = shadowRayEpsilon(big), eFar = shadowRayEpsilon(far);
+  EXPECT_GT(e1, 0.0f);
+  EXPECT_NEAR(e100 / e1, 100.0f, 1e-3f * 100.0f);
+  // Well above the float spacing at the far corner (1001 * 2^-23 = 1.2e-4).
+  EXPECT_GT(eFar, 100.0f * 1001.0f * 0x1p-23f);
+  EXPECT_GT(shadowRayEpsilon(Bounds3{}), 0.0f);
+}
+
+TEST(ShadowRayEpsilon, PreventsSelfIntersectionOnAGrazingPlane) {
+  // A large tilted plane, points on it from barycentric interpolation (as the G-buffer makes them),
+  // rays leaving at 1 degree above the surface from the offset origin must not hit it.
+  const Vec3 n = glm::normalize(Vec3(0.3f, 1.0f, 0.2f));
+  const Frame f = Frame::fromZ(n);
+  const Vec3 c(3.0f, -2.0f, 5.0f);
+  const Mesh m = quadMesh(c, 50.0f * f.x, 50.0f * f.y);
+  const Scene scene = makeScene({makeObject(1, m)});
+  const RayScene rays(scene);
+  const float eps = shadowRayEpsilon(scene.bounds());
+  int selfHits = 0;
+  for (uint32_t i = 0; i < 2000; ++i) {
+    const float b1 = static_cast<float>(hash32(2 * i) >> 8) / 16777216.0f;
+    const float b2 = (1.0f - b1) * static_cast<float>(hash32(2 * i + 1) >> 8) / 16777216.0f;
+    const glm::uvec3 t = m.triangles[i % 2];
+    const Vec3 p = (1.0f - b1 - b2) * m.positions[t.x] + b1 * m.positions[t.y] + b2 * m.positions[t.z];
+    const float a = radians(1.0f);
+    const Vec3 dir = std::cos(a) * glm::normalize(f.x + 0.3f * f.y) + std::sin(a) * n;
+    selfHits += rays.occluded(makeRay(p + eps * n, dir));
+  }
+  EXPECT_EQ(selfHits, 0);
+}
+
+}  // namespace
+}  // namespace penumbra
