@@ -1,0 +1,109 @@
+// `penumbra bench`: per-pass wall-clock times (median over --repeat runs) of techniques on one
+// scene, with the time relative to a baseline measured in the same run (the machines are shared
+// and noisy, so only same-run ratios are comparable; DESIGN.md, "Conventions"). Micro-benchmarks
+// of individual kernels live in bench/ (Google Benchmark).
+#include <algorithm>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "penumbra/error.h"
+#include "penumbra/raster.h"
+#include "penumbra/report.h"
+
+namespace penumbra::cli {
+
+namespace {
+
+struct BenchOptions {
+  FrameOptions frame;
+  std::vector<std::string> techniques;
+  std::string baseline;
+  int repeat = 5;
+  std::string jsonPath;
+};
+
+int runBench(const BenchOptions& options) {
+  ThreadLimit threads(options.frame.threads);
+  std::vector<std::string> names = techniqueList(options.techniques);
+  const std::string baseline = options.baseline.empty() ? defaultBaseline() : options.baseline;
+  findTechnique(baseline);
+  if (std::find(names.begin(), names.end(), baseline) == names.end()) names.push_back(baseline);
+  checkPrefixedParams(options.frame.params, names);
+
+  const Setup setup = loadSetup(options.frame);
+  if (!options.jsonPath.empty()) refuseInputOverwrite(setup, options.jsonPath);
+  std::vector<ParamSet> given;
+  for (const std::string& name : names) {
+    const TechniqueInfo& info = findTechnique(name);
+    given.push_back(gatherParams(setup, info, options.frame, true));
+    resolveParams(info.name, info.params, given.back());
+  }
+
+  const Light& light = setupLight(setup);
+  fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
+             setup.lightIndex, describeLight(light));
+  std::vector<double> gbufferMs;
+  GBuffer gbuffer;
+  for (int r = 0; r < options.repeat; ++r) {
+    Timer timer;
+    gbuffer = renderGBuffer(setup.scene, setup.width, setup.height);
+    gbufferMs.push_back(timer.elapsedMs());
+  }
+
+  Report report;
+  report.kind = "bench";
+  report.version = PENUMBRA_VERSION;
+  report.scene = setup.scene.name;
+  report.sceneSource = setup.scene.source;
+  report.lightIndex = setup.lightIndex;
+  report.light = describeLight(light);
+  report.width = setup.width;
+  report.height = setup.height;
+  report.baseline = baseline;
+  report.settings = {{"repeat", fmt::format("{}", options.repeat)},
+                     {"statistic", "median over repeats"},
+                     {"gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs))},
+                     {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
+  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
+  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
+    const TechniqueRun run = runTechnique(setup, gbuffer, info, given[i], options.repeat);
+    ReportRow row;
+    row.technique = info.name;
+    row.params = describeParams(run.params);
+    row.timings = run.timings;
+    row.stats = run.stats;
+    report.rows.push_back(std::move(row));
+  }
+  fillBaselineRatios(report);
+  fmt::print("G-buffer raster {:.2f} ms (median of {})\n\n{}", median(gbufferMs), options.repeat, reportToText(report));
+  if (!options.jsonPath.empty()) {
+    writeTextFile(options.jsonPath, reportToJson(report));
+    fmt::print("wrote {}\n", options.jsonPath);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command addBenchCommand(CLI::App& parent) {
+  auto options = std::make_shared<BenchOptions>();
+  CLI::App* app = parent.add_subcommand("bench", "time techniques per pass (median over repeats) relative to a baseline");
+  app->add_option("--techniques,-t", options->techniques,
+                  "comma-separated technique names (default: every registered technique)")
+      ->delimiter(',');
+  app->add_option("--baseline", options->baseline,
+                  "technique the ratios are relative to, measured in the same run (default: hard if registered, "
+                  "else raytraced-hard)");
+  app->add_option("--repeat", options->repeat, "runs per technique; the median is reported")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app->add_option("--json", options->jsonPath, "also write the table as JSON to this file");
+  addFrameOptions(*app, options->frame,
+                  "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
+  return {app, [options] { return runBench(*options); }};
+}
+
+}  // namespace penumbra::cli

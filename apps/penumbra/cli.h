@@ -1,0 +1,131 @@
+// Internal interface of the `penumbra` command-line tool: the subcommands (one file each) and the
+// pipeline steps they share (scene + light selection, parameter merging, running a technique,
+// output paths that never overwrite the input scene file, a progress bar).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "penumbra/gbuffer.h"
+#include "penumbra/image.h"
+#include "penumbra/params.h"
+#include "penumbra/registry.h"
+#include "penumbra/scene.h"
+#include "penumbra/technique.h"
+#include "penumbra/timer.h"
+
+#ifndef PENUMBRA_VERSION
+#define PENUMBRA_VERSION "unknown"
+#endif
+
+namespace penumbra::cli {
+
+// A registered subcommand and what runs it once the command line is parsed. run() returns the exit code.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+Command addRenderCommand(CLI::App& parent);
+Command addCompareCommand(CLI::App& parent);
+Command addBenchCommand(CLI::App& parent);
+Command addScenesCommand(CLI::App& parent);
+Command addTechniquesCommand(CLI::App& parent);
+
+// Options render, compare and bench share. Unset optionals mean "the scene's value" or "the
+// technique's default".
+struct FrameOptions {
+  std::string scene = "torus";
+  std::optional<int> width, height;
+  int lightIndex = 0;
+  std::optional<int64_t> spp, seed;
+  std::vector<std::string> params;  //!< "key=value" (render) or "technique.key=value" (compare, bench)
+  int threads = 0;                  //!< 0: oneTBB's default (every core)
+};
+// Adds --scene, --width, --height, --light, --spp, --seed, --threads (and --param) to a subcommand.
+void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp);
+
+// The loaded scene and everything derived from the frame options.
+struct Setup {
+  Scene scene;
+  std::optional<std::string> sceneFile;  //!< the input file, when the scene came from one
+  int width = 0, height = 0;
+  int lightIndex = 0;
+};
+// Loads the scene and checks the light index and image size. Throws Error with the fix.
+Setup loadSetup(const FrameOptions& options);
+const Light& setupLight(const Setup& setup);
+
+// Scene-file parameters of the technique, then --spp / --seed where the technique has them, then
+// the command line's key=value pairs (`prefixed`: "technique.key=value", others skipped).
+ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const FrameOptions& options, bool prefixed);
+// Checks that every "technique.key=value" names a technique in `techniques` (else a typo would be
+// silently ignored).
+void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques);
+
+struct TechniqueRun {
+  std::string name;
+  Params params;
+  Image<float> v;
+  PassTimings timings;
+  std::vector<std::pair<std::string, double>> stats;
+};
+// Builds the technique from `given` and runs prepare + visibility `repeat` times (timings: median of
+// each pass over the repeats; V and stats: the last run).
+TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
+                          int repeat = 1);
+
+// Creates the output directory (and parents). Throws Error naming it when that fails.
+void makeOutputDir(const std::string& dir);
+// dir/file, refused when it would overwrite the input scene file.
+std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file);
+void refuseInputOverwrite(const Setup& setup, const std::string& path);
+
+// Every technique name if `names` is empty; otherwise the names, checked against the registry.
+std::vector<std::string> techniqueList(const std::vector<std::string>& names);
+// `hard` if registered, else `raytraced-hard`.
+std::string defaultBaseline();
+
+double median(std::vector<double> values);
+
+// A one-line progress bar on stderr, drawn only when stderr is a terminal and a pass has run for
+// more than a second. callback() is thread-safe (a mutex taken with try_lock, so worker threads
+// never wait on it) and throttled to ~10 redraws a second.
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+  ProgressCallback callback();
+  void finish();
+
+ private:
+  void update(double fraction);
+  std::string label_;
+  bool enabled_;
+  std::mutex mutex_;
+  Timer timer_;
+  double lastDrawMs_ = -1.0e9;
+  bool drawn_ = false;
+};
+
+// RAII for --threads: limits oneTBB's parallelism for the lifetime of the object (0: no limit).
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+  ~ThreadLimit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace penumbra::cli

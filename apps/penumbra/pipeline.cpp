@@ -1,0 +1,229 @@
+// The steps render, compare and bench share: loading the scene and choosing its light, merging
+// technique parameters (scene file < --spp/--seed < --param), running a technique with timings,
+// output paths that never overwrite the input scene file, --threads, and the progress bar.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <unistd.h>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <tbb/global_control.h>
+
+#include "cli.h"
+#include "penumbra/error.h"
+#include "penumbra/scene_io.h"
+
+namespace penumbra::cli {
+
+namespace fs = std::filesystem;
+
+// Large enough for any figure, small enough that a typo (an extra zero) fails fast instead of
+// allocating gigabytes of G-buffer.
+constexpr int kMaxImageSize = 16384;
+
+void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp) {
+  app.add_option("--scene", options.scene, "built-in scene name (see `penumbra scenes`) or path to a JSON scene file")
+      ->capture_default_str();
+  app.add_option("--width", options.width, "image width in pixels (default: the scene's)")
+      ->check(CLI::Range(1, kMaxImageSize));
+  app.add_option("--height", options.height, "image height in pixels (default: the scene's)")
+      ->check(CLI::Range(1, kMaxImageSize));
+  app.add_option("--light", options.lightIndex, "index of the scene's light to use")->capture_default_str();
+  app.add_option("--spp", options.spp, "samples per pixel, for techniques that have an `spp` parameter")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--seed", options.seed, "random seed, for techniques that have a `seed` parameter")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--param,-p", options.params, paramHelp);
+  app.add_option("--threads", options.threads, "worker threads (0: every core)")->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
+Setup loadSetup(const FrameOptions& options) {
+  Setup setup;
+  setup.scene = loadScene(options.scene);
+  if (setup.scene.source.rfind("built-in:", 0) != 0) setup.sceneFile = setup.scene.source;
+  const Scene& scene = setup.scene;
+  // Check the scene file's "techniques" section whole, including techniques not run now: a typo in
+  // a name or value there would otherwise be ignored until the day that technique runs.
+  for (const auto& [name, given] : scene.techniqueParams) {
+    const TechniqueInfo* info = nullptr;
+    for (const TechniqueInfo& candidate : techniqueRegistry())
+      if (candidate.name == name) info = &candidate;
+    if (!info) {
+      std::vector<std::string> known;
+      for (const TechniqueInfo& candidate : techniqueRegistry()) known.push_back(candidate.name);
+      fail("{}: techniques.{}: unknown technique '{}' (known: {})", scene.source, name, name, fmt::join(known, ", "));
+    }
+    resolveParams(info->name, info->params, given);
+  }
+  if (scene.lights.empty())
+    fail("scene '{}' ({}) has no light; add one to \"lights\"", scene.name, scene.source);
+  const int count = static_cast<int>(scene.lights.size());
+  if (options.lightIndex < 0 || options.lightIndex >= count)
+    fail("--light {} is out of range: scene '{}' has {} light{} (valid: {})", options.lightIndex, scene.name, count,
+         count == 1 ? "" : "s", count == 1 ? std::string("0") : fmt::format("0 to {}", count - 1));
+  setup.lightIndex = options.lightIndex;
+  setup.width = options.width.value_or(scene.image.width);
+  setup.height = options.height.value_or(scene.image.height);
+  if (setup.width < 1 || setup.height < 1 || setup.width > kMaxImageSize || setup.height > kMaxImageSize)
+    fail("{}: image size {}x{} must be in 1..{} on each side", scene.source, setup.width, setup.height, kMaxImageSize);
+  return setup;
+}
+
+const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
+
+void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques) {
+  for (const std::string& kv : params) {
+    const size_t eq = kv.find('=');
+    const size_t dot = kv.find('.');
+    if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot > eq || dot + 1 == eq)
+      fail("command line: parameter '{}' must be written technique.key=value here (for example reference.spp=64)", kv);
+    const std::string technique = kv.substr(0, dot);
+    findTechnique(technique);  // an unknown name: the registry's message lists the known ones
+    if (std::find(techniques.begin(), techniques.end(), technique) == techniques.end())
+      fail("command line: parameter '{}' is for technique '{}', which is not among the techniques run here", kv,
+           technique);
+  }
+}
+
+ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const FrameOptions& options, bool prefixed) {
+  ParamSet given;
+  auto it = setup.scene.techniqueParams.find(info.name);
+  if (it != setup.scene.techniqueParams.end()) given = it->second;
+  if (options.spp && info.hasParam("spp")) given.set("spp", *options.spp, "command line (--spp)");
+  if (options.seed && info.hasParam("seed")) given.set("seed", *options.seed, "command line (--seed)");
+  for (const std::string& kv : options.params) {
+    if (!prefixed) {
+      given.setFromKeyValue(kv, "command line (--param)");
+      continue;
+    }
+    const size_t dot = kv.find('.');
+    if (kv.substr(0, dot) == info.name) given.setFromKeyValue(kv.substr(dot + 1), "command line (--param)");
+  }
+  return given;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
+                          int repeat) {
+  TechniqueRun run;
+  run.name = info.name;
+  run.params = resolveParams(info.name, info.params, given);
+  std::unique_ptr<ShadowTechnique> technique = info.create(run.params);
+  ProgressBar bar(info.name);
+  technique->setProgressCallback(bar.callback());
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<double>> passMs;
+  for (int r = 0; r < std::max(1, repeat); ++r) {
+    technique->prepare(setup.scene, setupLight(setup));
+    technique->visibility(gbuffer, run.v);
+    for (const auto& [pass, ms] : technique->timings().passes) {
+      if (!passMs.count(pass)) order.push_back(pass);
+      passMs[pass].push_back(ms);
+    }
+  }
+  bar.finish();
+  if (run.v.width() != gbuffer.width() || run.v.height() != gbuffer.height())
+    fail("internal: technique '{}' wrote a {}x{} visibility image for a {}x{} G-buffer", info.name, run.v.width(),
+         run.v.height(), gbuffer.width(), gbuffer.height());
+  for (const std::string& pass : order) run.timings.add(pass, median(passMs[pass]));
+  run.stats = technique->stats();
+  return run;
+}
+
+void makeOutputDir(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    fail("cannot create output directory '{}': {}", dir, ec ? ec.message() : "a file of that name exists");
+}
+
+void refuseInputOverwrite(const Setup& setup, const std::string& path) {
+  if (!setup.sceneFile) return;
+  std::error_code ec1, ec2;
+  const bool same = fs::exists(path, ec1) ? fs::equivalent(path, *setup.sceneFile, ec2)
+                                           : fs::weakly_canonical(path, ec1) == fs::weakly_canonical(*setup.sceneFile, ec2);
+  if (same)
+    fail("refusing to write '{}': it is the input scene file; choose another output path", path);
+}
+
+std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file) {
+  const std::string path = (fs::path(dir) / file).string();
+  refuseInputOverwrite(setup, path);
+  return path;
+}
+
+std::vector<std::string> techniqueList(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  if (names.empty()) {
+    for (const TechniqueInfo& info : techniqueRegistry()) out.push_back(info.name);
+    return out;
+  }
+  for (const std::string& name : names) {
+    findTechnique(name);  // throws, listing the known names
+    if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(name);
+  }
+  return out;
+}
+
+std::string defaultBaseline() {
+  for (const TechniqueInfo& info : techniqueRegistry())
+    if (info.name == "hard") return "hard";
+  return "raytraced-hard";
+}
+
+ProgressBar::ProgressBar(std::string label) : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+
+ProgressBar::~ProgressBar() { finish(); }
+
+ProgressCallback ProgressBar::callback() {
+  if (!enabled_) return {};
+  return [this](double fraction) { update(fraction); };
+}
+
+void ProgressBar::update(double fraction) {
+  // Worker threads must never queue behind the drawing thread: skip this report if it is busy.
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;
+  const double ms = timer_.elapsedMs();
+  if (ms < 1000.0 || ms - lastDrawMs_ < 100.0) return;
+  lastDrawMs_ = ms;
+  drawn_ = true;
+  const double f = std::clamp(fraction, 0.0, 1.0);
+  constexpr int kWidth = 30;
+  const int filled = static_cast<int>(f * kWidth);
+  fmt::print(stderr, "\r{} [{}{}] {:3.0f}% {:.1f} s", label_, std::string(static_cast<size_t>(filled), '#'),
+             std::string(static_cast<size_t>(kWidth - filled), ' '), 100.0 * f, ms / 1000.0);
+  std::fflush(stderr);
+}
+
+void ProgressBar::finish() {
+  std::lock_guard lock(mutex_);
+  if (drawn_) {
+    fmt::print(stderr, "\r\033[K");
+    std::fflush(stderr);
+    drawn_ = false;
+  }
+}
+
+struct ThreadLimit::Impl {
+  explicit Impl(size_t threads) : control(tbb::global_control::max_allowed_parallelism, threads) {}
+  tbb::global_control control;
+};
+
+ThreadLimit::ThreadLimit(int threads) {
+  if (threads > 0)
+    impl_ = std::make_unique<Impl>(static_cast<size_t>(threads));
+}
+
+ThreadLimit::~ThreadLimit() = default;
+
+}  // namespace penumbra::cli

@@ -1,0 +1,103 @@
+// Tests of src/eval/metrics.cpp against hand-computed values of DESIGN.md's formulas:
+// RMSE8 = sqrt(mean((V - Vref)^2)) * 255 over the mask; penumbra RMSE8 over mask pixels where V or
+// Vref lies in the open interval (0.01, 0.99).
+#include "penumbra/metrics.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "penumbra/error.h"
+
+namespace penumbra {
+namespace {
+
+TEST(ErrorMask, HitPixelsFacingTheLightCentreOnly) {
+  GBuffer g(4, 1);
+  const Light light = Light::sphere(Vec3(0.0f, 10.0f, 0.0f), 1.0f);
+  // Pixel 0: floor facing up, towards the light. Pixel 1: facing down, away from it.
+  // Pixel 2: a wall whose normal is perpendicular to the direction to the light (dot = 0: not facing).
+  // Pixel 3: miss.
+  g.objectId(0, 0) = 0; g.wsPosition(0, 0) = Vec3(0.0f); g.wsNormal(0, 0) = Vec3(0.0f, 1.0f, 0.0f);
+  g.objectId(1, 0) = 0; g.wsPosition(1, 0) = Vec3(0.0f); g.wsNormal(1, 0) = Vec3(0.0f, -1.0f, 0.0f);
+  g.objectId(2, 0) = 1; g.wsPosition(2, 0) = Vec3(0.0f); g.wsNormal(2, 0) = Vec3(1.0f, 0.0f, 0.0f);
+  g.wsNormal(3, 0) = Vec3(0.0f, 1.0f, 0.0f);  // a miss never counts, whatever its stale normal
+  const Image<uint8_t> mask = errorMask(g, light);
+  EXPECT_EQ(mask(0, 0), 1);
+  EXPECT_EQ(mask(1, 0), 0);
+  EXPECT_EQ(mask(2, 0), 0);
+  EXPECT_EQ(mask(3, 0), 0);
+}
+
+TEST(ErrorMask, DirectionalLightUsesItsDirection) {
+  GBuffer g(2, 1);
+  const Light sun = Light::directional(Vec3(1.0f, 1.0f, 0.0f), radians(0.5f));
+  g.objectId(0, 0) = 0; g.wsNormal(0, 0) = Vec3(1.0f, 0.0f, 0.0f);   // dot = 0.707 > 0
+  g.objectId(1, 0) = 0; g.wsNormal(1, 0) = Vec3(-1.0f, 0.0f, 0.0f);  // dot < 0
+  const Image<uint8_t> mask = errorMask(g, sun);
+  EXPECT_EQ(mask(0, 0), 1);
+  EXPECT_EQ(mask(1, 0), 0);
+}
+
+TEST(CompareVisibility, HandComputedRmse8) {
+  Image<float> v(3, 2), ref(3, 2);
+  Image<uint8_t> mask(3, 2, 1);
+  // (v, ref): (1,1) (0.5,0.25) (0,0) (0.75,1) (0,0.5) and a masked-out pixel with a huge error.
+  const float vs[6] = {1.0f, 0.5f, 0.0f, 0.75f, 0.0f, 0.0f};
+  const float rs[6] = {1.0f, 0.25f, 0.0f, 1.0f, 0.5f, 1.0f};
+  for (int i = 0; i < 6; ++i) {
+    v[i] = vs[i];
+    ref[i] = rs[i];
+  }
+  mask[5] = 0;
+  const ErrorStats s = compareVisibility(v, ref, mask);
+  // Squared errors over the 5 masked pixels: 0, 1/16, 0, 1/16, 1/4 -> mean 3/40.
+  EXPECT_EQ(s.maskPixels, 5u);
+  EXPECT_NEAR(s.rmse8, std::sqrt(3.0 / 40.0) * 255.0, 1e-9);
+  // Penumbra pixels: (0.5, 0.25), (0.75, 1), (0, 0.5): squared errors 1/16, 1/16, 1/4 -> mean 1/8.
+  EXPECT_EQ(s.penumbraPixels, 3u);
+  EXPECT_NEAR(s.penumbraRmse8, std::sqrt(1.0 / 8.0) * 255.0, 1e-9);
+  EXPECT_DOUBLE_EQ(s.maxAbsError, 0.5);
+}
+
+TEST(CompareVisibility, PenumbraIntervalIsOpen) {
+  // 0.01 and 0.99 themselves are not penumbra values; just inside them are.
+  Image<float> v(4, 1), ref(4, 1);
+  Image<uint8_t> mask(4, 1, 1);
+  v[0] = 0.01f; ref[0] = 0.0f;
+  v[1] = 0.99f; ref[1] = 1.0f;
+  v[2] = 0.011f; ref[2] = 0.0f;
+  v[3] = 1.0f; ref[3] = 0.989f;
+  const ErrorStats s = compareVisibility(v, ref, mask);
+  EXPECT_EQ(s.penumbraPixels, 2u);
+  const double e2 = 0.011f, e3 = 1.0f - 0.989f;
+  EXPECT_NEAR(s.penumbraRmse8, std::sqrt((e2 * e2 + e3 * e3) / 2.0) * 255.0, 1e-6);
+}
+
+TEST(CompareVisibility, IdenticalImagesHaveZeroError) {
+  Image<float> v(5, 5, 0.3f);
+  Image<uint8_t> mask(5, 5, 1);
+  const ErrorStats s = compareVisibility(v, v, mask);
+  EXPECT_EQ(s.rmse8, 0.0);
+  EXPECT_EQ(s.penumbraRmse8, 0.0);
+  EXPECT_EQ(s.maxAbsError, 0.0);
+  EXPECT_EQ(s.penumbraPixels, 25u);
+}
+
+TEST(CompareVisibility, EmptyMaskReportsZeroPixelsAndNoNan) {
+  Image<float> v(2, 2, 0.0f), ref(2, 2, 1.0f);
+  Image<uint8_t> mask(2, 2, 0);
+  const ErrorStats s = compareVisibility(v, ref, mask);
+  EXPECT_EQ(s.maskPixels, 0u);
+  EXPECT_EQ(s.rmse8, 0.0);
+  EXPECT_EQ(s.penumbraRmse8, 0.0);
+}
+
+TEST(CompareVisibility, SizeMismatchIsAnError) {
+  Image<float> v(2, 2), ref(3, 2);
+  Image<uint8_t> mask(2, 2, 1);
+  EXPECT_THROW(compareVisibility(v, ref, mask), Error);
+}
+
+}  // namespace
+}  // namespace penumbra
