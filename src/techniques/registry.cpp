@@ -11,12 +11,20 @@ namespace penumbra {
 TechniqueInfo referenceTechniqueInfo();
 TechniqueInfo noneTechniqueInfo();
 TechniqueInfo raytracedHardTechniqueInfo();
+TechniqueInfo hardTechniqueInfo();
+TechniqueInfo pcfTechniqueInfo();
+TechniqueInfo pcssTechniqueInfo();
+TechniqueInfo multisampleTechniqueInfo();
 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = {
       referenceTechniqueInfo(),
       noneTechniqueInfo(),
+      hardTechniqueInfo(),
       raytracedHardTechniqueInfo(),
+      pcfTechniqueInfo(),
+      pcssTechniqueInfo(),
+      multisampleTechniqueInfo(),
   };
   return registry;
 }

@@ -1,0 +1,67 @@
+// Benchmarks of the shadow-map techniques (hard, pcf, pcss, multisample) on the `crowded` built-in
+// scene at 1024x1024 with 1024x1024 light maps: the prepare pass (light maps) and the visibility
+// pass (per-pixel lookups) timed separately, in milliseconds of wall-clock time. pcss runs with its
+// defaults (16 blocker + 32 filter samples); the target is pcss <= 3x hard. Compare ratios
+// taken in one run only: the machines are shared and noisy.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "penumbra/raster.h"
+#include "penumbra/registry.h"
+#include "penumbra/scene_io.h"
+
+namespace penumbra {
+namespace {
+
+struct BenchScene {
+  Scene scene;
+  GBuffer gbuffer;
+};
+
+const BenchScene& crowded1024() {
+  static const BenchScene s = [] {
+    BenchScene b;
+    b.scene = loadScene("crowded");
+    b.gbuffer = renderGBuffer(b.scene, 1024, 1024);
+    return b;
+  }();
+  return s;
+}
+
+std::unique_ptr<ShadowTechnique> make(const std::string& name) {
+  ParamSet p;
+  p.setFromKeyValue("map_size=1024", "bench");
+  return createTechnique(name, p);
+}
+
+void prepareBench(benchmark::State& state, const std::string& name) {
+  const BenchScene& s = crowded1024();
+  auto t = make(name);
+  for (auto _ : state) t->prepare(s.scene, s.scene.lights.at(0));
+}
+
+void visibilityBench(benchmark::State& state, const std::string& name) {
+  const BenchScene& s = crowded1024();
+  auto t = make(name);
+  t->prepare(s.scene, s.scene.lights.at(0));
+  Image<float> v;
+  for (auto _ : state) {
+    t->visibility(s.gbuffer, v);
+    benchmark::DoNotOptimize(v.data());
+  }
+}
+
+#define PENUMBRA_SM_BENCH(id, name)                                                                              \
+  BENCHMARK_CAPTURE(prepareBench, id, std::string(name))->Unit(benchmark::kMillisecond)->UseRealTime();         \
+  BENCHMARK_CAPTURE(visibilityBench, id, std::string(name))->Unit(benchmark::kMillisecond)->UseRealTime();
+
+PENUMBRA_SM_BENCH(hard, "hard")
+PENUMBRA_SM_BENCH(pcf, "pcf")
+PENUMBRA_SM_BENCH(pcss, "pcss")
+PENUMBRA_SM_BENCH(multisample, "multisample")
+
+}  // namespace
+}  // namespace penumbra

@@ -1,0 +1,69 @@
+// `hard`: the classic shadow map (Williams 1978, "Casting curved shadows on curved surfaces",
+// SIGGRAPH): the scene's depth seen from the light's centre sample, and one depth compare per camera
+// pixel at the texel holding it. V in {0, 1}: a hard shadow from a point light at the light's centre,
+// with the map's aliasing — the baseline every soft technique is measured against.
+//
+// Approximations: the area light is replaced by its centre sample; the compare uses the receiver
+// plane and the slope-scaled bias of shadow_map.h (bias in texel sizes, so it scales with the map's
+// resolution); receivers outside the map are lit. Works for every light shape (all have a centre
+// sample; directional lights get an orthographic map).
+#include <memory>
+
+#include "penumbra/error.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "shadow_map.h"
+
+namespace penumbra {
+
+struct HardShadowOptions {
+  int mapSize = 1024;  //!< texels per side of the light map, in [16, 8192]
+  DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+};
+
+class HardShadowTechnique final : public ShadowTechnique {
+ public:
+  explicit HardShadowTechnique(const HardShadowOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "hard"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    map_ = createShadowMap(scene, light, options_.mapSize);
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("hard: visibility() called before prepare()");
+    Timer timer;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      return hardShadow(map_, makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  HardShadowOptions options_;
+  LightMap map_;
+  PassTimings timings_;
+};
+
+TechniqueInfo hardTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "hard";
+  info.summary = "shadow map from the light's centre sample, one depth compare per pixel (hard shadow)";
+  info.source = "Williams 1978 (baseline)";
+  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec()};
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    HardShadowOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.bias = depthBiasFromParams(params);
+    return std::make_unique<HardShadowTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

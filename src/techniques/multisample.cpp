@@ -1,0 +1,142 @@
+// `multisample`: N hard shadow maps, one from each of N light samples, averaged — the brute-force
+// soft shadow of the accumulation-buffer era (Herf & Heckbert's and Brotman & Badler's approach as
+// cited by Brabec & Seidel 2002, Sec. 2; the "16 samples" row of Lawlor 2006's comparison table).
+// V in {0, 1/N, ..., 1} (weighted for a limb-darkened sun): it converges to the true visibility as
+// N grows, with banding of N steps in the penumbra instead of noise.
+//
+// Light samples: N points stratified over the emitting area with correlated multi-jittered sampling
+// (CmjSampler, one fixed pattern selected by `seed`), each rendered as a point-light map with the
+// light's own light-space axis (rect, disk and polygon lights keep their normal):
+//  - disk, rect, polygon, segment: points of the emitter, uniform in area (length), as Light::sample;
+//  - sphere: points of the sphere's great disk facing the scene's centre — approximation: a receiver
+//    sees the silhouette disk facing itself, which is this disk for receivers far from the light
+//    relative to its radius (the silhouette shrinks and moves towards the receiver as it nears);
+//  - directional: N directions of the solar disk (orthographic maps), weighted by its profile.
+// Each map's compare is the hard shadow of shadow_map.h (receiver plane, slope-scaled bias).
+// Memory: N maps of map_size^2 depths.
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+#include "penumbra/error.h"
+#include "penumbra/registry.h"
+#include "penumbra/sampling.h"
+#include "penumbra/timer.h"
+#include "shadow_map.h"
+
+namespace penumbra {
+
+struct MultisampleOptions {
+  int mapSize = 1024;   //!< texels per side of each light map, in [16, 8192]
+  int samples = 16;     //!< light samples = shadow maps, in [1, 1024]
+  uint32_t seed = 1;    //!< selects the stratified sample pattern
+  DepthBias bias;       //!< depth-compare bias (shadow_map.h)
+};
+
+namespace {
+
+// A point-like light at sample u of `light`, with the light's own axis where it has one, and the
+// sample's radiance-profile weight.
+std::pair<Light, float> pointLightAtSample(const Light& light, const Scene& scene, const Vec2& u) {
+  // Emitter size of the stand-in: any positive value works (a light map only uses the centre and
+  // axis); a tiny fraction of the light keeps it well inside the emitter.
+  const float tiny = 1e-4f * light.extent();
+  switch (light.shape()) {
+    case LightShape::Directional: {
+      const LightSample s = light.sample(Vec3(0.0f), u);
+      return {Light::directional(s.wsDirection, 1e-6f), s.weight};
+    }
+    case LightShape::Sphere: {
+      const Frame frame = light.lightFrame(scene.bounds());
+      const Vec2 q = concentricDisk(u) * light.radius();
+      return {Light::sphere(light.center() + q.x * frame.x + q.y * frame.y, tiny), 1.0f};
+    }
+    default: {
+      // Light::sample's point x of the emitter is independent of the viewpoint for planar and
+      // linear lights: recover it from a viewpoint on the light's axis, one extent away.
+      const Frame frame = light.lightFrame(scene.bounds());
+      const Vec3 viewpoint = light.center() + frame.z * (2.0f * light.extent());
+      const LightSample s = light.sample(viewpoint, u);
+      const Vec3 x = viewpoint + s.wsDirection * s.distance;
+      if (light.shape() == LightShape::Segment) return {Light::sphere(x, tiny), 1.0f};
+      return {Light::disk(x, light.normal(), tiny), 1.0f};
+    }
+  }
+}
+
+}  // namespace
+
+class MultisampleTechnique final : public ShadowTechnique {
+ public:
+  explicit MultisampleTechnique(const MultisampleOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "multisample"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    maps_.clear();
+    weights_.clear();
+    const CmjSampler sampler(static_cast<uint32_t>(options_.samples));
+    float weightSum = 0.0f;
+    for (uint32_t k = 0; k < sampler.count(); ++k) {
+      const auto [pointLight, weight] = pointLightAtSample(light, scene, sampler.sample(k, options_.seed));
+      LightMap map = createShadowMap(scene, pointLight, options_.mapSize);
+      map.objectId = Image<int32_t>();  // only depths are compared; halves the memory of N maps
+      maps_.push_back(std::move(map));
+      weights_.push_back(weight);
+      weightSum += weight;
+      reportProgress(static_cast<double>(k + 1) / sampler.count());
+    }
+    for (float& w : weights_) w /= weightSum;
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (maps_.empty()) fail("multisample: visibility() called before prepare()");
+    Timer timer;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const Vec3& p = gbuffer.wsPosition(x, y);
+      const Vec3& n = gbuffer.wsGeometricNormal(x, y);
+      float sum = 0.0f;
+      for (size_t k = 0; k < maps_.size(); ++k) sum += weights_[k] * hardShadow(maps_[k], makeReceiver(maps_[k], p, n, options_.bias));
+      return std::min(sum, 1.0f);  // the normalized weights can sum to 1 + rounding
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  MultisampleOptions options_;
+  std::vector<LightMap> maps_;
+  std::vector<float> weights_;
+  PassTimings timings_;
+};
+
+TechniqueInfo multisampleTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "multisample";
+  info.summary = "N hard shadow maps from N stratified light samples, averaged";
+  info.source = "baseline (Lawlor 2006's \"16 samples\" row)";
+  info.params = {
+      mapSizeParamSpec(),
+      ParamSpec{.name = "samples", .type = ParamType::Int, .defaultValue = int64_t{16}, .min = 1.0, .max = 1024.0, .choices = {},
+                .unit = "samples", .help = "light samples, one shadow map each (CMJ-stratified over the emitter)"},
+      ParamSpec{.name = "seed", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 0.0, .max = 4294967295.0, .choices = {},
+                .unit = "", .help = "selects the stratified sample pattern"},
+      biasConstantParamSpec(),
+      biasSlopeParamSpec(),
+  };
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    MultisampleOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.samples = static_cast<int>(params.getInt("samples"));
+    options.seed = static_cast<uint32_t>(params.getInt("seed"));
+    options.bias = depthBiasFromParams(params);
+    return std::make_unique<MultisampleTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,87 @@
+// `pcf`: percentage-closer filtering with a fixed kernel (Reeves, Salesin, Cook 1987, "Rendering
+// antialiased shadows with depth maps", SIGGRAPH, Sec. 3): instead of filtering depths, filter the
+// *results* of the depth compare over a region of the map around the pixel's texel, giving the
+// fraction of the region that is lit. V in [0, 1].
+//
+// Kernel: a square box `kernel` texels wide centred at the pixel's exact map position, integrated
+// exactly over the nearest-texel compare function — texels fully inside weigh 1, the border texels
+// weigh their covered fraction (shadow_map.h, pcfBox) — so V is continuous across texels (Reeves
+// used jittered samples in the region; the exact box is the noise-free limit). The kernel is fixed in
+// texels: the blur does not follow the light's size or the occluder distance, which is what this
+// baseline shows against `pcss`.
+//
+// Approximations: a point light at the light's centre for the map; the receiver-plane compare and
+// slope-scaled bias of shadow_map.h at every texel of the kernel. Works for every light shape.
+#include <memory>
+
+#include "penumbra/error.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "shadow_map.h"
+
+namespace penumbra {
+
+struct PcfOptions {
+  int mapSize = 1024;  //!< texels per side of the light map, in [16, 8192]
+  int kernel = 3;      //!< width of the box kernel in texels, odd, in [1, 63]
+  DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+};
+
+class PcfTechnique final : public ShadowTechnique {
+ public:
+  explicit PcfTechnique(const PcfOptions& options) : options_(options) {
+    if (options_.kernel < 1 || options_.kernel > 63 || options_.kernel % 2 == 0)
+      fail("pcf: kernel = {} is not valid: expected an odd int in [1, 63] texels", options_.kernel);
+  }
+
+  std::string_view name() const override { return "pcf"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    map_ = createShadowMap(scene, light, options_.mapSize);
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("pcf: visibility() called before prepare()");
+    Timer timer;
+    const float width = static_cast<float>(options_.kernel);
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      return r.inMap ? pcfBox(map_, r, r.s, r.t, width) : 1.0f;
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  PcfOptions options_;
+  LightMap map_;
+  PassTimings timings_;
+};
+
+TechniqueInfo pcfTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "pcf";
+  info.summary = "percentage-closer filtering of the shadow-map compare over a fixed box kernel";
+  info.source = "Reeves, Salesin, Cook 1987 (baseline)";
+  info.params = {
+      mapSizeParamSpec(),
+      ParamSpec{.name = "kernel", .type = ParamType::Int, .defaultValue = int64_t{3}, .min = 1.0, .max = 63.0, .choices = {},
+                .unit = "texels", .help = "width of the box kernel (odd); border texels weigh their covered fraction"},
+      biasConstantParamSpec(),
+      biasSlopeParamSpec(),
+  };
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    PcfOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.kernel = static_cast<int>(params.getInt("kernel"));
+    options.bias = depthBiasFromParams(params);
+    return std::make_unique<PcfTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

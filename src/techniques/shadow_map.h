@@ -1,0 +1,164 @@
+// Shared shadow-map stages (Filament-style free functions) used by the shadow-map techniques
+// (`hard`, `pcf`, `pcss`, `multisample`) and by `brabec`:
+//  - createShadowMap: the light-space depth + object-id map seen from one point of the light
+//    (renderLightMap), with the technique's map size validated;
+//  - makeReceiver + the depth compare: a camera pixel's surface point in map coordinates, with a
+//    receiver-plane depth (Isidoro 2006, "Shadow mapping: GPU-based tips and techniques", GDC) and a
+//    slope-scaled bias (Williams 1978's shadow map plus the usual polygon-offset style bias);
+//  - the PCF box kernel (Reeves, Salesin, Cook 1987, "Rendering antialiased shadows with depth
+//    maps", SIGGRAPH), exact for the nearest-texel compare function;
+//  - the PCSS blocker search (Fernando 2005, "Percentage-closer soft shadows", SIGGRAPH sketch):
+//    mean depth of the blockers in a disk of texels; and a nearest-blocker ring search (the search of
+//    Brabec & Seidel 2002, Sec. 3.2).
+//
+// Conventions (DESIGN.md "Light space", include/penumbra/raster.h): map coordinates (s, t) in texels,
+// texel (i, j) covers [i, i+1) x [j, j+1) and its depth was rasterized at its centre (i+0.5, j+0.5);
+// light-space depth z is the distance along the light's axis, in world units.
+//
+// Depth compare. A texel holds a blocker for a receiver when its depth is smaller than the depth the
+// receiver's tangent plane has *at that texel's centre*, minus a bias. Evaluating the receiver's
+// plane at the texel centre (rather than comparing against the receiver's own depth) removes the
+// depth error of a tilted receiver that grows with the texel offset, so the same compare serves a
+// 1-texel lookup and a 40-texel PCSS kernel. The bias that is left covers curvature, faceting and
+// float rounding:
+//     bias = bias_constant * texelWorldSize(z) + bias_slope * |grad z|,
+// with |grad z| the receiver plane's depth change per texel (world units), i.e. texelWorldSize(z)
+// times tan(angle between the surface normal and the ray to the light) in a perspective map.
+// Approximations: the plane is extrapolated linearly in (s, t) (exact for an orthographic map, first
+// order for a perspective one); its slope is limited to kMaxDepthSlope texel sizes per texel (about
+// 84 degrees from facing the light) so a receiver seen edge-on from the light does not extrapolate to
+// absurd depths. Receivers outside the map (behind a local light, or outside its frustum) are lit:
+// the map records no occluder for them.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/gbuffer.h"
+#include "penumbra/image.h"
+#include "penumbra/light.h"
+#include "penumbra/math.h"
+#include "penumbra/params.h"
+#include "penumbra/raster.h"
+#include "penumbra/sampling.h"
+#include "penumbra/scene.h"
+
+namespace penumbra {
+
+inline constexpr int kMinShadowMapSize = 16;
+inline constexpr int kMaxShadowMapSize = 8192;
+// Receiver-plane slope limit, in texel sizes of depth per texel (tan 84 degrees ~ 9.5).
+inline constexpr float kMaxDepthSlope = 10.0f;
+
+// Depth bias of the compare (see the file comment).
+struct DepthBias {
+  float constantTexels = 0.5f;  //!< in texel sizes at the receiver's depth (world size of one texel), >= 0
+  float slope = 1.0f;           //!< multiplies the receiver plane's depth change per texel, >= 0
+};
+
+// Schema entries shared by every shadow-map technique, so they read the same everywhere.
+ParamSpec mapSizeParamSpec(int64_t defaultSize = 1024);
+ParamSpec biasConstantParamSpec();
+ParamSpec biasSlopeParamSpec();
+DepthBias depthBiasFromParams(const Params& params);
+
+// The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
+// Throws Error if mapSize is outside [kMinShadowMapSize, kMaxShadowMapSize].
+LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize);
+
+// Smallest finite depth in the map (the nearest possible blocker); kInfinity for an empty map.
+float minMapDepth(const LightMap& map);
+
+// One camera pixel's surface point as seen by a shadow map.
+struct ShadowReceiver {
+  float s = 0.0f, t = 0.0f;  //!< map coordinates, texels
+  float lsDepth = 0.0f;      //!< light-space depth z, world units
+  float dzds = 0.0f;         //!< receiver plane's depth change per texel along s, world units
+  float dzdt = 0.0f;         //!< ... along t
+  float bias = 0.0f;         //!< world units
+  float texelWorld = 0.0f;   //!< texelWorldSize(lsDepth), world units
+  bool inMap = false;        //!< false: behind a local light or outside the map's frustum (lit)
+};
+
+ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
+                            const DepthBias& bias);
+
+// The depth below which texel (i, j) holds a blocker for the receiver.
+inline float blockerThreshold(const ShadowReceiver& r, int i, int j) {
+  return r.lsDepth + r.dzds * (static_cast<float>(i) + 0.5f - r.s) + r.dzdt * (static_cast<float>(j) + 0.5f - r.t) -
+         r.bias;
+}
+
+// 1 if texel (i, j) lets the light through to the receiver, 0 if it holds a blocker. Texels outside
+// the map hold nothing.
+inline float litAtTexel(const LightMap& map, const ShadowReceiver& r, int i, int j) {
+  if (i < 0 || j < 0 || i >= map.size || j >= map.size) return 1.0f;
+  return map.lsDepth(i, j) < blockerThreshold(r, i, j) ? 0.0f : 1.0f;
+}
+
+// Williams' hard shadow: the compare at the texel holding (s, t). V in {0, 1}.
+inline float hardShadow(const LightMap& map, const ShadowReceiver& r) {
+  if (!r.inMap) return 1.0f;
+  return litAtTexel(map, r, static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
+}
+
+// PCF: the mean of the nearest-texel compare function over the square of side `widthTexels`
+// centred at (s, t). Computed exactly: the square covers whole texels with weight 1 and partial
+// texels at its border with the covered fraction (separable weights 1-f, 1, ..., 1, f), so V varies
+// continuously with (s, t) — a box of width 1 is the familiar 2x2 bilinear PCF.
+float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels);
+
+// A disk of n sample offsets in the unit disk, evenly spread (Vogel's sunflower spiral:
+// radius sqrt((i + 0.5) / n), angle i times the golden angle). Deterministic.
+std::vector<Vec2> vogelDisk(int n);
+
+// Rotation (cos, sin) of a per-pixel disk pattern, from a hash of the pixel: trades the banding of
+// one fixed pattern for fine noise. Deterministic.
+Vec2 pixelRotation(int x, int y);
+
+struct BlockerSearch {
+  int blockers = 0;         //!< samples that found a blocker
+  float meanDepth = 0.0f;   //!< mean light-space depth of those blockers (0 when none)
+};
+
+// PCSS blocker search: the texels under the disk `pattern` (unit-disk offsets) rotated by
+// `rotation` and scaled to `radiusTexels` around (r.s, r.t).
+BlockerSearch searchBlockers(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
+                             std::span<const Vec2> pattern, const Vec2& rotation);
+
+// PCF over a disk: the mean of 1-texel box compares (pcfBox width 1) at the pattern's offsets.
+float pcfDisk(const LightMap& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+              const Vec2& rotation);
+
+struct NearestBlocker {
+  bool found = false;
+  float distanceTexels = 0.0f;  //!< from (r.s, r.t) to the blocker texel's centre
+  float lsDepth = 0.0f;         //!< the blocker's depth
+  int32_t objectId = kNoObject;
+};
+
+// The blocker texel nearest to (r.s, r.t) (Euclidean, texel centres) within maxRadiusTexels:
+// square rings of growing radius, stopped once no nearer texel can follow (Brabec & Seidel 2002,
+// Sec. 3.2's search). Ties go to the first texel in row-major ring order.
+NearestBlocker findNearestBlocker(const LightMap& map, const ShadowReceiver& r, float maxRadiusTexels);
+
+// Runs f(x, y) -> V for every pixel of the G-buffer that sees geometry, in parallel over rows;
+// V = 1 where the pixel sees nothing. Deterministic: every pixel is computed on its own.
+template <class F>
+void forEachReceiverPixel(const GBuffer& gbuffer, Image<float>& v, F&& f) {
+  v = Image<float>(gbuffer.width(), gbuffer.height(), 1.0f);
+  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      float* out = v.row(y);
+      for (int x = 0; x < gbuffer.width(); ++x)
+        if (gbuffer.hit(x, y)) out[x] = f(x, y);
+    }
+  });
+}
+
+}  // namespace penumbra

@@ -1,0 +1,251 @@
+// Tests of the shared shadow-map stages (src/techniques/shadow_map.cpp) on small hand-made light
+// maps whose content is known in closed form: the exact PCF box against the covered fraction of a
+// half-plane of blockers, the receiver plane against the analytic depth of a tilted plane
+// (orthographic: exact; perspective: first order, checked against ray-plane intersections), the
+// blocker search's mean depth, the nearest-blocker ring search against a brute-force scan, the
+// disk patterns, and the rejection of bad map sizes and kernels.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "penumbra/error.h"
+#include "penumbra/registry.h"
+#include "techniques/shadow_map.h"
+
+namespace penumbra {
+namespace {
+
+// An orthographic 16x16 map looking down +z from the origin: texel size 1, s = 8 + x, t = 8 - y.
+LightMap orthoMap(int size = 16, float fill = kInfinity) {
+  LightMap m;
+  m.size = size;
+  m.orthographic = true;
+  m.halfWidth = 0.5f * static_cast<float>(size);
+  m.zNear = 0.0f;
+  m.zFar = 100.0f;
+  m.lsDepth = Image<float>(size, size, fill);
+  m.objectId = Image<int32_t>(size, size, kNoObject);
+  return m;
+}
+
+const Vec3 kFacingLight(0.0f, 0.0f, -1.0f);  // a receiver facing a light that looks down +z
+
+TEST(ShadowMap, OrthoMapProjectsAsDocumented) {
+  const LightMap m = orthoMap();
+  const Vec3 stz = m.project(Vec3(1.25f, -2.5f, 7.0f));
+  EXPECT_NEAR(stz.x, 9.25f, 1e-5f);
+  EXPECT_NEAR(stz.y, 10.5f, 1e-5f);
+  EXPECT_NEAR(stz.z, 7.0f, 1e-5f);
+  EXPECT_NEAR(m.texelWorldSize(7.0f), 1.0f, 1e-6f);
+}
+
+TEST(ShadowMap, PcfBoxIsTheCoveredFractionOfAHalfPlane) {
+  LightMap m = orthoMap();
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < 8; ++i) m.lsDepth(i, j) = 1.0f;  // blockers where s < 8
+  for (float width : {1.0f, 3.0f, 5.0f}) {
+    for (float x = -4.0f; x <= 4.0f; x += 0.137f) {
+      const ShadowReceiver r = makeReceiver(m, Vec3(x, 0.3f, 5.0f), kFacingLight, DepthBias{});
+      ASSERT_TRUE(r.inMap);
+      const float s = 8.0f + x;
+      const float exact = std::clamp((s + 0.5f * width - 8.0f) / width, 0.0f, 1.0f);
+      EXPECT_NEAR(pcfBox(m, r, r.s, r.t, width), exact, 1e-5f) << "width " << width << " s " << s;
+    }
+  }
+  // The hard compare is the step at s = 8.
+  EXPECT_EQ(hardShadow(m, makeReceiver(m, Vec3(-0.01f, 0.0f, 5.0f), kFacingLight, DepthBias{})), 0.0f);
+  EXPECT_EQ(hardShadow(m, makeReceiver(m, Vec3(0.01f, 0.0f, 5.0f), kFacingLight, DepthBias{})), 1.0f);
+  // A blocker behind the receiver does not shadow it.
+  EXPECT_EQ(hardShadow(m, makeReceiver(m, Vec3(-3.0f, 0.0f, 0.5f), kFacingLight, DepthBias{})), 1.0f);
+}
+
+TEST(ShadowMap, ReceiverPlaneMatchesATiltedPlaneExactlyInAnOrthoMap) {
+  LightMap m = orthoMap(64);
+  // A plane at 60 degrees to the light's axis through (0, 0, 20), rendered into the map analytically.
+  const Vec3 n = glm::normalize(Vec3(std::sin(radians(60.0f)) * 0.8f, std::sin(radians(60.0f)) * 0.6f, -std::cos(radians(60.0f))));
+  const Vec3 p0(0.0f, 0.0f, 20.0f);
+  auto planeDepth = [&](float x, float y) { return (glm::dot(n, p0) - n.x * x - n.y * y) / n.z; };
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < m.size; ++i) {
+      const Vec3 w = m.unproject(static_cast<float>(i) + 0.5f, static_cast<float>(j) + 0.5f, 1.0f);
+      m.lsDepth(i, j) = planeDepth(w.x, w.y);
+    }
+  const Vec3 p(1.3f, -0.7f, planeDepth(1.3f, -0.7f));
+  const ShadowReceiver exact = makeReceiver(m, p, n, DepthBias{0.0f, 0.0f});
+  ASSERT_TRUE(exact.inMap);
+  EXPECT_NEAR(exact.dzds, -n.x / n.z, 1e-5f);  // texel size 1; x grows with s
+  EXPECT_NEAR(exact.dzdt, n.y / n.z, 1e-5f);   // y falls with t
+  const int ci = static_cast<int>(exact.s), cj = static_cast<int>(exact.t);
+  for (int dj = -7; dj <= 7; ++dj)
+    for (int di = -7; di <= 7; ++di)
+      EXPECT_NEAR(blockerThreshold(exact, ci + di, cj + dj), m.lsDepth(ci + di, cj + dj), 2e-5f * 20.0f);
+  // With the default bias a 15-texel kernel on the steep plane sees no blocker at all...
+  const ShadowReceiver biased = makeReceiver(m, p, n, DepthBias{});
+  EXPECT_EQ(pcfBox(m, biased, biased.s, biased.t, 15.0f), 1.0f);
+  // ... while comparing against the receiver's own depth (a flat receiver) shadows about half of it.
+  const ShadowReceiver flat = makeReceiver(m, p, kFacingLight, DepthBias{});
+  EXPECT_NEAR(pcfBox(m, flat, flat.s, flat.t, 15.0f), 0.5f, 0.1f);
+}
+
+TEST(ShadowMap, ReceiverPlaneIsFirstOrderExactInAPerspectiveMap) {
+  LightMap m;
+  m.size = 64;
+  m.orthographic = false;
+  m.tanHalfFov = 1.0f;
+  m.zNear = 0.1f;
+  m.zFar = 100.0f;
+  m.lsDepth = Image<float>(m.size, m.size, kInfinity);
+  const Vec3 n = glm::normalize(Vec3(0.5f, -0.4f, -0.7f));
+  const Vec3 p(1.0f, 0.5f, 10.0f);
+  // Exact depth of the plane through p along the ray through map position (s, t).
+  auto exactDepth = [&](float s, float t) {
+    const Vec3 d = m.unproject(s, t, 1.0f);  // the point of depth 1 on the ray: (a, b, 1)
+    return glm::dot(n, p) / glm::dot(n, d);
+  };
+  const ShadowReceiver r = makeReceiver(m, p, n, DepthBias{0.0f, 0.0f});
+  ASSERT_TRUE(r.inMap);
+  EXPECT_NEAR(r.lsDepth, 10.0f, 1e-4f);
+  const float h = 0.01f;
+  EXPECT_NEAR(r.dzds, (exactDepth(r.s + h, r.t) - exactDepth(r.s - h, r.t)) / (2 * h), 2e-3f);
+  EXPECT_NEAR(r.dzdt, (exactDepth(r.s, r.t + h) - exactDepth(r.s, r.t - h)) / (2 * h), 2e-3f);
+  // At a texel centre the exact depth is z0 / (1 + e) with e = n.d(texel) / n.d(receiver) - 1; the
+  // linear extrapolation must be its first-order part z0 (1 - e), exactly.
+  const int ci = static_cast<int>(r.s), cj = static_cast<int>(r.t);
+  const float nDotD0 = glm::dot(n, m.unproject(r.s, r.t, 1.0f));
+  for (int dj = -3; dj <= 3; ++dj)
+    for (int di = -3; di <= 3; ++di) {
+      const Vec3 d = m.unproject(static_cast<float>(ci + di) + 0.5f, static_cast<float>(cj + dj) + 0.5f, 1.0f);
+      const float e = glm::dot(n, d) / nDotD0 - 1.0f;
+      EXPECT_NEAR(blockerThreshold(r, ci + di, cj + dj), r.lsDepth * (1.0f - e), 1e-4f * r.lsDepth);
+    }
+}
+
+TEST(ShadowMap, ReceiversOutsideTheMapAreLit) {
+  const LightMap m = orthoMap(16, 1.0f);  // blockers everywhere
+  const ShadowReceiver outside = makeReceiver(m, Vec3(20.0f, 0.0f, 5.0f), kFacingLight, DepthBias{});
+  EXPECT_FALSE(outside.inMap);
+  EXPECT_EQ(hardShadow(m, outside), 1.0f);
+  const ShadowReceiver inside = makeReceiver(m, Vec3(2.0f, 0.0f, 5.0f), kFacingLight, DepthBias{});
+  EXPECT_TRUE(inside.inMap);
+  EXPECT_EQ(hardShadow(m, inside), 0.0f);
+  LightMap persp = m;
+  persp.orthographic = false;
+  EXPECT_FALSE(makeReceiver(persp, Vec3(0.0f, 0.0f, -5.0f), kFacingLight, DepthBias{}).inMap);  // behind the light
+}
+
+TEST(ShadowMap, BlockerSearchAveragesTheBlockersItFinds) {
+  LightMap m = orthoMap(64, 3.0f);
+  const std::vector<Vec2> disk = vogelDisk(64);
+  const ShadowReceiver r = makeReceiver(m, Vec3(0.2f, 0.1f, 10.0f), kFacingLight, DepthBias{});
+  BlockerSearch all = searchBlockers(m, r, 6.0f, disk, Vec2(1, 0));
+  EXPECT_EQ(all.blockers, 64);
+  EXPECT_FLOAT_EQ(all.meanDepth, 3.0f);
+  // Blockers at depth 2 left of the receiver only: about half the disk finds them, all at depth 2.
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < m.size; ++i) m.lsDepth(i, j) = i < 32 ? 2.0f : kInfinity;
+  const ShadowReceiver atEdge = makeReceiver(m, Vec3(0.0f, 0.0f, 10.0f), kFacingLight, DepthBias{});
+  BlockerSearch half = searchBlockers(m, atEdge, 6.0f, disk, pixelRotation(3, 4));
+  EXPECT_NEAR(half.blockers, 32, 5);
+  EXPECT_FLOAT_EQ(half.meanDepth, 2.0f);
+  // Nothing in front of a receiver nearer than every blocker.
+  const ShadowReceiver near = makeReceiver(m, Vec3(0.0f, 0.0f, 1.0f), kFacingLight, DepthBias{});
+  EXPECT_EQ(searchBlockers(m, near, 6.0f, disk, Vec2(1, 0)).blockers, 0);
+}
+
+TEST(ShadowMap, PcfDiskOfAHalfPlaneIsAboutHalfLit) {
+  LightMap m = orthoMap(64);
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < 32; ++i) m.lsDepth(i, j) = 2.0f;
+  const std::vector<Vec2> disk = vogelDisk(256);
+  const ShadowReceiver r = makeReceiver(m, Vec3(0.0f, 0.0f, 10.0f), kFacingLight, DepthBias{});
+  EXPECT_NEAR(pcfDisk(m, r, 8.0f, disk, Vec2(1, 0)), 0.5f, 0.02f);
+  // Moved by half the radius into the lit side: the lit part of the disk is the disk minus a
+  // circular segment at distance d = R/2 from the centre: 1 - (acos(d/R) - (d/R) sqrt(1 - (d/R)^2)) / pi.
+  const ShadowReceiver lit = makeReceiver(m, Vec3(4.0f, 0.0f, 10.0f), kFacingLight, DepthBias{});
+  const double q = 0.5;
+  const double exact = 1.0 - (std::acos(q) - q * std::sqrt(1.0 - q * q)) / 3.14159265358979323846;
+  EXPECT_NEAR(pcfDisk(m, lit, 8.0f, disk, Vec2(1, 0)), exact, 0.02);
+}
+
+TEST(ShadowMap, NearestBlockerMatchesABruteForceScan) {
+  LightMap m = orthoMap(48);
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < m.size; ++i)
+      if (hash32(static_cast<uint64_t>(j * m.size + i)) % 50 == 0) {
+        m.lsDepth(i, j) = 1.0f;
+        m.objectId(i, j) = j * m.size + i;
+      }
+  for (int k = 0; k < 200; ++k) {
+    const float x = (static_cast<float>(hash32(2 * k) % 10000) / 10000.0f - 0.5f) * 40.0f;
+    const float y = (static_cast<float>(hash32(2 * k + 1) % 10000) / 10000.0f - 0.5f) * 40.0f;
+    const float maxRadius = 1.0f + static_cast<float>(k % 9);
+    const ShadowReceiver r = makeReceiver(m, Vec3(x, y, 5.0f), kFacingLight, DepthBias{});
+    ASSERT_TRUE(r.inMap);
+    float best = kInfinity;
+    for (int j = 0; j < m.size; ++j)
+      for (int i = 0; i < m.size; ++i) {
+        if (!(m.lsDepth(i, j) < 5.0f)) continue;
+        const float d = std::hypot(static_cast<float>(i) + 0.5f - r.s, static_cast<float>(j) + 0.5f - r.t);
+        if (d <= maxRadius) best = std::min(best, d);
+      }
+    const NearestBlocker found = findNearestBlocker(m, r, maxRadius);
+    ASSERT_EQ(found.found, best < kInfinity) << "receiver " << k;
+    if (found.found) {
+      EXPECT_NEAR(found.distanceTexels, best, 1e-5f) << "receiver " << k;
+      EXPECT_EQ(found.lsDepth, 1.0f);
+      EXPECT_NE(found.objectId, kNoObject);
+    }
+  }
+}
+
+TEST(ShadowMap, VogelDiskSpreadsUniformlyOverTheUnitDisk) {
+  const std::vector<Vec2> disk = vogelDisk(32);
+  ASSERT_EQ(disk.size(), 32u);
+  Vec2 mean(0.0f);
+  int inner = 0;
+  for (const Vec2& p : disk) {
+    EXPECT_LT(glm::length(p), 1.0f);
+    mean += p / 32.0f;
+    inner += glm::length(p) < 0.5f ? 1 : 0;
+  }
+  EXPECT_LT(glm::length(mean), 0.05f);
+  EXPECT_EQ(inner, 8);  // a quarter of the area holds a quarter of the points
+  EXPECT_EQ(vogelDisk(32), disk);
+  const Vec2 rot = pixelRotation(17, 5);
+  EXPECT_NEAR(glm::length(rot), 1.0f, 1e-5f);
+  EXPECT_EQ(rot, pixelRotation(17, 5));
+  EXPECT_NE(rot, pixelRotation(18, 5));
+}
+
+TEST(ShadowMap, RejectsBadSizesAndKernels) {
+  Scene empty;
+  const Light light = Light::sphere(Vec3(0, 5, 0), 0.5f);
+  EXPECT_THROW(createShadowMap(empty, light, 8), Error);
+  EXPECT_THROW(createShadowMap(empty, light, 9000), Error);
+  for (const char* technique : {"hard", "pcf", "pcss", "multisample"}) {
+    ParamSet bad;
+    bad.set("map_size", int64_t{8}, "scene.json: techniques.x.map_size");
+    try {
+      createTechnique(technique, bad);
+      ADD_FAILURE() << technique << " accepted map_size = 8";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("map_size"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("scene.json"), std::string::npos) << e.what();
+    }
+    ParamSet negativeBias;
+    negativeBias.set("bias_constant", -1.0, "command line");
+    EXPECT_THROW(createTechnique(technique, negativeBias), Error) << technique;
+  }
+  ParamSet even;
+  even.set("kernel", int64_t{4}, "command line");
+  try {
+    createTechnique("pcf", even);
+    ADD_FAILURE() << "pcf accepted kernel = 4";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("odd"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace penumbra
