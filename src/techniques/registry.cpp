@@ -15,6 +15,7 @@ TechniqueInfo hardTechniqueInfo();
 TechniqueInfo pcfTechniqueInfo();
 TechniqueInfo pcssTechniqueInfo();
 TechniqueInfo multisampleTechniqueInfo();
+TechniqueInfo brabecTechniqueInfo();
 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = {
@@ -25,6 +26,7 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       pcfTechniqueInfo(),
       pcssTechniqueInfo(),
       multisampleTechniqueInfo(),
+      brabecTechniqueInfo(),
   };
   return registry;
 }
