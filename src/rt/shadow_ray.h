@@ -4,7 +4,12 @@
 // The origin moves by `epsilon` (shadowRayEpsilon: a scale-relative distance, world units) along
 // the geometric normal, to the side of the light's centre, so the ray does not hit the surface it
 // starts on. The offset goes to the light's side rather than to each sample's side: a sample below
-// the receiver's tangent plane is then blocked by the receiver itself, as it physically is. The ray
+// the receiver's tangent plane is then blocked by the receiver itself, as it physically is, and a
+// facet of a smooth-shaded mesh that faces slightly away from the light near the shadow terminator
+// (while its shading normal faces the light) does not shadow itself, as the smooth surface it
+// approximates would not (pbrt's rule, offsetting to the side the ray leaves). On a surface facing
+// away from the light V is not meaningful (a zero-thickness wall is seen through): the error mask
+// excludes such pixels and shading multiplies V by an irradiance of 0 there. The ray
 // stops `epsilon` short of the sample, so emitter geometry modelled in the scene (a lamp's panel)
 // does not occlude its own light.
 #pragma once
