@@ -303,6 +303,9 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
   if (options.maxRadius < 1) fail("brabec: max_radius = {} is not valid: expected an int >= 1 (texels)", options.maxRadius);
   if (!(options.interpolateMaxStep >= 0.0f && options.interpolateMaxStep <= 1.0f))
     fail("brabec: interpolate_max_step = {} is not valid: expected a float in [0, 1]", options.interpolateMaxStep);
+  if (!(options.interpolateMaxAngle >= 0.0f && options.interpolateMaxAngle <= 180.0f))
+    fail("brabec: interpolate_max_angle = {} is not valid: expected a float in [0, 180] (degrees)",
+         options.interpolateMaxAngle);
   if (!(options.jitter >= 0.0f && options.jitter <= 0.5f))
     fail("brabec: jitter = {} is not valid: expected a float in [0, 0.5] (texels)", options.jitter);
 }
@@ -366,7 +369,8 @@ BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, 
   return p;
 }
 
-float BrabecTechnique::evaluate(const Pixel& p) const {
+float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel) const {
+  if (toTexel) *toTexel = Vec2(0.0f);
   switch (p.cls) {
     case Pixel::Miss:
     case Pixel::OutOfMap: return 1.0f;
@@ -436,6 +440,14 @@ float BrabecTechnique::evaluate(const Pixel& p) const {
   q.radius = radius;
   const brabec::SearchHit hit = options_.scalarSearch ? brabec::searchScalar(m, q) : brabec::searchVectorized(m, q);
   if (!hit.found) return inner ? 0.0f : 1.0f;
+  if (toTexel) {
+    // The texel's position as the distance measured it (centre + jitter).
+    const size_t i = static_cast<size_t>(hit.t) * map_.size + hit.s;
+    const Vec2 d(static_cast<float>(hit.s) + 0.5f + (m.jitterS ? m.jitterS[i] : 0.0f) - p.s,
+                 static_cast<float>(hit.t) + 0.5f + (m.jitterT ? m.jitterT[i] : 0.0f) - p.t);
+    const float length = glm::length(d);
+    if (length > 0.0f) *toTexel = d / length;
+  }
 
   const float found = map_.lsDepth(hit.s, hit.t);
   float rMax;
@@ -456,15 +468,17 @@ namespace {
 
 // Sec. 4.3 group refinement along one line of pixels (a column or a row): `at(i)` is pixel i's
 // index. Borders a and b are solved (searched unless already known); the pixels between are
-// interpolated when the whole group shares class and key, else the middle one is searched and both
-// halves are refined. Groups of 5 split into two of 3, as in the paper's Figure 5.
-template <class Solve, class Same, class At>
-void refineGroup(int a, int b, const Solve& solve, const Same& same, const At& at, float maxStep, float* v,
-                 uint8_t* known) {
+// interpolated when the borders pass `smooth` (the extra criteria: step, kinks) and the whole group
+// shares class and key, else the middle one is searched and both halves are refined. Groups of 5
+// split into two of 3, as in the paper's Figure 5. `fill(k, from)` interpolates pixel k, `from` being
+// its nearer interpolant (whose id and direction it keeps).
+template <class Solve, class Smooth, class Same, class Fill, class At>
+void refineGroup(int a, int b, const Solve& solve, const Smooth& smooth, const Same& same, const Fill& fill,
+                 const At& at, float* v, const uint8_t* known) {
   solve(at(a));
   solve(at(b));
   if (b - a < 2) return;
-  bool uniform = std::abs(v[at(a)] - v[at(b)]) <= maxStep;
+  bool uniform = smooth(at(a), at(b));
   for (int i = a + 1; i <= b && uniform; ++i) uniform = same(at(a), at(i));
   if (uniform) {
     const float va = v[at(a)], vb = v[at(b)];
@@ -473,13 +487,13 @@ void refineGroup(int a, int b, const Solve& solve, const Same& same, const At& a
       if (known[k]) continue;
       const float f = static_cast<float>(i - a) / static_cast<float>(b - a);
       v[k] = va + f * (vb - va);
-      known[k] = 1;
+      fill(k, i - a <= b - i ? at(a) : at(b));
     }
     return;
   }
   const int mid = (a + b) / 2;
-  refineGroup(a, mid, solve, same, at, maxStep, v, known);
-  refineGroup(mid, b, solve, same, at, maxStep, v, known);
+  refineGroup(a, mid, solve, smooth, same, fill, at, v, known);
+  refineGroup(mid, b, solve, smooth, same, fill, at, v, known);
 }
 
 // Group borders along a line of `length` pixels: every 4th pixel and the last one.
@@ -539,12 +553,43 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
       hits += hitCount;
     });
     auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };
+    // Per known pixel: the direction to its texel as two snorm8 components (0, 0: none), 2 bytes a
+    // pixel; written before it is read (a pixel is known once solved or interpolated).
+    const auto direction = std::make_unique_for_overwrite<int8_t[]>(2 * count);
+    auto storeDirection = [&](size_t k, const Vec2& d) {
+      direction[2 * k] = static_cast<int8_t>(std::lround(d.x * 127.0f));
+      direction[2 * k + 1] = static_cast<int8_t>(std::lround(d.y * 127.0f));
+    };
+    // V at the end of the penumbra (r >= r_max, or no texel within the radius): the clamp's kink.
+    auto atEnd = [&](size_t k) {
+      return cls[k] == Pixel::Lit ? out[k] == 1.0f : cls[k] == Pixel::Blocked ? out[k] == 0.0f : true;
+    };
+    const float maxStep = options_.interpolateMaxStep;
+    const bool kinks = options_.interpolateKinks;
+    // cos of the largest angle, in the snorm8 units of the dot product (127^2).
+    const float minDot = std::cos(radians(options_.interpolateMaxAngle)) * 127.0f * 127.0f;
+    auto smooth = [&](size_t a, size_t b) {
+      if (std::abs(out[a] - out[b]) > maxStep) return false;
+      if (!kinks) return true;
+      const bool endA = atEnd(a), endB = atEnd(b);
+      if (endA != endB) return false;
+      if (endA) return true;
+      const int dot = direction[2 * a] * direction[2 * b] + direction[2 * a + 1] * direction[2 * b + 1];
+      return static_cast<float>(dot) >= minDot;
+    };
+    auto fill = [&](size_t k, size_t from) {
+      known[k] = 1;
+      direction[2 * k] = direction[2 * from];
+      direction[2 * k + 1] = direction[2 * from + 1];
+    };
     const std::vector<int> columns = groupBorders(width), rowBorders = groupBorders(height);
     auto makeSolve = [&](int64_t& searchCount) {
       return [&, searchCountPtr = &searchCount](size_t k) {
         if (known[k]) return;
         const Pixel p = classify(gbuffer, static_cast<int>(k % width), static_cast<int>(k / width));
-        out[k] = evaluate(p);
+        Vec2 toTexel;
+        out[k] = evaluate(p, &toTexel);
+        storeDirection(k, toTexel);
         known[k] = 1;
         *searchCountPtr += searched(p);
       };
@@ -557,7 +602,7 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
         const int x = columns[c];
         auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
         for (size_t g = 0; g + 1 < rowBorders.size(); ++g)
-          refineGroup(rowBorders[g], rowBorders[g + 1], solve, same, at, options_.interpolateMaxStep, out, known.data());
+          refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, known.data());
         if (rowBorders.size() == 1) solve(at(0));
       }
       searches += searchCount;
@@ -568,7 +613,7 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
       for (int y = rows.begin(); y < rows.end(); ++y) {
         auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };
         for (size_t g = 0; g + 1 < columns.size(); ++g)
-          refineGroup(columns[g], columns[g + 1], solve, same, at, options_.interpolateMaxStep, out, known.data());
+          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fill, at, out, known.data());
       }
       searches += searchCount;
     });
@@ -618,8 +663,14 @@ TechniqueInfo brabecTechniqueInfo() {
   add("interpolate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
       "adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel");
   add("interpolate_max_step", ParamType::Float, 1.0, 0.0, 1.0, "",
-      "also search the middle of a group whose border V differ by more than this; 1 = the paper's "
-      "criterion alone (equal ids and hard-test results)");
+      "also search the middle of a group whose border V differ by more than this; 1 = off");
+  add("interpolate_kinks", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "also search the middle of a group across a kink of V: one border at the end of the penumbra "
+      "(r >= r_max) and the other not, or the borders' nearest texels in directions more than "
+      "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria");
+  add("interpolate_max_angle", ParamType::Float, 30.0, 0.0, 180.0, "degrees",
+      "interpolate_kinks: largest angle between the directions from the two borders to the texels "
+      "their searches found");
   add("accelerate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
       "tile summary and local search radius: change the cost, never V; false runs the plain Sec. 4.2 "
       "search (for measuring what they save)");
@@ -638,6 +689,8 @@ TechniqueInfo brabecTechniqueInfo() {
     o.maxRadius = static_cast<int>(params.getInt("max_radius"));
     o.interpolate = params.getBool("interpolate");
     o.interpolateMaxStep = static_cast<float>(params.getFloat("interpolate_max_step"));
+    o.interpolateKinks = params.getBool("interpolate_kinks");
+    o.interpolateMaxAngle = static_cast<float>(params.getFloat("interpolate_max_angle"));
     o.accelerate = params.getBool("accelerate");
     o.jitter = static_cast<float>(params.getFloat("jitter"));
     o.idTest = params.getBool("id_test");

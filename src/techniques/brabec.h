@@ -72,8 +72,22 @@
 // result and the id (the blocker's id when blocked, the receiver's when lit), else search the middle
 // and repeat on the two groups of 3; then every row, between those columns, in the same way. Since a
 // group interpolates only when its ids agree, an interpolated pixel keeps the id of its interpolants.
-// Option `interpolate_max_step` (default 1: off, the paper's criterion) also refines a group whose
-// border V differ by more than the step, for a result closer to the exhaustive search.
+// Deviation (option `interpolate_kinks`, on by default): two more refinement criteria, in the spirit
+// of the paper's "very conservative refinement". Linear interpolation is exact where V is linear in
+// the pixel position, and V = f(clamp(r / r_max)) with r the distance to the nearest qualifying texel
+// is close to linear except at two kinds of kink: (1) the clamp, where the penumbra ends at r = r_max
+// (V = 1 lit, 0 blocked): refine when exactly one border is at that end value; (2) the ridges and
+// valleys of the distance field r (the medial axis: midway between two blockers, the middle of an
+// umbra, a blocker's corner), where the nearest texel jumps to another edge: refine when the
+// directions from the two borders' P' to their texels differ by more than `interpolate_max_angle`
+// (default 30 degrees). An interpolated pixel carries its nearer interpolant's direction into the
+// row pass, as it carries its id. Measured on `crowded` against the exhaustive search (pixel RMSE8
+// over the error mask, 512x512 image, maps 256 / 1024): the paper's criteria alone 2.2 / 2.5, with
+// (1) only 1.5 / 1.6, with (1) and (2) 0.61 / 0.59; searched pixels 8.8% -> 12.2% / 11.6%. At 1024x1024
+// (penumbrae twice as many pixels wide) 1.26 -> 0.38 / 0.37, searched 7.5% -> 9.4%. Different blocker
+// ids at the borders (the paper's other cue) add nothing once (2) is in: a change of blocker turns the
+// direction. Option `interpolate_max_step` (default 1: off) also refines a group whose border V
+// differ by more than the step.
 //
 // Jitter (Sec. 4.3): texel positions offset by up to `jitter` texels in s and t, a deterministic hash
 // of the texel. Units: map coordinates and radii in texels, depths in world units.
@@ -103,6 +117,8 @@ struct BrabecOptions {
   int maxRadius = 96;            //!< hard cap of the search radius, texels (see the file comment)
   bool interpolate = true;       //!< Sec. 4.3 adaptive 4x4 block interpolation
   float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more, [0, 1]
+  bool interpolateKinks = true;  //!< also refine across the kinks of V (r = r_max, ridges of r); see the file comment
+  float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees, [0, 180]
   float jitter = 0.0f;           //!< texel position jitter amplitude, texels, [0, 0.5]
   bool idTest = true;            //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
   bool scalarSearch = false;     //!< use the scalar oracle search (tests)
@@ -177,7 +193,9 @@ class BrabecTechnique final : public ShadowTechnique {
  private:
   struct Pixel;
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
-  float evaluate(const Pixel& pixel) const;
+  // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
+  // the texel the search found, (0, 0) when it found none.
+  float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr) const;
 
   BrabecOptions options_;
   LightMap map_;

@@ -216,49 +216,56 @@ TEST(Brabec, QualityWithDefaults) {
 // ---------------------------------------------------------------------------------------------------
 // Sec. 4.3 interpolation against the exhaustive search.
 
+// The criterion: the interpolated V stays within 1/255 RMSE of the exhaustive search's V,
+// pixel by pixel over the error mask, on `crowded` (512x512 image here; maps 256 and 1024).
 TEST(Brabec, InterpolationStaysWithinOneRmse8OfTheExhaustiveSearchOnCrowded) {
   const ShadowTestScene& s = shadowTestScene("crowded");
   for (int mapSize : {256, 1024}) {
+    auto run = [&](const BrabecOptions& o, double* searchFraction) {
+      BrabecTechnique t(o);
+      t.prepare(s.scene, s.light());
+      Image<float> v;
+      t.visibility(s.gbuffer, v);
+      for (const auto& [k, value] : t.stats())
+        if (k == "search_fraction") *searchFraction = value;
+      return v;
+    };
     BrabecOptions o;
     o.mapSize = mapSize;
     o.interpolate = false;
-    BrabecTechnique exhaustive(o);
-    exhaustive.prepare(s.scene, s.light());
-    Image<float> vx;
-    exhaustive.visibility(s.gbuffer, vx);
-    o.interpolate = true;
-    BrabecTechnique interpolated(o);
-    interpolated.prepare(s.scene, s.light());
-    Image<float> vi;
-    interpolated.visibility(s.gbuffer, vi);
-    o.interpolateMaxStep = 0.0625f;
-    BrabecTechnique stepped(o);
-    stepped.prepare(s.scene, s.light());
-    Image<float> vs;
-    stepped.visibility(s.gbuffer, vs);
+    double fExhaustive = -1.0, fInterpolated = -1.0, fPaper = -1.0, fStepped = -1.0;
+    const Image<float> vx = run(o, &fExhaustive);
+    o.interpolate = true;  // defaults: the paper's criteria and the kink criteria
+    const Image<float> vi = run(o, &fInterpolated);
+    o.interpolateKinks = false;  // the paper's criteria alone
+    const Image<float> vp = run(o, &fPaper);
+    o.interpolateMaxStep = 0.0625f;  // the paper's criteria and the step criterion
+    const Image<float> vs = run(o, &fStepped);
 
     const ErrorStats ex = errorAgainstReference(vx, s), in = errorAgainstReference(vi, s);
-    const ErrorStats between = compareVisibility(vi, vx, s.mask), betweenStepped = compareVisibility(vs, vx, s.mask);
-    auto fraction = [](const BrabecTechnique& t) {
-      for (const auto& [k, v] : t.stats())
-        if (k == "search_fraction") return v;
-      return -1.0;
-    };
-    std::printf("[brabec] crowded map %d: RMSE8 exhaustive %.3f, interpolated %.3f (difference of the two: "
-                "RMSE8 %.3f, max %.3f; with interpolate_max_step 1/16: RMSE8 %.3f); searched %.3f / %.3f / %.3f\n",
-                mapSize, ex.rmse8, in.rmse8, between.rmse8, between.maxAbsError, betweenStepped.rmse8,
-                fraction(exhaustive), fraction(interpolated), fraction(stepped));
-    // The bound: the interpolation changes the error against the reference by < 1/255 RMSE.
+    const ErrorStats between = compareVisibility(vi, vx, s.mask), paper = compareVisibility(vp, vx, s.mask);
+    const ErrorStats stepped = compareVisibility(vs, vx, s.mask);
+    std::printf("[brabec] crowded map %d: RMSE8 exhaustive %.3f, interpolated %.3f; interpolated vs exhaustive: "
+                "RMSE8 %.3f (max %.3f), the paper's criteria alone %.3f (max %.3f), with interpolate_max_step 1/16 "
+                "%.3f; searched %.3f / %.3f / %.3f / %.3f\n",
+                mapSize, ex.rmse8, in.rmse8, between.rmse8, between.maxAbsError, paper.rmse8, paper.maxAbsError,
+                stepped.rmse8, fExhaustive, fInterpolated, fPaper, fStepped);
+    // Pixel by pixel, the bound is 1.0. Measured 0.61 and 0.59 (maps 256 and 1024; max 0.125
+    // and 0.100); 0.8 keeps a margin below the bound. The paper's criteria alone: 2.2 and 2.5 (max
+    // 0.3, linear interpolation across the kinks of V), so the kink criteria are what meets it.
+    EXPECT_LE(between.rmse8, 0.8) << mapSize;
+    EXPECT_LT(between.maxAbsError, 0.2) << mapSize;
+    EXPECT_GT(paper.rmse8, 2.0 * between.rmse8) << mapSize;
+    // Against the reference the two are as good as each other.
     EXPECT_LT(std::abs(in.rmse8 - ex.rmse8), 1.0) << mapSize;
     EXPECT_LT(std::abs(in.penumbraRmse8 - ex.penumbraRmse8), 2.5) << mapSize;
-    // Pixel by pixel the two differ (measured RMSE8 2.2 and 2.5 at maps 256 and 1024, max 0.3:
-    // linear interpolation across the kinks of V in penumbrae 2 to 10 pixels wide); the step
-    // criterion brings them closer (1.1 at both).
-    EXPECT_LT(between.rmse8, 3.0) << mapSize;
-    EXPECT_LT(betweenStepped.rmse8, 0.75 * between.rmse8) << mapSize;
-    // It searches far fewer pixels: 1 in 16 in blocks without shadow edges.
-    EXPECT_GT(fraction(exhaustive), 0.9);
-    EXPECT_LT(fraction(interpolated), 0.15);
+    // The step criterion also brings the paper's interpolation closer (measured 1.1 at both maps).
+    EXPECT_LT(stepped.rmse8, 0.75 * paper.rmse8) << mapSize;
+    // The interpolation skips most searches: 1 in 16 in blocks without shadow edges. Measured 0.122
+    // and 0.116 searched with the kink criteria, 0.088 with the paper's alone, 0.976 exhaustive.
+    EXPECT_GT(fExhaustive, 0.9);
+    EXPECT_LT(fInterpolated, 0.15);
+    EXPECT_LE(fPaper, fInterpolated);
   }
 }
 
@@ -484,7 +491,8 @@ TEST(Brabec, RejectsIncompletePaperKnobsAndBadValues) {
   } catch (const penumbra::Error& e) {
     EXPECT_NE(std::string(e.what()).find("missing: r_bias, r_shrink"), std::string::npos) << e.what();
   }
-  for (const char* bad : {"meet=1.5", "jitter=0.7", "max_radius=0", "map_size=4", "interpolate_max_step=-1"}) {
+  for (const char* bad : {"meet=1.5", "jitter=0.7", "max_radius=0", "map_size=4", "interpolate_max_step=-1",
+                          "interpolate_max_angle=181"}) {
     ParamSet q;
     q.setFromKeyValue(bad, "test");
     EXPECT_THROW(createTechnique("brabec", q), penumbra::Error) << bad;
