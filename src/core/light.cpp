@@ -252,6 +252,89 @@ LightSample Light::sample(const Vec3& wsP, const Vec2& u) const {
   return {d / len, len, 1.0f};
 }
 
+Light::Sampler Light::samplerAt(const Vec3& wsP) const {
+  Sampler s;
+  s.light_ = this;
+  s.wsP_ = wsP;
+  switch (shape_) {
+    case LightShape::Sphere: {
+      // The set-up half of Light::sample's sphere case, in the same operations.
+      s.toCenter_ = center_ - wsP;
+      const float d2 = glm::dot(s.toCenter_, s.toCenter_);
+      const float r2 = radius_ * radius_;
+      s.inside_ = d2 <= r2;
+      if (s.inside_) break;
+      const float d = std::sqrt(d2);
+      const Vec3 w = s.toCenter_ / d;
+      s.frame_ = Frame::fromZ(w);
+      const float h = std::sqrt(d2 - r2);
+      s.d2MinusR2_ = d2 - r2;
+      s.diskRadius_ = radius_ * h / d;
+      s.axial_ = (d2 - r2) / d * w;
+      break;
+    }
+    case LightShape::Disk:
+      s.frame_ = Frame::fromZ(normal_);
+      s.diskRadius_ = radius_;
+      break;
+    case LightShape::Directional:
+      s.frame_ = Frame::fromZ(direction_);
+      s.diskRadius_ = std::tan(0.5f * angularDiameter_);
+      break;
+    default: break;  // rect, segment, polygon: nothing depends on p before the sample point
+  }
+  return s;
+}
+
+LightSample Light::Sampler::sample(const Vec2& u) const {
+  LightSample s;
+  sample(&u, 1, &s);
+  return s;
+}
+
+// The sample half of Light::sample, per shape, with the per-point values samplerAt computed.
+void Light::Sampler::sample(const Vec2* u, int count, LightSample* out) const {
+  const Light& l = *light_;
+  switch (l.shape_) {
+    case LightShape::Sphere:
+      if (inside_) {
+        for (int i = 0; i < count; ++i) out[i] = {l.directionToCenter(wsP_), 0.0f, 1.0f};
+        return;
+      }
+      for (int i = 0; i < count; ++i) {
+        const Vec2 q = concentricDisk(u[i]) * diskRadius_;
+        const Vec3 dir = glm::normalize(axial_ + q.x * frame_.x + q.y * frame_.y);
+        const float b = glm::dot(dir, toCenter_);
+        const float t = b - std::sqrt(std::max(0.0f, b * b - d2MinusR2_));
+        out[i] = {dir, t, 1.0f};
+      }
+      return;
+    case LightShape::Disk:
+      for (int i = 0; i < count; ++i) {
+        const Vec2 q = concentricDisk(u[i]) * diskRadius_;
+        const Vec3 d = l.center_ + q.x * frame_.x + q.y * frame_.y - wsP_;
+        const float len = glm::length(d);
+        out[i] = len > 0.0f ? LightSample{d / len, len, 1.0f} : LightSample{l.directionToCenter(wsP_), 0.0f, 1.0f};
+      }
+      return;
+    case LightShape::Directional:
+      for (int i = 0; i < count; ++i) {
+        const Vec2 q = concentricDisk(u[i]);
+        const Vec2 offset = q * diskRadius_;
+        float weight = 1.0f;
+        if (l.profile_ == LightProfile::LimbDarkened) {
+          const float mu = std::sqrt(std::max(0.0f, 1.0f - glm::dot(q, q)));
+          weight = (1.0f - kLimbDarkeningU * (1.0f - mu)) / (1.0f - kLimbDarkeningU / 3.0f);
+        }
+        out[i] = {glm::normalize(l.direction_ + offset.x * frame_.x + offset.y * frame_.y), kInfinity, weight};
+      }
+      return;
+    default:  // rect, segment, polygon: no per-point set-up to hoist
+      for (int i = 0; i < count; ++i) out[i] = l.sample(wsP_, u[i]);
+      return;
+  }
+}
+
 float Light::irradiance(const Vec3& wsP, const Vec3& wsN) const {
   switch (shape_) {
     case LightShape::Directional: return intensity_ * std::max(0.0f, glm::dot(wsN, direction_));

@@ -277,21 +277,36 @@ void rasterizeInTile(const Setup& s, int tx0, int ty0, const Context& ctx, TileB
 // Perspective-correct barycentrics of the pixel centre (ndcX, ndcY) in the clip-space triangle
 // (c0, c1, c2): the solution u of sum u_i (x_i, y_i, w_i) = (ndcX, ndcY, 1), normalized (Olano &
 // Greer 1997). u = adj(M) p / det(M) with M's columns c_i; the rows of adj(M) are cross products.
-glm::dvec3 homogeneousBarycentrics(const Vec4& c0, const Vec4& c1, const Vec4& c2, double ndcX, double ndcY) {
-  const glm::dvec3 m0(c0.x, c0.y, c0.w), m1(c1.x, c1.y, c1.w), m2(c2.x, c2.y, c2.w);
-  const glm::dvec3 p(ndcX, ndcY, 1.0);
-  glm::dvec3 u(glm::dot(glm::cross(m1, m2), p), glm::dot(glm::cross(m2, m0), p), glm::dot(glm::cross(m0, m1), p));
-  u *= 1.0 / (u.x + u.y + u.z);
-  // Snapping may put a covered pixel centre up to 1/512 pixel outside the exact triangle: clamp to
-  // it. A triangle whose plane passes through the eye has no solution (it covers no area in exact
-  // arithmetic); its centroid stands in.
-  if (!std::isfinite(u.x) || !std::isfinite(u.y) || !std::isfinite(u.z)) return glm::dvec3(1.0 / 3.0);
-  if (u.x < 0.0 || u.y < 0.0 || u.z < 0.0) {
-    u = glm::max(u, glm::dvec3(0.0));
-    u *= 1.0 / (u.x + u.y + u.z);
+// The rows depend on the triangle alone, so they are set up once per run of pixels that share a
+// winning triangle (most of a large triangle's row) and each pixel pays three dot products; the
+// arithmetic per pixel is the same as computing the rows afresh, so the result is bit-identical.
+struct HomogeneousTriangle {
+  glm::dvec3 row0{0.0}, row1{0.0}, row2{0.0};  // rows of adj(M)
+  Vec3 w{0.0f};                                // clip w of the three vertices
+  explicit HomogeneousTriangle(const Vec4& c0, const Vec4& c1, const Vec4& c2)
+      : w(c0.w, c1.w, c2.w) {
+    const glm::dvec3 m0(c0.x, c0.y, c0.w), m1(c1.x, c1.y, c1.w), m2(c2.x, c2.y, c2.w);
+    row0 = glm::cross(m1, m2);
+    row1 = glm::cross(m2, m0);
+    row2 = glm::cross(m0, m1);
   }
-  return u;
-}
+  HomogeneousTriangle() = default;
+
+  glm::dvec3 barycentrics(double ndcX, double ndcY) const {
+    const glm::dvec3 p(ndcX, ndcY, 1.0);
+    glm::dvec3 u(glm::dot(row0, p), glm::dot(row1, p), glm::dot(row2, p));
+    u *= 1.0 / (u.x + u.y + u.z);
+    // Snapping may put a covered pixel centre up to 1/512 pixel outside the exact triangle: clamp to
+    // it. A triangle whose plane passes through the eye has no solution (it covers no area in exact
+    // arithmetic); its centroid stands in.
+    if (!std::isfinite(u.x) || !std::isfinite(u.y) || !std::isfinite(u.z)) return glm::dvec3(1.0 / 3.0);
+    if (u.x < 0.0 || u.y < 0.0 || u.z < 0.0) {
+      u = glm::max(u, glm::dvec3(0.0));
+      u *= 1.0 / (u.x + u.y + u.z);
+    }
+    return u;
+  }
+};
 
 void validate(const RasterInput& input) {
   if (input.width < 1 || input.height < 1 || input.width > kMaxImageSize || input.height > kMaxImageSize)
@@ -366,19 +381,22 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
       samples.width = std::min(kTileSize, W - tx0);
       samples.height = std::min(kTileSize, H - ty0);
       const double ndcPerPixelX = 2.0 / W, ndcPerPixelY = 2.0 / H;
+      int32_t cachedTriangle = -1;
+      HomogeneousTriangle h;
       for (int j = 0; j < samples.height; ++j) {
         const double ndcY = 1.0 - (ty0 + j + 0.5) * ndcPerPixelY;
         for (int i = 0; i < samples.width; ++i) {
           const int32_t tri = tile.winner[j * kTileSize + i];
           if (tri < 0) continue;
+          if (tri != cachedTriangle) {
+            const glm::uvec3& v = input.triangles[static_cast<size_t>(tri)];
+            h = HomogeneousTriangle(input.clipPositions[v.x], input.clipPositions[v.y], input.clipPositions[v.z]);
+            cachedTriangle = tri;
+          }
           const double ndcX = (tx0 + i + 0.5) * ndcPerPixelX - 1.0;
-          const glm::uvec3& v = input.triangles[static_cast<size_t>(tri)];
-          const Vec4& c0 = input.clipPositions[v.x];
-          const Vec4& c1 = input.clipPositions[v.y];
-          const Vec4& c2 = input.clipPositions[v.z];
-          const glm::dvec3 b = homogeneousBarycentrics(c0, c1, c2, ndcX, ndcY);
+          const glm::dvec3 b = h.barycentrics(ndcX, ndcY);
           barycentrics[j * kTileSize + i] = Vec3(b);
-          clipW[j * kTileSize + i] = static_cast<float>(b.x * c0.w + b.y * c1.w + b.z * c2.w);
+          clipW[j * kTileSize + i] = static_cast<float>(b.x * h.w.x + b.y * h.w.y + b.z * h.w.z);
         }
       }
       samples.triangle = tile.winner.data();
