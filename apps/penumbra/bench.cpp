@@ -51,16 +51,7 @@ int runBench(const BenchOptions& options) {
     gbufferMs.push_back(timer.elapsedMs());
   }
 
-  Report report;
-  report.kind = "bench";
-  report.version = PENUMBRA_VERSION;
-  report.scene = setup.scene.name;
-  report.sceneSource = setup.scene.source;
-  report.lightIndex = setup.lightIndex;
-  report.light = describeLight(light);
-  report.width = setup.width;
-  report.height = setup.height;
-  report.baseline = baseline;
+  Report report = beginReport("bench", setup, baseline);
   report.settings = {{"repeat", fmt::format("{}", options.repeat)},
                      {"statistic", "median over repeats"},
                      {"gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs))},

@@ -17,6 +17,7 @@
 #include "penumbra/image.h"
 #include "penumbra/params.h"
 #include "penumbra/registry.h"
+#include "penumbra/report.h"
 #include "penumbra/scene.h"
 #include "penumbra/technique.h"
 #include "penumbra/timer.h"
@@ -81,6 +82,10 @@ struct TechniqueRun {
 // each pass over the repeats; V and stats: the last run).
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
                           int repeat = 1);
+
+// A report of `kind` ("compare", "bench") with the scene, light, image size, baseline and version
+// of this setup filled in.
+Report beginReport(const std::string& kind, const Setup& setup, const std::string& baseline);
 
 // Creates the output directory (and parents). Throws Error naming it when that fails.
 void makeOutputDir(const std::string& dir);

@@ -61,16 +61,7 @@ int runCompare(const CompareOptions& options) {
   const double gbufferMs = gbufferTimer.elapsedMs();
   const Image<uint8_t> mask = errorMask(gbuffer, light);
 
-  Report report;
-  report.kind = "compare";
-  report.version = PENUMBRA_VERSION;
-  report.scene = setup.scene.name;
-  report.sceneSource = setup.scene.source;
-  report.lightIndex = setup.lightIndex;
-  report.light = describeLight(light);
-  report.width = setup.width;
-  report.height = setup.height;
-  report.baseline = baseline;
+  Report report = beginReport("compare", setup, baseline);
   report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)},
                      {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
   if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));

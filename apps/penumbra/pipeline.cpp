@@ -139,6 +139,20 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
   return run;
 }
 
+Report beginReport(const std::string& kind, const Setup& setup, const std::string& baseline) {
+  Report report;
+  report.kind = kind;
+  report.version = PENUMBRA_VERSION;
+  report.scene = setup.scene.name;
+  report.sceneSource = setup.scene.source;
+  report.lightIndex = setup.lightIndex;
+  report.light = describeLight(setupLight(setup));
+  report.width = setup.width;
+  report.height = setup.height;
+  report.baseline = baseline;
+  return report;
+}
+
 void makeOutputDir(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
