@@ -2,6 +2,7 @@
 #include "shadow_map.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "penumbra/error.h"
@@ -136,47 +137,210 @@ Vec2 pixelRotation(int x, int y) {
   return Vec2(std::cos(angle), std::sin(angle));
 }
 
+PixelRotations::PixelRotations() : table_(kCount) {
+  for (int k = 0; k < kCount; ++k) {
+    const float angle = static_cast<float>(k) * (2.0f * kPi / static_cast<float>(kCount));
+    table_[static_cast<size_t>(k)] = Vec2(std::cos(angle), std::sin(angle));
+  }
+}
+
 namespace {
 
-inline Vec2 rotate(const Vec2& p, const Vec2& rotation) {
-  return Vec2(p.x * rotation.x - p.y * rotation.y, p.x * rotation.y + p.y * rotation.x);
+// The disk kernels run in chunks of taps, in three phases: (1) the arithmetic of every tap (rotated
+// offset, texel, weights, compare thresholds) in loops over plain arrays that GCC vectorizes, (2) the
+// scattered map reads alone, (3) the compares and weights, vectorized again, summed in four lanes so
+// no tap waits for the previous one's add. Phase 1 evaluates blockerThreshold's expression term by
+// term in its order and phase 3's compare is exact, so a tap sees the blocker litAtTexel sees.
+// Written without float selects or std::floor: GCC vectorizes those only with -fno-trapping-math.
+constexpr size_t kTapChunk = 64;
+constexpr size_t kLanes = 4;  // the partial sums below are combined as four
+static_assert(kTapChunk % kLanes == 0);
+
+// Offsets of pattern[first, first + n): each p rotated by `rotation` (cos, sin), then scaled to
+// radiusTexels.
+inline void rotatedOffsets(std::span<const Vec2> pattern, size_t first, size_t n, float radiusTexels,
+                           const Vec2& rotation, float* __restrict ox, float* __restrict oy) {
+  const Vec2* p = pattern.data() + first;
+  for (size_t k = 0; k < n; ++k) {
+    ox[k] = radiusTexels * (p[k].x * rotation.x - p[k].y * rotation.y);
+    oy[k] = radiusTexels * (p[k].x * rotation.y + p[k].y * rotation.x);
+  }
+}
+
+// std::floor(x) as an int for |x| < 2^31: truncate, then subtract one where the truncation went up,
+// read from the sign bit of the difference (+ 0.0f turns the -0 of x = -0 into +0, so floor(-0) = 0).
+inline int32_t floorToInt(float x) {
+  const int32_t truncated = static_cast<int32_t>(x);
+  const float diff = (x - static_cast<float>(truncated)) + 0.0f;
+  return truncated + (std::bit_cast<int32_t>(diff) >> 31);
+}
+
+// -1 (all bits) where depth < threshold, else 0: the sign of depth - threshold, which float rounding
+// cannot flip (the difference of two different floats is never rounded to zero or across it; equal
+// values give +0). Depth +inf (an empty texel, or one outside the map) is never a blocker; the
+// threshold is finite.
+inline int32_t blockerMask(float depth, float threshold) { return std::bit_cast<int32_t>(depth - threshold) >> 31; }
+
+// 1 where the texel lets the light through, 0 where it holds a blocker (litAtTexel's value).
+inline float litValue(float depth, float threshold) { return static_cast<float>(1 + blockerMask(depth, threshold)); }
+
+// Whether texels [iMin, iMax] x [jMin, jMax] all lie in the map.
+inline bool insideMap(const DepthTexels& map, int iMin, int jMin, int iMax, int jMax) {
+  return iMin >= 0 && jMin >= 0 && iMax < map.size && jMax < map.size;
+}
+
+// The depth of texel (i, j); +inf outside the map (holds nothing).
+inline float depthOrEmpty(const DepthTexels& map, int i, int j) {
+  return i < 0 || j < 0 || i >= map.size || j >= map.size
+             ? kInfinity
+             : map.depth[static_cast<size_t>(j) * map.stride + static_cast<size_t>(i)];
+}
+
+// sum of v[0, n) in kLanes interleaved partial sums; v is zero from n up to the next multiple of kLanes.
+inline float laneSum(const float* __restrict v, size_t n) {
+  float lane[kLanes] = {};
+  for (size_t k = 0; k < n; k += kLanes)
+    for (size_t l = 0; l < kLanes; ++l) lane[l] += v[k + l];
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
 
 }  // namespace
 
-BlockerSearch searchBlockers(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
-                             std::span<const Vec2> pattern, const Vec2& rotation) {
-  BlockerSearch result;
-  float depthSum = 0.0f;
-  for (const Vec2& p : pattern) {
-    const Vec2 o = radiusTexels * rotate(p, rotation);
-    const int i = static_cast<int>(std::floor(r.s + o.x));
-    const int j = static_cast<int>(std::floor(r.t + o.y));
-    if (i < 0 || j < 0 || i >= map.size || j >= map.size) continue;
-    const float d = map.lsDepth(i, j);
-    if (d < blockerThreshold(r, i, j)) {
-      ++result.blockers;
-      depthSum += d;
-    }
+namespace {
+
+// Phases 1 and 2 of a nearest-texel disk (searchBlockers, pcfDiskNearest) for taps [first, first + n):
+// the compare threshold of each tap's texel and the texel's depth (+inf outside the map).
+void nearestTaps(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+                 const Vec2& rotation, size_t first, size_t n, float* __restrict threshold, float* __restrict d) {
+  alignas(64) float ox[kTapChunk], oy[kTapChunk];
+  alignas(64) int32_t ti[kTapChunk], tj[kTapChunk], index[kTapChunk];
+  rotatedOffsets(pattern, first, n, radiusTexels, rotation, ox, oy);
+  // The texel's index in map.depth, in the vectorized loop. int32 is enough: taps lie within the
+  // map's size of (s, t) (the callers limit the radius to it), so |i|, |j| < 2 * 8192.
+  const int32_t stride = static_cast<int32_t>(map.stride);
+  int iMin = map.size, jMin = map.size, iMax = -1, jMax = -1;
+  for (size_t k = 0; k < n; ++k) {
+    ti[k] = floorToInt(r.s + ox[k]);
+    tj[k] = floorToInt(r.t + oy[k]);
+    index[k] = tj[k] * stride + ti[k];
+    const float fi = static_cast<float>(ti[k]), fj = static_cast<float>(tj[k]);
+    threshold[k] = r.lsDepth + r.dzds * (fi + 0.5f - r.s) + r.dzdt * (fj + 0.5f - r.t) - r.bias;
+    iMin = std::min(iMin, ti[k]);
+    iMax = std::max(iMax, ti[k]);
+    jMin = std::min(jMin, tj[k]);
+    jMax = std::max(jMax, tj[k]);
   }
-  if (result.blockers > 0) result.meanDepth = depthSum / static_cast<float>(result.blockers);
+  if (insideMap(map, iMin, jMin, iMax, jMax)) {
+    for (size_t k = 0; k < n; ++k) d[k] = map.depth[index[k]];
+  } else {
+    for (size_t k = 0; k < n; ++k) d[k] = depthOrEmpty(map, ti[k], tj[k]);  // taps outside find nothing
+  }
+}
+
+}  // namespace
+
+BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
+                             std::span<const Vec2> pattern, const Vec2& rotation) {
+  alignas(64) float threshold[kTapChunk], d[kTapChunk], blockerDepth[kTapChunk];
+  int blockers = 0;
+  float depthSum = 0.0f;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    nearestTaps(map, r, radiusTexels, pattern, rotation, first, n, threshold, d);
+    const size_t padded = (n + kLanes - 1) / kLanes * kLanes;
+    for (size_t k = n; k < padded; ++k) blockerDepth[k] = 0.0f;
+    for (size_t k = 0; k < n; ++k) {
+      const int32_t mask = blockerMask(d[k], threshold[k]);
+      blockers -= mask;
+      blockerDepth[k] = std::bit_cast<float>(std::bit_cast<int32_t>(d[k]) & mask);
+    }
+    depthSum += laneSum(blockerDepth, padded);
+  }
+  BlockerSearch result;
+  result.blockers = blockers;
+  if (blockers > 0) result.meanDepth = depthSum / static_cast<float>(blockers);
   return result;
 }
 
-float pcfDisk(const LightMap& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+float pcfDiskNearest(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+                     const Vec2& rotation) {
+  if (pattern.empty()) return 1.0f;
+  alignas(64) float threshold[kTapChunk], d[kTapChunk], lit[kTapChunk];
+  float sum = 0.0f;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    nearestTaps(map, r, radiusTexels, pattern, rotation, first, n, threshold, d);
+    const size_t padded = (n + kLanes - 1) / kLanes * kLanes;
+    for (size_t k = n; k < padded; ++k) lit[k] = 0.0f;
+    for (size_t k = 0; k < n; ++k) lit[k] = litValue(d[k], threshold[k]);
+    sum += laneSum(lit, padded);
+  }
+  return sum / static_cast<float>(pattern.size());  // a count over a count: within [0, 1] exactly
+}
+
+float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
               const Vec2& rotation) {
   if (pattern.empty()) return 1.0f;
+  const float* depth = map.depth;
+  const size_t stride = map.stride;
+  alignas(64) float ox[kTapChunk], oy[kTapChunk], ws[kTapChunk], wt[kTapChunk], tap[kTapChunk];
+  alignas(64) float t00[kTapChunk], t10[kTapChunk], t01[kTapChunk], t11[kTapChunk];
+  alignas(64) float d00[kTapChunk], d10[kTapChunk], d01[kTapChunk], d11[kTapChunk];
+  alignas(64) int32_t ti[kTapChunk], tj[kTapChunk], index[kTapChunk];
+  const int32_t stride32 = static_cast<int32_t>(stride);
   float sum = 0.0f;
-  for (const Vec2& p : pattern) {
-    const Vec2 o = radiusTexels * rotate(p, rotation);
-    // A 1-texel box at (s, t) + o: the four texels around it, bilinear weights.
-    const float sc = r.s + o.x - 0.5f, tc = r.t + o.y - 0.5f;
-    const float fs = std::floor(sc), ft = std::floor(tc);
-    const int i = static_cast<int>(fs), j = static_cast<int>(ft);
-    const float ws = sc - fs, wt = tc - ft;
-    const float top = (1.0f - ws) * litAtTexel(map, r, i, j) + ws * litAtTexel(map, r, i + 1, j);
-    const float bottom = (1.0f - ws) * litAtTexel(map, r, i, j + 1) + ws * litAtTexel(map, r, i + 1, j + 1);
-    sum += (1.0f - wt) * top + wt * bottom;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    rotatedOffsets(pattern, first, n, radiusTexels, rotation, ox, oy);
+    int iMin = map.size, jMin = map.size, iMax = -1, jMax = -1;
+    for (size_t k = 0; k < n; ++k) {
+      // A 1-texel box at (s, t) + o: the four texels around it, bilinear weights.
+      const float sc = r.s + ox[k] - 0.5f, tc = r.t + oy[k] - 0.5f;
+      ti[k] = floorToInt(sc);
+      tj[k] = floorToInt(tc);
+      index[k] = tj[k] * stride32 + ti[k];  // int32 is enough: see nearestTaps
+      const float fs = static_cast<float>(ti[k]), ft = static_cast<float>(tj[k]);
+      ws[k] = sc - fs;
+      wt[k] = tc - ft;
+      // blockerThreshold of texels (i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1).
+      const float a0 = r.dzds * (fs + 0.5f - r.s), a1 = r.dzds * (fs + 1.5f - r.s);
+      const float b0 = r.dzdt * (ft + 0.5f - r.t), b1 = r.dzdt * (ft + 1.5f - r.t);
+      t00[k] = r.lsDepth + a0 + b0 - r.bias;
+      t10[k] = r.lsDepth + a1 + b0 - r.bias;
+      t01[k] = r.lsDepth + a0 + b1 - r.bias;
+      t11[k] = r.lsDepth + a1 + b1 - r.bias;
+      iMin = std::min(iMin, ti[k]);
+      iMax = std::max(iMax, ti[k]);
+      jMin = std::min(jMin, tj[k]);
+      jMax = std::max(jMax, tj[k]);
+    }
+    if (insideMap(map, iMin, jMin, iMax + 1, jMax + 1)) {
+      for (size_t k = 0; k < n; ++k) {
+        const float* p = depth + index[k];
+        d00[k] = p[0];
+        d10[k] = p[1];
+        d01[k] = p[stride];
+        d11[k] = p[stride + 1];
+      }
+    } else {
+      for (size_t k = 0; k < n; ++k) {
+        d00[k] = depthOrEmpty(map, ti[k], tj[k]);
+        d10[k] = depthOrEmpty(map, ti[k] + 1, tj[k]);
+        d01[k] = depthOrEmpty(map, ti[k], tj[k] + 1);
+        d11[k] = depthOrEmpty(map, ti[k] + 1, tj[k] + 1);
+      }
+    }
+    const size_t padded = (n + kLanes - 1) / kLanes * kLanes;
+    for (size_t k = n; k < padded; ++k) tap[k] = 0.0f;
+    for (size_t k = 0; k < n; ++k) {
+      const float l00 = litValue(d00[k], t00[k]), l10 = litValue(d10[k], t10[k]);
+      const float l01 = litValue(d01[k], t01[k]), l11 = litValue(d11[k], t11[k]);
+      // Lerps written as a + w (b - a): four lit (blocked) texels give exactly 1 (0).
+      const float top = l00 + ws[k] * (l10 - l00);
+      const float bottom = l01 + ws[k] * (l11 - l01);
+      tap[k] = top + wt[k] * (bottom - top);
+    }
+    sum += laneSum(tap, padded);
   }
   return std::clamp(sum / static_cast<float>(pattern.size()), 0.0f, 1.0f);  // rounding of the weights
 }

@@ -8,8 +8,9 @@
 //  - the PCF box kernel (Reeves, Salesin, Cook 1987, "Rendering antialiased shadows with depth
 //    maps", SIGGRAPH), exact for the nearest-texel compare function;
 //  - the PCSS blocker search (Fernando 2005, "Percentage-closer soft shadows", SIGGRAPH sketch):
-//    mean depth of the blockers in a disk of texels; and a nearest-blocker ring search (the search of
-//    Brabec & Seidel 2002, Sec. 3.2).
+//    mean depth of the blockers in a disk of texels, and PCF over a disk (bilinear or nearest-texel
+//    taps), vectorized in chunks of taps (shadow_map.cpp); and a nearest-blocker ring search (the
+//    search of Brabec & Seidel 2002, Sec. 3.2).
 //
 // Conventions (DESIGN.md "Light space", include/penumbra/raster.h): map coordinates (s, t) in texels,
 // texel (i, j) covers [i, i+1) x [j, j+1) and its depth was rasterized at its centre (i+0.5, j+0.5);
@@ -121,6 +122,33 @@ std::vector<Vec2> vogelDisk(int n);
 // one fixed pattern for fine noise. Deterministic.
 Vec2 pixelRotation(int x, int y);
 
+// pixelRotation with its angle rounded down to a multiple of 2 pi / kCount, read from a table: the
+// same per-pixel noise without a sin and a cos per pixel (256 patterns are plenty for noise).
+class PixelRotations {
+ public:
+  static constexpr int kBits = 8;
+  static constexpr int kCount = 1 << kBits;
+  PixelRotations();
+  Vec2 operator()(int x, int y) const {
+    const uint32_t h = hashCombine(static_cast<uint64_t>(static_cast<uint32_t>(x)), static_cast<uint64_t>(static_cast<uint32_t>(y)));
+    return table_[h >> (32 - kBits)];
+  }
+
+ private:
+  std::vector<Vec2> table_;
+};
+
+// The depths the disk kernels below read: texel (i, j) at depth[j * stride + i], j and i in
+// [0, size) (a LightMap's, or a copy laid out otherwise).
+struct DepthTexels {
+  const float* depth = nullptr;
+  size_t stride = 0;  //!< floats from one row to the next, >= size
+  int size = 0;       //!< texels per side
+};
+inline DepthTexels depthTexels(const LightMap& map) {
+  return DepthTexels{map.lsDepth.data(), static_cast<size_t>(map.size), map.size};
+}
+
 struct BlockerSearch {
   int blockers = 0;         //!< samples that found a blocker
   float meanDepth = 0.0f;   //!< mean light-space depth of those blockers (0 when none)
@@ -128,12 +156,31 @@ struct BlockerSearch {
 
 // PCSS blocker search: the texels under the disk `pattern` (unit-disk offsets) rotated by
 // `rotation` and scaled to `radiusTexels` around (r.s, r.t).
-BlockerSearch searchBlockers(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
+BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
                              std::span<const Vec2> pattern, const Vec2& rotation);
 
 // PCF over a disk: the mean of 1-texel box compares (pcfBox width 1) at the pattern's offsets.
-float pcfDisk(const LightMap& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
               const Vec2& rotation);
+
+// PCF over a disk with one compare per tap, at the texel holding (s, t) + offset (the taps of
+// searchBlockers): a quarter of pcfDisk's reads, for disks whose taps lie over a texel apart, where
+// the 1-texel box of pcfDisk smooths little. V is a multiple of 1 / pattern.size().
+float pcfDiskNearest(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+                     const Vec2& rotation);
+
+inline BlockerSearch searchBlockers(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
+                                    std::span<const Vec2> pattern, const Vec2& rotation) {
+  return searchBlockers(depthTexels(map), r, radiusTexels, pattern, rotation);
+}
+inline float pcfDisk(const LightMap& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
+                     const Vec2& rotation) {
+  return pcfDisk(depthTexels(map), r, radiusTexels, pattern, rotation);
+}
+inline float pcfDiskNearest(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
+                            std::span<const Vec2> pattern, const Vec2& rotation) {
+  return pcfDiskNearest(depthTexels(map), r, radiusTexels, pattern, rotation);
+}
 
 struct NearestBlocker {
   bool found = false;

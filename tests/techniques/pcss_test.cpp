@@ -3,11 +3,17 @@
 // printed), clearly below the hard shadow's; contact hardening — on `crowded`, the penumbra of an
 // object resting on the floor is much narrower than that of an object floating high, as in the
 // reference (a fixed-kernel filter fails this, see pcf_test.cpp); a larger light_size widens the
-// penumbra; directional lights (orthographic variant) against the reference; determinism.
+// penumbra; directional lights (orthographic variant) against the reference; determinism; the
+// vectorized disk kernels of shadow_map.cpp (searchBlockers, pcfDisk, pcfDiskNearest) against
+// plain scalar loops over litAtTexel / blockerThreshold on the real `crowded` map, including
+// receivers whose disks reach past the map's border; wide filters with nearest-texel taps stay
+// within a small margin of all-bilinear ones.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
+#include "techniques/shadow_map.h"
 #include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
@@ -115,6 +121,98 @@ TEST(Pcss, DirectionalLightUsesTheOrthographicVariant) {
               pcss.rmse8, pcss.penumbraRmse8, multi.rmse8, multi.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   EXPECT_LT(pcss.penumbraRmse8, 0.5 * hard.penumbraRmse8);
   EXPECT_LT(multi.penumbraRmse8, 0.5 * hard.penumbraRmse8);
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// Scalar oracles: the kernels as the plain loops the header describes.
+BlockerSearch oracleSearch(const LightMap& m, const ShadowReceiver& r, float radius, const std::vector<Vec2>& disk,
+                           const Vec2& rot) {
+  BlockerSearch b;
+  double sum = 0.0;
+  for (const Vec2& p : disk) {
+    const float ox = radius * (p.x * rot.x - p.y * rot.y), oy = radius * (p.x * rot.y + p.y * rot.x);
+    const int i = static_cast<int>(std::floor(r.s + ox)), j = static_cast<int>(std::floor(r.t + oy));
+    if (litAtTexel(m, r, i, j) == 0.0f) {
+      ++b.blockers;
+      sum += m.lsDepth(i, j);
+    }
+  }
+  if (b.blockers > 0) b.meanDepth = static_cast<float>(sum / b.blockers);
+  return b;
+}
+
+double oraclePcf(const LightMap& m, const ShadowReceiver& r, float radius, const std::vector<Vec2>& disk, const Vec2& rot,
+                 bool bilinear) {
+  double sum = 0.0;
+  for (const Vec2& p : disk) {
+    const float ox = radius * (p.x * rot.x - p.y * rot.y), oy = radius * (p.x * rot.y + p.y * rot.x);
+    if (!bilinear) {
+      sum += litAtTexel(m, r, static_cast<int>(std::floor(r.s + ox)), static_cast<int>(std::floor(r.t + oy)));
+      continue;
+    }
+    const float sc = r.s + ox - 0.5f, tc = r.t + oy - 0.5f;
+    const int i = static_cast<int>(std::floor(sc)), j = static_cast<int>(std::floor(tc));
+    const double ws = sc - std::floor(sc), wt = tc - std::floor(tc);
+    sum += (1 - wt) * ((1 - ws) * litAtTexel(m, r, i, j) + ws * litAtTexel(m, r, i + 1, j)) +
+           wt * ((1 - ws) * litAtTexel(m, r, i, j + 1) + ws * litAtTexel(m, r, i + 1, j + 1));
+  }
+  return sum / static_cast<double>(disk.size());
+}
+
+TEST(Pcss, DiskKernelsMatchScalarLoopsOnTheCrowdedMap) {
+  const Scene scene = loadScene("crowded");
+  const LightMap m = createShadowMap(scene, scene.lights.at(0), 256);
+  const GBuffer& g = testing::shadowTestScene("crowded").gbuffer;
+  const PixelRotations rotations;
+  // 16 and 32 taps as pcss uses them, and 77: more than one 64-tap chunk, not a multiple of 4.
+  for (int taps : {16, 32, 77}) {
+    const std::vector<Vec2> disk = vogelDisk(taps);
+    int checked = 0, blocked = 0, nearBorder = 0;
+    for (int y = 0; y < g.height(); y += 7) {
+      for (int x = 0; x < g.width(); x += 7) {
+        if (!g.hit(x, y)) continue;
+        const ShadowReceiver r = makeReceiver(m, g.wsPosition(x, y), g.wsGeometricNormal(x, y), DepthBias{});
+        if (!r.inMap) continue;
+        const Vec2 rot = rotations(x, y);
+        // Radii from a texel to far past the map's border (texels outside hold nothing).
+        const float radius = 0.7f + static_cast<float>((x * 31 + y * 17) % 400) * 0.25f;
+        nearBorder += r.s - radius < 0.0f || r.t - radius < 0.0f || r.s + radius > 256.0f || r.t + radius > 256.0f;
+        const BlockerSearch fast = searchBlockers(m, r, radius, disk, rot);
+        const BlockerSearch slow = oracleSearch(m, r, radius, disk, rot);
+        ASSERT_EQ(fast.blockers, slow.blockers) << x << "," << y << " taps " << taps;
+        EXPECT_NEAR(fast.meanDepth, slow.meanDepth, 1e-5f * slow.meanDepth) << x << "," << y;
+        blocked += fast.blockers > 0;
+        EXPECT_NEAR(pcfDisk(m, r, radius, disk, rot), oraclePcf(m, r, radius, disk, rot, true), 1e-5) << x << "," << y;
+        EXPECT_EQ(pcfDiskNearest(m, r, radius, disk, rot), static_cast<float>(oraclePcf(m, r, radius, disk, rot, false)))
+            << x << "," << y;
+        ++checked;
+      }
+    }
+    // The sample reaches what the test is about: blockers, and disks that cross the border.
+    EXPECT_GT(checked, 2000);
+    EXPECT_GT(blocked, checked / 10);
+    EXPECT_GT(nearBorder, checked / 40);  // measured: 208 of 3930
+  }
+}
+
+TEST(Pcss, NearestTapsForWideFiltersCostLittleQuality) {
+  // At map 1024 most filter disks are wider than bilinear_max_radius (4 texels): the default against
+  // all-bilinear taps (bilinear_max_radius = 8192), on crowded and torus.
+  for (const char* name : {"torus", "crowded"}) {
+    const testing::ShadowTestScene& s = testing::shadowTestScene(name);
+    const ErrorStats mixed = testing::errorAgainstReference(testing::runTechnique("pcss", s, {"map_size=1024"}), s);
+    const ErrorStats bilinear = testing::errorAgainstReference(
+        testing::runTechnique("pcss", s, {"map_size=1024", "bilinear_max_radius=8192"}), s);
+    std::printf("[ measured ] %s pcss map 1024: RMSE8 %.2f, penumbra %.2f; all bilinear %.2f, %.2f\n", name, mixed.rmse8,
+                mixed.penumbraRmse8, bilinear.rmse8, bilinear.penumbraRmse8);
+    EXPECT_LT(mixed.rmse8, bilinear.rmse8 + 0.5) << name;
+    EXPECT_LT(mixed.penumbraRmse8, bilinear.penumbraRmse8 + 1.5) << name;
+  }
 }
 
 }  // namespace
