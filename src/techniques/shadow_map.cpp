@@ -155,6 +155,14 @@ namespace {
 constexpr size_t kTapChunk = 64;
 constexpr size_t kLanes = 4;  // the partial sums below are combined as four
 static_assert(kTapChunk % kLanes == 0);
+// The three disk kernels are also compiled for AVX2, picked at load time where the CPU has it (GCC
+// function multi-versioning): phases 1 and 3 then run 8 lanes wide instead of 4. No FMA in the list,
+// so no multiply-add is fused and every clone rounds alike: V is bit-identical on every CPU.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
+#define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PENUMBRA_KERNEL_CLONES
+#endif
 
 // Offsets of pattern[first, first + n): each p rotated by `rotation` (cos, sin), then scaled to
 // radiusTexels.
@@ -210,8 +218,10 @@ namespace {
 
 // Phases 1 and 2 of a nearest-texel disk (searchBlockers, pcfDiskNearest) for taps [first, first + n):
 // the compare threshold of each tap's texel and the texel's depth (+inf outside the map).
-void nearestTaps(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
-                 const Vec2& rotation, size_t first, size_t n, float* __restrict threshold, float* __restrict d) {
+// Inlined so each clone of its callers gets its own copy.
+[[gnu::always_inline]] inline void nearestTaps(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
+                                               std::span<const Vec2> pattern, const Vec2& rotation, size_t first,
+                                               size_t n, float* __restrict threshold, float* __restrict d) {
   alignas(64) float ox[kTapChunk], oy[kTapChunk];
   alignas(64) int32_t ti[kTapChunk], tj[kTapChunk], index[kTapChunk];
   rotatedOffsets(pattern, first, n, radiusTexels, rotation, ox, oy);
@@ -239,6 +249,7 @@ void nearestTaps(const DepthTexels& map, const ShadowReceiver& r, float radiusTe
 
 }  // namespace
 
+PENUMBRA_KERNEL_CLONES
 BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
                              std::span<const Vec2> pattern, const Vec2& rotation) {
   alignas(64) float threshold[kTapChunk], d[kTapChunk], blockerDepth[kTapChunk];
@@ -262,6 +273,7 @@ BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, fl
   return result;
 }
 
+PENUMBRA_KERNEL_CLONES
 float pcfDiskNearest(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
                      const Vec2& rotation) {
   if (pattern.empty()) return 1.0f;
@@ -278,6 +290,7 @@ float pcfDiskNearest(const DepthTexels& map, const ShadowReceiver& r, float radi
   return sum / static_cast<float>(pattern.size());  // a count over a count: within [0, 1] exactly
 }
 
+PENUMBRA_KERNEL_CLONES
 float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
               const Vec2& rotation) {
   if (pattern.empty()) return 1.0f;
