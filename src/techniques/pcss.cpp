@@ -16,7 +16,8 @@
 //     taps lie over a texel apart, where the box smooths little — measured at map 1024: RMSE8 +0.15,
 //     penumbra RMSE8 +0.5 to +0.8 on torus and crowded, for about 10% of the frame's time).
 // Both disks use Vogel's spiral (deterministic; the sketch uses a Poisson disk), rotated per pixel
-// by one of 256 angles picked by a hash when `rotate` is on (banding becomes fine noise).
+// when `rotate` is on (banding becomes fine noise) by one of 256 angles read from a 16x16 tile
+// (PixelRotations: a table read, where a hash per pixel cost a few percent of the frame).
 //
 // Cost (issue 3, crowded at 1024^2 with a 1024^2 map, 16 + 32 taps): about 3.0x `hard` (was 9.3x).
 // The kernels are vectorized (shadow_map.cpp), with an AVX2 clone picked at load time (3.4x -> 3.0x,
@@ -81,6 +82,8 @@ class PcssTechnique final : public ShadowTechnique {
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
     map_ = createShadowMap(scene, light, options_.mapSize);
     zMin_ = minMapDepth(map_);
+    // The search radius's factors that do not depend on the pixel (one division per pixel fewer).
+    searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -128,8 +131,7 @@ class PcssTechnique final : public ShadowTechnique {
     const float maxRadius = static_cast<float>(map_.size);  // a search wider than the map finds nothing more
     const float zr = r.lsDepth;
     // In texels: the world radius at the receiver's depth over the texel size there.
-    const float searchRadius = map_.orthographic ? lightSize_ * (zr - zMin_) / r.texelWorld
-                                                 : lightSize_ * (zr - zMin_) / zMin_ / r.texelWorld;
+    const float searchRadius = searchScale_ * (zr - zMin_) / r.texelWorld;
     const Vec2 rotation = options_.rotate ? rotations_(x, y) : Vec2(1.0f, 0.0f);
     const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerDisk_, rotation);
     // No blocker: lit. Every search tap blocked: umbra. The filter disk lies inside the search disk
@@ -157,6 +159,7 @@ class PcssTechnique final : public ShadowTechnique {
   LightMap map_;
   float lightSize_ = 0.0f;
   float zMin_ = 0.0f;
+  float searchScale_ = 0.0f;  //!< lightSize_ (orthographic) or lightSize_ / zMin_ (perspective)
   PassTimings timings_;
   std::array<double, kPathCount> pathFractions_{};
 };

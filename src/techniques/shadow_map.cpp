@@ -2,6 +2,8 @@
 #include "shadow_map.h"
 
 #include <algorithm>
+#include <array>
+#include <utility>
 #include <bit>
 #include <cmath>
 
@@ -54,10 +56,19 @@ LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize) {
 }
 
 float minMapDepth(const LightMap& map) {
-  float m = kInfinity;
+  // Eight independent running minima: one chain would wait a compare's latency per texel. min is
+  // exact, so the lanes give the same value as one pass (NaN texels are skipped either way).
+  constexpr size_t kMinLanes = 8;
+  float lane[kMinLanes];
+  std::fill(lane, lane + kMinLanes, kInfinity);
   const float* d = map.lsDepth.data();
   const size_t n = map.lsDepth.size();
-  for (size_t i = 0; i < n; ++i) m = d[i] < m ? d[i] : m;
+  size_t i = 0;
+  for (; i + kMinLanes <= n; i += kMinLanes)
+    for (size_t l = 0; l < kMinLanes; ++l) lane[l] = d[i + l] < lane[l] ? d[i + l] : lane[l];
+  float m = kInfinity;
+  for (; i < n; ++i) m = d[i] < m ? d[i] : m;
+  for (size_t l = 0; l < kMinLanes; ++l) m = lane[l] < m ? lane[l] : m;
   return m;
 }
 
@@ -138,9 +149,15 @@ Vec2 pixelRotation(int x, int y) {
 }
 
 PixelRotations::PixelRotations() : table_(kCount) {
+  std::array<std::pair<uint32_t, int>, kCount> cells;
+  for (int cell = 0; cell < kCount; ++cell)
+    cells[static_cast<size_t>(cell)] = {hashCombine(static_cast<uint64_t>(cell & (kTile - 1)),
+                                                    static_cast<uint64_t>(cell >> kTileBits)),
+                                         cell};
+  std::sort(cells.begin(), cells.end());  // ties (none in practice) broken by the cell: deterministic
   for (int k = 0; k < kCount; ++k) {
     const float angle = static_cast<float>(k) * (2.0f * kPi / static_cast<float>(kCount));
-    table_[static_cast<size_t>(k)] = Vec2(std::cos(angle), std::sin(angle));
+    table_[static_cast<size_t>(cells[static_cast<size_t>(k)].second)] = Vec2(std::cos(angle), std::sin(angle));
   }
 }
 

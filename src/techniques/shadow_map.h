@@ -122,16 +122,18 @@ std::vector<Vec2> vogelDisk(int n);
 // one fixed pattern for fine noise. Deterministic.
 Vec2 pixelRotation(int x, int y);
 
-// pixelRotation with its angle rounded down to a multiple of 2 pi / kCount, read from a table: the
-// same per-pixel noise without a sin and a cos per pixel (256 patterns are plenty for noise).
+// Per-pixel rotations from a 16x16 tile repeated over the image (the interleaved-gradient trick):
+// the tile holds each of the kCount angles 2 pi k / kCount once, placed by pixelRotation's hash of the
+// tile cell (the cells sorted by hash take k = 0, 1, ...), so a pixel costs a table read instead of a
+// hash. Noise that repeats every 16 pixels reads as noise; every 16x16 block holds every angle.
 class PixelRotations {
  public:
-  static constexpr int kBits = 8;
-  static constexpr int kCount = 1 << kBits;
+  static constexpr int kTileBits = 4;
+  static constexpr int kTile = 1 << kTileBits;
+  static constexpr int kCount = kTile * kTile;
   PixelRotations();
   Vec2 operator()(int x, int y) const {
-    const uint32_t h = hashCombine(static_cast<uint64_t>(static_cast<uint32_t>(x)), static_cast<uint64_t>(static_cast<uint32_t>(y)));
-    return table_[h >> (32 - kBits)];
+    return table_[static_cast<size_t>(((y & (kTile - 1)) << kTileBits) | (x & (kTile - 1)))];
   }
 
  private:
