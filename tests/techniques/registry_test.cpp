@@ -79,6 +79,15 @@ void expectValidVisibility(const std::string& what, const GBuffer& gbuffer, cons
       }
 }
 
+// Every registered technique runs on the scene (no light-shape rejection allowed) with valid V.
+void expectEveryTechniqueValid(const Scene& scene, const GBuffer& gbuffer, const std::string& what) {
+  for (const TechniqueInfo& info : techniqueRegistry()) {
+    Image<float> v;
+    ASSERT_TRUE(runCheap(info, scene, gbuffer, v)) << info.name;
+    expectValidVisibility(info.name + " " + what, gbuffer, v);
+  }
+}
+
 TEST(Registry, NamesAreUniqueAndSchemasResolveToTheirDefaults) {
   std::set<std::string> names;
   for (const TechniqueInfo& info : techniqueRegistry()) {
@@ -125,11 +134,7 @@ TEST(Registry, EmptySceneIsFullyLitForEveryTechnique) {
   Scene scene;
   scene.lights.push_back(Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f));
   const GBuffer gbuffer = renderGBuffer(scene, 16, 16);
-  for (const TechniqueInfo& info : techniqueRegistry()) {
-    Image<float> v;
-    ASSERT_TRUE(runCheap(info, scene, gbuffer, v)) << info.name;
-    expectValidVisibility(info.name + " on an empty scene", gbuffer, v);
-  }
+  expectEveryTechniqueValid(scene, gbuffer, "on an empty scene");
 }
 
 TEST(Registry, DegenerateTrianglesDoNotBreakAnyTechnique) {
@@ -145,11 +150,7 @@ TEST(Registry, DegenerateTrianglesDoNotBreakAnyTechnique) {
   box.triangles.push_back({n, n + 2, n + 3});      // zero area: collinear corners
   box.triangles.push_back({0u, 0u, 0u});           // one vertex three times
   const GBuffer gbuffer = renderGBuffer(scene, 48, 40);
-  for (const TechniqueInfo& info : techniqueRegistry()) {
-    Image<float> v;
-    ASSERT_TRUE(runCheap(info, scene, gbuffer, v)) << info.name;
-    expectValidVisibility(info.name + " with degenerate triangles", gbuffer, v);
-  }
+  expectEveryTechniqueValid(scene, gbuffer, "with degenerate triangles");
 }
 
 TEST(Registry, CameraInsideAnObject) {
@@ -161,11 +162,7 @@ TEST(Registry, CameraInsideAnObject) {
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x) hits += gbuffer.hit(x, y);
   EXPECT_EQ(hits, 32u * 32u) << "from inside a closed box every pixel sees its inner walls";
-  for (const TechniqueInfo& info : techniqueRegistry()) {
-    Image<float> v;
-    ASSERT_TRUE(runCheap(info, scene, gbuffer, v)) << info.name;
-    expectValidVisibility(info.name + " with the camera inside a box", gbuffer, v);
-  }
+  expectEveryTechniqueValid(scene, gbuffer, "with the camera inside a box");
   // Inside the closed box, every wall facing the light (the floor, in the error mask) lies under
   // the roof: the reference and the exact hard shadow put it in full umbra. (Walls facing away from
   // the light are outside the mask, and shading multiplies their V by an irradiance of 0.)
