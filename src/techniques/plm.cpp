@@ -1,0 +1,501 @@
+// `plm`: penumbra limit maps (Lawlor 2006, "Interpolation-friendly soft shadow maps", CGVR;
+// papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md), and the silhouette-ribbon stages
+// of plm.h shared with `smoothies` and `kirsch`.
+//
+// The map (Sec. 2, 2.1) holds four quantities per texel, all in PLM space's zeta (plm.h):
+//  c   the depth of the occluder edge casting the texel's soft shadow (none: zetaNone),
+//  g   the geometry upper limit: the topmost surface, raised on the outer side of a ribbon so that it
+//      does not clip the outer penumbra away (Sec. 3.1 step 2). Deviation: raised to the outer limit
+//      of a point `margin` texels nearer the edge, c + max(w - margin, 0) s r, rather than to the
+//      texel's own limit c + p_i. Both give the same l_g (Equation 1 saturates to 1 above the outer
+//      limit), but with the limit itself in g the receiver's depth bias cut the outermost part of the
+//      penumbra to 1 (measured 3.3/255 on a straight edge at 32^2); and at the ribbon's border g
+//      still meets the depth of the map's far end, so the interpolation into texels without a ribbon
+//      (c = zetaNone) happens where every receiver lies above g,
+//  b   the geometry lower limit: the first back-facing surface below c (step 3: "throw away
+//      geometry above or near the occluder depth c"). What lies "near c" is the surface attached to
+//      the edge, on its inner side: there we discard the edge's own object, on the outer side (where
+//      the own object can only be another part of it, the far side of a torus seen through its hole)
+//      nothing; and anything less than a texel below c. The surface is found with Embree rays along
+//      the texel's light ray instead of a second depth-tested pass with discard,
+//  p_i the signed penumbra limit w s r (Sec. 3), + outside the silhouette, 0 where no ribbon.
+// Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
+// topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
+// "highest penumbra limit wins", taken only where a surface lies below the edge (plm.h's
+// farthestSurface) and, on an edge's inner side, only where the light map sees the edge's object
+// (the inner side of one edge's line must not reach past a thin occluder's other edges). Deviation
+// (the clamp of Fig. 7 C): where the topmost surface of a
+// texel lies above the winning edge and is not the edge's own surface (another object, or anything
+// on the edge's outer side), the texel keeps no ribbon (c = zetaNone): a higher occluder whose own
+// ribbon does not reach the texel hides everything below.
+// Evaluation, per pixel: the bilinear interpolation of the four channels at the pixel's map position
+// (the paper's single bilinear fetch) and Equation 2,
+//     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
+// with the compares made at the receiver's depth moved towards the light by the slope-scaled bias of
+// shadow_map.h (a receiver must not shadow itself) and Equation 1 at its true depth; where no ribbon
+// touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
+// V = f(l_g) through the visibility-to-illumination table of Appendix A (penumbra/light_profile.h)
+// when `illumination_table` is on.
+// Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
+// rasterization and the bias); one occluder per shadow-map ray (the first penumbra wins, Sec. 3);
+// corners are rounded (the ribbon of a segment ends in a half disk); where an occluder is thinner
+// than a texel (a sharp corner) the map sees what lies under it and the shadow there is lost; near a
+// contact with the receiver the depth bias lights the shadow, as in every shadow map. Lights: directional disks (an
+// orthographic map, as the paper) and sphere, disk, rect and polygon lights through the perspective
+// transform of plm.h; segment lights are rejected.
+// Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
+// (texels added to every ribbon's half-width), illumination_table (bool).
+#include "techniques/plm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <unordered_map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/light_profile.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "raster/rasterizer.h"
+#include "techniques/shadow_map.h"
+
+namespace penumbra {
+namespace plm {
+
+float emitterRadius(const Light& light, const char* technique) {
+  switch (light.shape()) {
+    case LightShape::Sphere:
+    case LightShape::Disk: return light.radius();
+    case LightShape::Directional: return std::tan(0.5f * light.angularDiameter());
+    case LightShape::Rect:
+    case LightShape::Polygon: {
+      // The disk of equal area: Newell's area of the (planar, convex) polygon.
+      const std::vector<Vec3>& v = light.vertices();
+      Vec3 n(0.0f);
+      for (size_t i = 0; i < v.size(); ++i) n += glm::cross(v[i], v[(i + 1) % v.size()]);
+      return std::sqrt(0.5f * glm::length(n) / kPi);
+    }
+    case LightShape::Segment: break;
+  }
+  fail("{}: a {} light is not supported (it has no width across its axis, so no disk stands for it); supported: "
+       "sphere, disk, rect, polygon, directional",
+       technique, toString(light.shape()));
+}
+
+Space makeSpace(const LightMap& map, const Light& light, const char* technique) {
+  Space space;
+  const float radius = emitterRadius(light, technique);
+  space.orthographic = map.orthographic;
+  const float zNear = std::max(map.zNear, 1e-6f * std::max(map.zFar, 1e-6f));
+  const float zFar = std::max(map.zFar, zNear * (1.0f + 1e-4f));
+  space.zetaNear = space.zeta(zNear);
+  space.zetaFar = space.zeta(zFar);
+  // Deeper than anything, with the scale of the map's range (a finite value: it is interpolated).
+  space.zetaNone = space.zetaFar + 4.0f * (space.zetaFar - space.zetaNear);
+  const float texelSize = 2.0f * (map.orthographic ? map.halfWidth : map.tanHalfFov) / static_cast<float>(map.size);
+  space.ratePerTexel = texelSize / radius;
+  return space;
+}
+
+namespace {
+
+// A surface counts as below an edge when deeper by this fraction of the edge's zeta (float rounding of
+// the two rasterizations of one surface stays well inside it).
+constexpr float kBelowEdge = 1e-5f;
+
+struct EdgeUse {
+  uint32_t opposite[2] = {0, 0};  //!< world vertex opposite the edge in its first two triangles
+  int front = 0, back = 0;
+  int firstFront = -1;            //!< which of the two (0, 1) faces the light, -1 none
+};
+
+uint64_t edgeKey(uint32_t a, uint32_t b) {
+  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
+}
+
+struct PositionHash {
+  size_t operator()(const Vec3& p) const {
+    uint32_t bits[3];
+    std::memcpy(bits, &p, sizeof bits);
+    return (static_cast<size_t>(bits[0]) * 0x9E3779B1u) ^ (static_cast<size_t>(bits[1]) * 0x85EBCA77u) ^
+           (static_cast<size_t>(bits[2]) * 0xC2B2AE3Du);
+  }
+};
+
+}  // namespace
+
+std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space) {
+  std::vector<Edge> edges;
+  for (const Object& object : scene.objects) {
+    const size_t firstEdge = edges.size();
+    std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
+    const Mesh& mesh = object.mesh;
+    // Weld by exact position: primitives repeat vertices where normals differ (a box's corners).
+    std::unordered_map<Vec3, uint32_t, PositionHash> weld;
+    std::vector<uint32_t> canonical(mesh.positions.size());
+    std::vector<Vec3> positions;
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      auto [it, inserted] = weld.try_emplace(mesh.positions[i], static_cast<uint32_t>(positions.size()));
+      if (inserted) positions.push_back(mesh.positions[i]);
+      canonical[i] = it->second;
+    }
+    std::unordered_map<uint64_t, EdgeUse> uses;
+    std::vector<uint64_t> order;  // edges in first-use order: deterministic output
+    for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
+      const glm::uvec3& tri = mesh.triangles[ti];
+      const uint32_t v[3] = {canonical[tri.x], canonical[tri.y], canonical[tri.z]};
+      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+      const Vec3 n = mesh.faceNormal(ti);
+      if (!(glm::dot(n, n) > 0.0f)) continue;  // degenerate
+      const Vec3 centroid = (positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f;
+      const Vec3 toLight = light.isDirectional() ? light.direction() : light.center() - centroid;
+      const bool front = glm::dot(n, toLight) > 0.0f;
+      for (int k = 0; k < 3; ++k) {
+        const uint64_t key = edgeKey(v[k], v[(k + 1) % 3]);
+        auto [it, inserted] = uses.try_emplace(key);
+        if (inserted) order.push_back(key);
+        EdgeUse& use = it->second;
+        const int slot = use.front + use.back;
+        if (slot < 2) {
+          use.opposite[slot] = v[(k + 2) % 3];
+          if (front && use.firstFront < 0) use.firstFront = slot;
+        }
+        (front ? use.front : use.back) += 1;
+      }
+    }
+    for (uint64_t key : order) {
+      const EdgeUse& use = uses[key];
+      const int count = use.front + use.back;
+      if (!(count == 1 || (use.front > 0 && use.back > 0))) continue;
+      const Vec3& pa = positions[static_cast<uint32_t>(key >> 32)];
+      const Vec3& pb = positions[static_cast<uint32_t>(key & 0xffffffffu)];
+      const Vec3 sa = map.project(pa), sb = map.project(pb);
+      if (!map.orthographic && !(sa.z > 0.0f && sb.z > 0.0f)) continue;  // behind a local light
+      Edge e;
+      e.a = Vec2(sa.x, sa.y);
+      e.b = Vec2(sb.x, sb.y);
+      const Vec2 d = e.b - e.a;
+      const float length = glm::length(d);
+      if (!(length > 1e-6f) || !std::isfinite(length)) continue;  // seen end-on
+      Vec2 normal(-d.y / length, d.x / length);
+      // The inner side holds the (front-facing) triangle's third vertex.
+      const int slots = std::min(count, 2);
+      int candidates[2], candidateCount = 0;
+      if (use.firstFront >= 0) candidates[candidateCount++] = use.firstFront;
+      for (int slot = 0; slot < slots; ++slot)
+        if (slot != use.firstFront) candidates[candidateCount++] = slot;
+      float side = 0.0f;
+      for (int q = 0; q < candidateCount && !(std::abs(side) > 1e-6f * length); ++q) {
+        const Vec3 so = map.project(positions[use.opposite[candidates[q]]]);
+        if (!map.orthographic && !(so.z > 0.0f)) continue;
+        side = glm::dot(Vec2(so.x, so.y) - e.a, normal);
+      }
+      if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
+      e.outward = side > 0.0f ? -normal : normal;
+      e.zetaA = space.zeta(sa.z);
+      e.zetaB = space.zeta(sb.z);
+      e.objectId = object.id;
+      edges.push_back(e);
+      ends.emplace_back(static_cast<uint32_t>(key >> 32), static_cast<uint32_t>(key & 0xffffffffu));
+    }
+    // Corners: where exactly two silhouette edges of the object meet, the corner is convex when the
+    // other edge leaves towards this edge's inner side.
+    std::unordered_map<uint32_t, std::vector<uint32_t>> atVertex;  // vertex -> 2 * edge + (0: a, 1: b)
+    for (uint32_t k = 0; k < ends.size(); ++k) {
+      atVertex[ends[k].first].push_back(2 * k);
+      atVertex[ends[k].second].push_back(2 * k + 1);
+    }
+    for (const auto& [vertex, uses] : atVertex) {
+      if (uses.size() != 2) continue;
+      for (int self = 0; self < 2; ++self) {
+        const uint32_t mine = uses[static_cast<size_t>(self)], other = uses[static_cast<size_t>(1 - self)];
+        Edge& e = edges[firstEdge + mine / 2];
+        const Edge& o = edges[firstEdge + other / 2];
+        const Vec2 corner = (mine & 1) ? e.b : e.a;
+        const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
+        const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
+        ((mine & 1) ? e.endSideB : e.endSideA) = side;
+      }
+    }
+  }
+  return edges;
+}
+
+Image<float> farthestSurface(const Scene& scene, const LightMap& map, const Space& space) {
+  // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
+  // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
+  // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
+  std::vector<Vec4> clip;
+  std::vector<float> lsZ;
+  std::vector<glm::uvec3> triangles;
+  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
+  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  for (const Object& object : scene.objects) {
+    const auto offset = static_cast<uint32_t>(clip.size());
+    for (const Vec3& p : object.mesh.positions) {
+      const Vec3 l = map.lightFromRender(p);
+      clip.push_back(map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
+                                      : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z));
+      lsZ.push_back(l.z);
+    }
+    for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
+  }
+  Image<float> far(map.size, map.size, space.zetaNone);
+  if (triangles.empty()) return far;
+  raster::RasterInput input;
+  input.width = input.height = map.size;
+  input.clipPositions = clip;
+  input.triangles = triangles;
+  input.attributeCount = 1;
+  input.attributes = lsZ;
+  const raster::RasterOutput out = raster::rasterize(input);
+  for (int j = 0; j < map.size; ++j)
+    for (int i = 0; i < map.size; ++i)
+      if (out.triangle(i, j) >= 0) {
+        const float z = out.attributes[0](i, j);
+        far(i, j) = map.orthographic || z > 0.0f ? space.zeta(z) : space.zetaNone;
+      }
+  return far;
+}
+
+Image<RibbonTexel> rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
+                                    RibbonPriority priority, float marginTexels, const Image<int32_t>* coverage,
+                                    const Image<float>& farthest) {
+  Image<RibbonTexel> out(mapSize, mapSize);
+  constexpr int kTile = 32;
+  const int tiles = (mapSize + kTile - 1) / kTile;
+  struct Box {
+    int i0, j0, i1, j1;  //!< inclusive texel bounds
+    float halfWidth;     //!< texels
+  };
+  std::vector<Box> boxes(edges.size());
+  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
+  for (size_t k = 0; k < edges.size(); ++k) {
+    const Edge& e = edges[k];
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
+    // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
+    const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
+    const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
+    Box box{std::max(0, static_cast<int>(std::floor(lo.x))), std::max(0, static_cast<int>(std::floor(lo.y))),
+            std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))), std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))),
+            half};
+    boxes[k] = box;
+    if (box.i0 > box.i1 || box.j0 > box.j1) continue;
+    for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
+      for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti)
+        bins[static_cast<size_t>(tj) * tiles + ti].push_back(static_cast<uint32_t>(k));
+  }
+  const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
+    for (int tile = range.begin(); tile < range.end(); ++tile) {
+      const int ti = tile % tiles, tj = tile / tiles;
+      for (uint32_t k : bins[static_cast<size_t>(tile)]) {
+        const Edge& e = edges[k];
+        const Box& box = boxes[k];
+        const Vec2 d = e.b - e.a;
+        const float invLength2 = 1.0f / glm::dot(d, d);
+        const int i0 = std::max(box.i0, ti * kTile), i1 = std::min(box.i1, ti * kTile + kTile - 1);
+        const int j0 = std::max(box.j0, tj * kTile), j1 = std::min(box.j1, tj * kTile + kTile - 1);
+        for (int j = j0; j <= j1; ++j) {
+          RibbonTexel* row = out.row(j);
+          for (int i = i0; i <= i1; ++i) {
+            const Vec2 q(static_cast<float>(i) + 0.5f, static_cast<float>(j) + 0.5f);
+            const Vec2 aq = q - e.a;
+            const float along = glm::dot(aq, d) * invLength2;
+            const float u = std::clamp(along, 0.0f, 1.0f);
+            // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
+            // corner, so they tie there.
+            const Vec2 offset = along <= 0.0f ? aq : along >= 1.0f ? q - e.b : aq - u * d;
+            const float distance = glm::length(offset);
+            if (distance > box.halfWidth) continue;
+            const float endSide = along <= 0.0f ? e.endSideA : along >= 1.0f ? e.endSideB : 0.0f;
+            const bool outer = endSide != 0.0f ? endSide > 0.0f : glm::dot(aq, e.outward) >= 0.0f;
+            if (outer ? !wantOuter : !wantInner) continue;
+            if (!outer && coverage && (*coverage)(i, j) != e.objectId) continue;
+            const float c = along <= 0.0f ? e.zetaA : along >= 1.0f ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA);
+            if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
+            const float p = priority == RibbonPriority::PenumbraLimit ? c + distance * space.ratePerTexel : c;
+            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId};
+          }
+        }
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace plm
+
+namespace {
+
+struct PlmOptions {
+  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  DepthBias bias;             //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every ribbon's half-width, in [0, 64]
+  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
+};
+
+// One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
+struct PlmTexel {
+  float c, g, b, pi;
+};
+
+class PlmTechnique final : public ShadowTechnique {
+ public:
+  explicit PlmTechnique(const PlmOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "plm"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
+    map_ = createShadowMap(scene, light, options_.mapSize);
+    space_ = plm::makeSpace(map_, light, "plm");
+    table_ = VisibilityToIllumination::forLight(light);
+    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);
+    const Image<plm::RibbonTexel> ribbons = plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both,
+                                                                  plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
+                                                                  &map_.objectId, plm::farthestSurface(scene, map_, space_));
+    const int n = map_.size;
+    limits_ = Image<PlmTexel>(n, n);
+    std::vector<int> needLower;  // texels whose ribbon needs the lower limit b
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const float depth = map_.lsDepth(i, j);
+        const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
+        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f};
+        const plm::RibbonTexel& r = ribbons(i, j);
+        // Fig. 7 C's clamp: another object's surface above the edge hides this ribbon's shadow.
+        const bool hidden = (r.w > 0.0f || map_.objectId(i, j) != r.objectId) && g < r.c;
+        if (r.covered() && !hidden) {
+          texel.c = r.c;
+          texel.pi = r.w * space_.ratePerTexel;
+          if (r.w > 0.0f)  // raise g (step 2; see the file comment)
+            texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
+          needLower.push_back(j * n + i);
+        }
+        limits_(i, j) = texel;
+      }
+    if (!needLower.empty()) findLowerLimits(scene, light, ribbons, needLower);
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("plm: visibility() called before prepare()");
+    Timer timer;
+    const int n = map_.size;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      if (!r.inMap) return 1.0f;
+      // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
+      const float fs = r.s - 0.5f, ft = r.t - 0.5f;
+      const float is = std::floor(fs), it = std::floor(ft);
+      const float ws = fs - is, wt = ft - it;
+      const int i0 = std::clamp(static_cast<int>(is), 0, n - 1), i1 = std::clamp(static_cast<int>(is) + 1, 0, n - 1);
+      const int j0 = std::clamp(static_cast<int>(it), 0, n - 1), j1 = std::clamp(static_cast<int>(it) + 1, 0, n - 1);
+      const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
+      const auto lerp2 = [&](float a00, float a10, float a01, float a11) {
+        const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
+        return top + wt * (bottom - top);
+      };
+      const float g = lerp2(t00.g, t10.g, t01.g, t11.g);
+      const float biased = r.lsDepth - r.bias;
+      const float zc = space_.orthographic || biased > 0.0f ? space_.zeta(biased) : -kInfinity;
+      // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
+      // interpolate to zetaNone exactly, p_i to 0), the same value without the division.
+      if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
+      const float c = lerp2(t00.c, t10.c, t01.c, t11.c);
+      const float b = lerp2(t00.b, t10.b, t01.b, t11.b);
+      const float pi = lerp2(t00.pi, t10.pi, t01.pi, t11.pi);
+      const float z = space_.zeta(r.lsDepth);
+      // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless).
+      const float l = std::clamp(0.5f + 0.5f * pi / std::max(z - c, 1e-30f), 0.0f, 1.0f);
+      const float lg = std::clamp(l + 4.0f * (zc < g) - 2.0f * (zc < c) + (zc < b) - 1.0f, 0.0f, 1.0f);
+      return options_.illuminationTable ? table_(lg) : lg;
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  // b (step 3) for the listed texels: along the texel's light ray from a texel's size below c, the
+  // first surface that faces away from the light and belongs to another object than the edge.
+  void findLowerLimits(const Scene& scene, const Light& light, const Image<plm::RibbonTexel>& ribbons,
+                       const std::vector<int>& texels) {
+    const RayScene rays(scene);
+    const int n = map_.size;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const int i = texels[k] % n, j = texels[k] / n;
+        const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
+        const float cDepth = space_.lsDepth(limits_(i, j).c);
+        const float start = cDepth + map_.texelWorldSize(cDepth);
+        Ray ray;
+        ray.origin = map_.unproject(s, t, start);
+        ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
+        for (int hop = 0; hop < 16; ++hop) {
+          const std::optional<RayHit> hit = rays.intersect(ray);
+          if (!hit) break;
+          const Vec3 wsHit = ray.origin + hit->t * ray.direction;
+          const bool facesAway = glm::dot(hit->wsGeometricNormal, -ray.direction) < 0.0f;
+          if (facesAway && (hit->objectId != ribbons(i, j).objectId || ribbons(i, j).w > 0.0f)) {
+            const float depth = map_.lightFromRender(wsHit).z;
+            if (depth > 0.0f) limits_(i, j).b = space_.zeta(depth);
+            break;
+          }
+          ray.tMin = std::nextafter(hit->t, kInfinity);
+        }
+      }
+    });
+  }
+
+  PlmOptions options_;
+  LightMap map_;
+  plm::Space space_;
+  VisibilityToIllumination table_;
+  Image<PlmTexel> limits_;
+  PassTimings timings_;
+};
+
+}  // namespace
+
+ParamSpec ribbonMarginParamSpec() {
+  return ParamSpec{.name = "margin", .type = ParamType::Float, .defaultValue = 2.0, .min = 0.0, .max = 64.0, .choices = {},
+                   .unit = "texels",
+                   .help = "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon"};
+}
+
+ParamSpec illuminationTableParamSpec() {
+  return ParamSpec{.name = "illumination_table", .type = ParamType::Bool, .defaultValue = true, .min = {}, .max = {},
+                   .choices = {}, .unit = "",
+                   .help = "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A "
+                           "table for the light's profile (disk lights; identity for rect, polygon)"};
+}
+
+TechniqueInfo plmTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "plm";
+  info.summary = "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
+  info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
+  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
+                 illuminationTableParamSpec()};
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    PlmOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.bias = depthBiasFromParams(params);
+    options.marginTexels = static_cast<float>(params.getFloat("margin"));
+    options.illuminationTable = params.getBool("illumination_table");
+    return std::make_unique<PlmTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,120 @@
+// Shared stages of the silhouette-ribbon techniques — `plm` (Lawlor 2006, "Interpolation-friendly
+// soft shadow maps", CGVR, Sec. 2-3; papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md),
+// `smoothies` (Chan & Durand 2003) and `kirsch` (Kirsch & Döllner 2003): the light-space depth
+// parameterization in which a straight occluder edge casts a planar penumbra limit, the silhouette
+// edges of the scene seen from the light, and the rasterization of their soft-shadow ribbons.
+//
+// PLM space. Lawlor derives Equation 1 for an infinitely distant light: with depth z measured along
+// the light's axis, an edge at depth c and a receiver at horizontal distance w from it,
+//     l = 1/2 + 1/2 p_i / (z - c),   p_i = w s r   (Sec. 3: s the texel size, r = 1 / tan(angle / 2)),
+// l the visible fraction of the light's diameter. For a directional light we use exactly that
+// (zeta = light-space depth, world units). For a local light of radius R the paper names, as future
+// work, a perspective transform that pushes the light to infinity: with u = x / z the map's
+// projective coordinate and zeta = -1 / z, similar triangles through the edge give
+//     l = 1/2 + 1/2 (u_r - u_e) / (R (zeta_r - zeta_c))
+// exactly for a disk emitter of radius R facing the map's axis, i.e. Equation 1 in (u, zeta) with
+// s = the texel's size in u and r = 1 / R. Sphere lights are modelled by the disk of their radius at
+// their centre (their silhouette disk sits slightly nearer the receiver), rect and polygon lights by
+// the disk of equal area; segment lights, which have no width across their axis, are not supported.
+//
+// Silhouette edges (Sec. 3.1). Per object, vertices are welded by position; a triangle faces the
+// light when its wound normal points to the light's centre (directional: its direction). An edge is
+// a silhouette when its triangles face both ways, or when it has one triangle (the border of an open
+// mesh: a single triangle, a plane). Its outer side, in the map, is the side away from its
+// (front-facing) triangle. Degenerate triangles and edges seen end-on are skipped.
+//
+// Ribbons. Each silhouette edge covers the texels within W(c) = (zeta_far - c) / (s r) + margin +
+// kRibbonBorderTexels texels of its projected segment: the widest penumbra it can cast on anything
+// in the map, plus a margin so that bilinear interpolation near the penumbra reads texels of the same
+// ribbon (the paper's "bias up the z-buffer depth to expand the penumbra limit over a few extra
+// pixels"), plus a border of texels beyond any penumbra, where a bilinear lookup that straddles the
+// ribbon's end sees values that all agree the receiver is lit (plm.cpp). At a
+// texel the edge gives c (its zeta at the nearest point of the segment) and w (the signed distance to
+// the segment in texels, + on the outer side; the distance to the line where the texel lies beside
+// the segment, so p_i is a plane along a straight edge). Beyond an end, where the nearest point is a
+// corner shared with the next silhouette edge, the side is the corner's: outer at a convex corner
+// (beyond a sharp convex corner a texel can lie on the inner side of one edge's line and still
+// outside the occluder), inner at a concave one; the two edges then tie exactly (the same corner,
+// the same distance) and the first keeps the texel. Overlapping ribbons are resolved per texel
+// like a depth buffer: by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1) or, for
+// smoothies, by the edge nearest the light (priority c). Ties go to the edge listed first, and edges
+// are binned to tiles processed in parallel in edge order, so the result is the same for any thread
+// count.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/image.h"
+#include "penumbra/light.h"
+#include "penumbra/math.h"
+#include "penumbra/params.h"
+#include "penumbra/raster.h"
+#include "penumbra/scene.h"
+
+namespace penumbra::plm {
+
+struct Space {
+  bool orthographic = true;
+  float zetaNear = 0.0f, zetaFar = 1.0f;  //!< zeta of the map's depth range
+  float zetaNone = 2.0f;    //!< stands for "nothing here": deeper than anything in the map, finite
+  float ratePerTexel = 1.0f;  //!< s r: zeta of penumbra-limit depth per texel of horizontal distance
+  // zeta of a light-space depth: z (orthographic) or -1 / z (perspective).
+  float zeta(float lsDepth) const { return orthographic ? lsDepth : -1.0f / lsDepth; }
+  float lsDepth(float zeta) const { return orthographic ? zeta : -1.0f / zeta; }
+};
+
+// The emitter radius R of the file comment (world units; directional: tan(angular_diameter / 2)).
+// Throws Error naming the shape and the supported ones for a segment light; `technique` names the
+// caller in the message.
+float emitterRadius(const Light& light, const char* technique);
+
+Space makeSpace(const LightMap& map, const Light& light, const char* technique);
+
+struct Edge {
+  Vec2 a, b;            //!< projected end points, map texels
+  float zetaA = 0.0f, zetaB = 0.0f;
+  Vec2 outward{0.0f};   //!< unit normal of the segment in the map, towards the outer side
+  int32_t objectId = kNoObject;
+  // Side (+1 outer, -1 inner) of the texels beyond each end, whose nearest point is the end point:
+  // +1 at a convex corner of the silhouette, -1 at a concave one (the corner's other edge decides),
+  // 0 where the end meets no single other edge (then the side of the edge's line is used).
+  float endSideA = 0.0f, endSideB = 0.0f;
+};
+
+std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space);
+
+inline constexpr float kRibbonBorderTexels = 1.5f;
+
+enum class RibbonSides { Both, Outer, Inner };
+enum class RibbonPriority { PenumbraLimit, EdgeDepth };
+
+struct RibbonTexel {
+  float c = 0.0f;       //!< zeta of the winning edge at its nearest point
+  float w = 0.0f;       //!< signed distance to it, texels, + outside the silhouette
+  float priority = kInfinity;  //!< kInfinity: no ribbon covers this texel
+  int32_t objectId = kNoObject;
+  bool covered() const { return priority != kInfinity; }
+};
+
+// The deepest surface along each texel's light ray (the light map's far layer), in zeta; zetaNone
+// where the texel sees nothing. A ribbon texel is only taken where a surface lies below the edge:
+// elsewhere there is nothing to receive its shadow (the border of a ground plane, seen from above,
+// would otherwise lay an inner ribbon over the ground itself, whose texels then interpolate with
+// the ribbons of the occluders above it).
+Image<float> farthestSurface(const Scene& scene, const LightMap& map, const Space& space);
+
+// `coverage` (the light map's object ids, or nullptr): a texel on an edge's inner side is only taken
+// where the light map sees the edge's own object — the inner side of one edge's line reaches past
+// the other edges of a thin occluder, where the texel lies outside it.
+Image<RibbonTexel> rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
+                                    RibbonPriority priority, float marginTexels, const Image<int32_t>* coverage,
+                                    const Image<float>& farthest);
+
+}  // namespace penumbra::plm
+
+namespace penumbra {
+// Schema entries shared by the ribbon techniques.
+ParamSpec ribbonMarginParamSpec();
+ParamSpec illuminationTableParamSpec();
+}  // namespace penumbra
