@@ -1,0 +1,525 @@
+// `heidrich`: soft shadow maps for linear lights (Heidrich, Brabec, Seidel 2000, "Soft shadow maps for
+// linear lights", Rendering Techniques 2000, pp. 269-280; the slides in papers/ are the source followed
+// here, slide titles quoted).
+//
+// The light is a segment. Each sample point of it gets a two-channel shadow map ("Visibility Map"):
+// the depth channel of a point light there, and a visibility channel holding, in the penumbra, the
+// fraction of the light that is visible. For the two end points L1, L2 of a linear light the visible
+// fraction falls from 100% to 0% across [p1, p2], where L2 is hidden and L1 is not ("Visibility of
+// Light Source"); the slides interpolate it linearly there ("Linear Interpolation of Visibility"):
+// the exact relation between positions in the penumbra is the rational x1 = x2 t / (n x2 - m x2 + s),
+// approximated by x1 = (t / s) x2, valid where the penumbra is large (n ~ m). The visibility channel
+// is made so:
+//  1. a shadow map per sample point ("Step 1");
+//  2. edge detection on each depth map ("Step 2"; the slides use the Laplacian-of-Gaussian of the
+//     OpenGL imaging subset): heidrich::detectEdges;
+//  3. the depth discontinuities triangulated into "skin" polygons spanning occluder and receiver
+//     depths, warped into the other sample point's view and rasterized there with Gouraud
+//     interpolation, white (1) at receiver vertices, black (0) at occluder vertices ("Step 3");
+//     texels no skin covers take the default 1/2 (a completely lit region: each end point's share);
+//  4. shading ("new shadow map algorithm", shade(p)): l_i = 0 where the depth channel of sample i
+//     shadows p, else V_i[p]; V = l1 + l2.
+// Light subdivision ("Sampling the Light Source"): with k sub-segments (k + 1 sample points, the end
+// points at k = 1) each sub-segment is a linear light of its own, shaded as above with weight 1 / k;
+// this fixes the undersampling case where part of the light is visible but neither end point is.
+//
+// Deviations and approximations (besides the slides' linear interpolation):
+//  - All maps share one orientation, the segment's light frame (Light::lightFrame: +z from the
+//    segment's centre to the scene's centre); each is a perspective map fitted to the scene from its
+//    own sample point (renderLightMap). The Gouraud interpolation is linear in the map's screen space,
+//    which is linear along a receiver parallel to the map plane, so a receiver facing the light gets
+//    the slides' linear penumbra exactly.
+//  - Edge detection: LoG = the 5-point Laplacian of the depth blurred by a 3x3 binomial; a texel is an
+//    edge where |LoG| exceeds edge_threshold / 4 texel sizes (a step of D texel sizes gives D / 4).
+//    The depth map is triangulated as a mesh of texel centres, two triangles per 2x2 quad; a quad is
+//    skin where it touches an edge texel and its corners span a depth gap of more than edge_threshold
+//    texel sizes; corners nearer than the middle of the gap are occluder vertices. Triangles whose
+//    vertices are all on one side are dropped (they are no skin: an all-occluder triangle would darken
+//    the occluder's own lit top). A quad with an empty corner (nothing behind the occluder) gives no
+//    skin: there is no receiver to shade.
+//  - Skins are rasterized into the other view with its depth channel as the depth buffer: a skin
+//    behind the surface that view sees is dropped; of several in front, the nearest shades it.
+//  - Lookups: the visibility channel is read bilinearly at the receiver's map position. Where the
+//    depth channels say p is in the penumbra (one end point lit, the other not), only texels a skin
+//    covers are read: a skin's edge texel sits up to a texel off the hard shadow edges, and the
+//    default 1/2 of an uncovered neighbour would otherwise drop V by half in a one-texel band along
+//    the penumbra's edges. Where no texel of the footprint is covered, the slides' default 1/2
+//    stands. Where both end points are lit, the sum of their two shares is limited to 1 (overlapping
+//    skins can claim more than the whole sub-segment). Each texel records whether a skin covers any
+//    texel of its 3x3 neighbourhood; where none does, the lookup is the default without reading more:
+//    fully lit and umbra pixels cost one texel read per map, the visibility channel sitting next to
+//    the depth in one two-channel texel.
+//  - Each pixel is transformed into map 0's light space once; the other maps share its axes and
+//    differ by their origin only (heidrich::receiverInMap, makeReceiver's arithmetic).
+//  - The depth channel's compare is the hard shadow of shadow_map.h (receiver plane, slope-scaled
+//    bias); receivers outside a map are lit by that sample point.
+//
+// Light shapes: segment only; every other shape is rejected with an Error naming it (a rect light as
+// several segments is not offered: its 2D penumbra is no linear interpolation along one direction).
+//
+// Parameters: map_size (texels per side of every map, default 1024), subdivisions (k, default 1: the
+// slides' two samples), edge_threshold (texel sizes, default 4), bias_constant and bias_slope (the
+// depth compare's, shadow_map.h). Memory: (k + 1) depth maps of map_size^2 floats, and per
+// sub-segment two two-channel maps (depth and visibility side by side) of 2 map_size^2 floats.
+// prepare() builds every map; visibility() only reads them, so a camera-only change costs one
+// visibility pass (the slides' "minimal overhead for static walk-throughs").
+#include "heidrich.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "raster/rasterizer.h"
+
+namespace penumbra {
+namespace heidrich {
+
+Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels) {
+  const int n = map.size;
+  Image<uint8_t> edges(n, n, 0);
+  if (n == 0) return edges;
+  Image<float> horizontal(n, n), blurred(n, n);
+  auto clampIndex = [n](int i) { return std::clamp(i, 0, n - 1); };
+  const float* depth = map.lsDepth.data();
+  // The binomial blur, separable; borders repeat the edge texel. Empty texels (+inf) spread +inf over
+  // the blur's support, and the Laplacian turns that into NaN or inf: flagged below, skipped later.
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      const float* z = depth + static_cast<size_t>(y) * n;
+      float* h = horizontal.row(y);
+      h[0] = 0.25f * z[0] + 0.5f * z[0] + 0.25f * z[clampIndex(1)];
+      for (int x = 1; x < n - 1; ++x) h[x] = 0.25f * z[x - 1] + 0.5f * z[x] + 0.25f * z[x + 1];
+      if (n > 1) h[n - 1] = 0.25f * z[n - 2] + 0.5f * z[n - 1] + 0.25f * z[n - 1];
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      const float* up = horizontal.row(clampIndex(y - 1));
+      const float* mid = horizontal.row(y);
+      const float* down = horizontal.row(clampIndex(y + 1));
+      float* b = blurred.row(y);
+      for (int x = 0; x < n; ++x) b[x] = 0.25f * up[x] + 0.5f * mid[x] + 0.25f * down[x];
+    }
+  });
+  // texelWorldSize(z) is linear in z for a perspective map and constant for an orthographic one.
+  const float texelPerDepth = map.orthographic ? 0.0f : map.texelWorldSize(1.0f);
+  const float texelConstant = map.orthographic ? map.texelWorldSize(1.0f) : 0.0f;
+  const float k = 0.25f * edgeThresholdTexels;
+  tbb::enumerable_thread_specific<std::vector<float>> rowBuffer(std::vector<float>(static_cast<size_t>(n) + 2));
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      const float* up = blurred.row(clampIndex(y - 1));
+      const float* mid = blurred.row(y);
+      const float* down = blurred.row(clampIndex(y + 1));
+      const float* z = depth + static_cast<size_t>(y) * n;
+      uint8_t* e = edges.row(y);
+      // The row with its border texels repeated, so the loop below reads x - 1 and x + 1 unclamped
+      // and vectorizes.
+      float* padded = rowBuffer.local().data();
+      padded[0] = mid[0];
+      std::copy(mid, mid + n, padded + 1);
+      padded[n + 1] = mid[n - 1];
+      for (int x = 0; x < n; ++x) {
+        const float log = padded[x] + padded[x + 2] + up[x] + down[x] - 4.0f * mid[x];
+        const float threshold = k * (texelPerDepth * z[x] + texelConstant);
+        e[x] = !(std::abs(log) <= threshold);  // NaN and inf (empty texels nearby) are edges
+      }
+    }
+  });
+  return edges;
+}
+
+SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels) {
+  const int n = map.size;
+  SkinMesh skin;
+  if (n < 2) return skin;
+  // Rows of quads in parallel, each into its own mesh, joined in row order: the same mesh for any
+  // thread count.
+  std::vector<SkinMesh> rows(static_cast<size_t>(n - 1));
+  tbb::parallel_for(tbb::blocked_range<int>(0, n - 1), [&](const tbb::blocked_range<int>& range) {
+    for (int j = range.begin(); j < range.end(); ++j) {
+      SkinMesh& out = rows[static_cast<size_t>(j)];
+      for (int i = 0; i < n - 1; ++i) {
+        if (!(edges(i, j) | edges(i + 1, j) | edges(i, j + 1) | edges(i + 1, j + 1))) continue;
+        // Corners in the order 00, 10, 11, 01 (a cycle around the quad).
+        const int ci[4] = {i, i + 1, i + 1, i};
+        const int cj[4] = {j, j, j + 1, j + 1};
+        float z[4];
+        float zMin = kInfinity, zMax = -kInfinity;
+        for (int c = 0; c < 4; ++c) {
+          z[c] = map.lsDepth(ci[c], cj[c]);
+          zMin = std::min(zMin, z[c]);
+          zMax = std::max(zMax, z[c]);
+        }
+        if (!std::isfinite(zMax)) continue;  // nothing behind the occluder: no receiver to shade
+        if (!(zMax - zMin > edgeThresholdTexels * map.texelWorldSize(zMin))) continue;
+        const float middle = 0.5f * (zMin + zMax);
+        bool occluder[4];
+        for (int c = 0; c < 4; ++c) occluder[c] = z[c] < middle;
+        const auto base = static_cast<uint32_t>(out.wsPositions.size());
+        for (int c = 0; c < 4; ++c) {
+          out.wsPositions.push_back(
+              map.unproject(static_cast<float>(ci[c]) + 0.5f, static_cast<float>(cj[c]) + 0.5f, z[c]));
+          out.value.push_back(occluder[c] ? 0.0f : 1.0f);
+        }
+        // Two triangles, 00-10-11 and 00-11-01; one with all vertices on one side is no skin.
+        const int tris[2][3] = {{0, 1, 2}, {0, 2, 3}};
+        for (const auto& t : tris) {
+          const int occluders = occluder[t[0]] + occluder[t[1]] + occluder[t[2]];
+          if (occluders == 0 || occluders == 3) continue;
+          out.triangles.emplace_back(base + t[0], base + t[1], base + t[2]);
+        }
+      }
+    }
+  });
+  size_t vertexCount = 0, triangleCount = 0;
+  for (const SkinMesh& r : rows) {
+    vertexCount += r.wsPositions.size();
+    triangleCount += r.triangles.size();
+  }
+  skin.wsPositions.reserve(vertexCount);
+  skin.value.reserve(vertexCount);
+  skin.triangles.reserve(triangleCount);
+  for (const SkinMesh& r : rows) {
+    const auto offset = static_cast<uint32_t>(skin.wsPositions.size());
+    skin.wsPositions.insert(skin.wsPositions.end(), r.wsPositions.begin(), r.wsPositions.end());
+    skin.value.insert(skin.value.end(), r.value.begin(), r.value.end());
+    for (const glm::uvec3& t : r.triangles) skin.triangles.push_back(t + glm::uvec3(offset));
+  }
+  return skin;
+}
+
+Image<float> renderVisibilityMap(const SkinMesh& skin, const LightMap& view) {
+  Image<float> out(view.size, view.size, kUncovered);
+  if (skin.triangles.empty() || view.size == 0) return out;
+  if (view.orthographic) fail("heidrich: visibility maps need a perspective map (a local light)");
+  // The view's projection (LightMap::project) in clip space with the light maps' reversed depth key
+  // -zNear / z, and the view's depth channel as the depth buffer: of the skins in front of the
+  // surface the view sees at a texel, the nearest one shades it, as depth-buffered rendering of the
+  // skins over the shadow map does. A skin behind that surface says nothing about it (the surface is
+  // outside the other sample's shadow volume there). Vertices nearer than zNear are clipped.
+  std::vector<Vec4> clip(skin.wsPositions.size());
+  const float xyScale = 1.0f / view.tanHalfFov;
+  for (size_t i = 0; i < clip.size(); ++i) {
+    const Vec3 l = view.lightFromRender(skin.wsPositions[i]);
+    clip[i] = Vec4(l.x * xyScale, l.y * xyScale, -view.zNear, l.z);
+  }
+  raster::RasterInput input;
+  input.width = input.height = view.size;
+  input.clipPositions = clip;
+  input.triangles = skin.triangles;
+  const float texelPerDepth = view.texelWorldSize(1.0f);
+  raster::rasterize(input, [&](const raster::TileSamples& s) {
+    for (int j = 0; j < s.height; ++j)
+      for (int i = 0; i < s.width; ++i) {
+        const int k = j * raster::kTileSize + i;
+        const int32_t tri = s.triangle[k];
+        if (tri < 0) continue;
+        const int x = s.x0 + i, y = s.y0 + j;
+        // The skin's depth here is clip w; it must not lie behind the view's surface by more than the
+        // two texels of depth where a skin's receiver end meets that surface.
+        const float zSkin = s.clipW[k], zSurface = view.lsDepth(x, y);
+        if (zSkin > zSurface + 2.0f * texelPerDepth * zSurface) continue;
+        // Gouraud: the value interpolated linearly in screen space. The rasterizer's barycentrics b are
+        // perspective-correct; the screen-space ones are b_i w_i / sum_j b_j w_j, and sum_j b_j w_j is
+        // the clip w at the sample.
+        const glm::uvec3& t = skin.triangles[static_cast<size_t>(tri)];
+        const Vec3& b = s.barycentrics[k];
+        const float gouraud = (b.x * clip[t.x].w * skin.value[t.x] + b.y * clip[t.y].w * skin.value[t.y] +
+                               b.z * clip[t.z].w * skin.value[t.z]) /
+                              zSkin;
+        out(x, y) = std::clamp(gouraud, 0.0f, 1.0f);  // rounding only: a convex combination of 0s and 1s
+      }
+  });
+  return out;
+}
+
+Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>& visibility) {
+  const int n = map.size;
+  Image<TwoChannelTexel> out(n, n);
+  if (n == 0) return out;
+  // Coverage dilated by one texel (3x3), separably: a horizontal then a vertical OR.
+  Image<uint8_t> horizontal(n, n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const float* v = visibility.row(j);
+      uint8_t* h = horizontal.row(j);
+      for (int i = 0; i < n; ++i) h[i] = v[i] >= 0.0f;
+      uint8_t previous = 0;
+      for (int i = 0; i < n; ++i) {
+        const uint8_t here = h[i];
+        h[i] = static_cast<uint8_t>(previous | here | (i + 1 < n && v[i + 1] >= 0.0f));
+        previous = here;
+      }
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const uint8_t* up = horizontal.row(std::max(j - 1, 0));
+      const uint8_t* mid = horizontal.row(j);
+      const uint8_t* down = horizontal.row(std::min(j + 1, n - 1));
+      const float* v = visibility.row(j);
+      const float* z = map.lsDepth.row(j);
+      TwoChannelTexel* o = out.row(j);
+      for (int i = 0; i < n; ++i) {
+        const bool near = (up[i] | mid[i] | down[i]) != 0;
+        o[i] = TwoChannelTexel{z[i], v[i] >= 0.0f ? v[i] : (near ? kUncovered : kNoSkinNearby)};
+      }
+    }
+  });
+  return out;
+}
+
+namespace {
+
+// num / den limited to [-kMaxDepthSlope, kMaxDepthSlope], also when den is 0 (as makeReceiver does).
+float limitedRatio(float num, float den) {
+  if (std::abs(num) <= kMaxDepthSlope * std::abs(den)) return num / den;
+  const float sign = (num < 0.0f) != (den < 0.0f) ? -1.0f : 1.0f;
+  return sign * kMaxDepthSlope;
+}
+
+}  // namespace
+
+ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
+  // makeReceiver's steps and rounding, for a perspective map (shadow_map.cpp has the derivation).
+  ShadowReceiver r;
+  if (!(lsP.z > 0.0f)) return r;
+  const float half = 0.5f * static_cast<float>(map.size);
+  const float scale = 1.0f / (lsP.z * map.tanHalfFov);
+  r.s = half * (1.0f + lsP.x * scale);
+  r.t = half * (1.0f - lsP.y * scale);
+  r.lsDepth = lsP.z;
+  const float size = static_cast<float>(map.size);
+  if (!(r.s >= 0.0f && r.s < size && r.t >= 0.0f && r.t < size) || !std::isfinite(r.lsDepth)) return r;
+  r.inMap = true;
+  r.texelWorld = map.texelWorldSize(r.lsDepth);
+  const float nDotD = glm::dot(lsN, lsP) / lsP.z;
+  const float gs = limitedRatio(-lsN.x, nDotD);
+  const float gt = limitedRatio(lsN.y, nDotD);
+  r.dzds = gs * r.texelWorld;
+  r.dzdt = gt * r.texelWorld;
+  r.bias = r.texelWorld * (bias.constantTexels + bias.slope * std::sqrt(gs * gs + gt * gt));
+  return r;
+}
+
+}  // namespace heidrich
+
+namespace {
+
+constexpr float kLitShare = 0.5f;  // an uncovered texel: each end point's share of its sub-segment
+
+using heidrich::TwoChannelTexel;
+
+// The texel holding p in one two-channel map: the depth channel's compare (hardShadow of
+// shadow_map.h) and whether a skin lies near enough for the visibility lookups to read one.
+struct TexelRead {
+  bool lit = true;
+  bool nearSkin = false;
+};
+
+TexelRead readTexel(const Image<TwoChannelTexel>& m, const ShadowReceiver& r) {
+  if (!r.inMap) return {};  // lit, and no visibility information: the lit share
+  const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
+  const TwoChannelTexel& t = m(i, j);
+  return TexelRead{!(t.lsDepth < blockerThreshold(r, i, j)), t.visibility != heidrich::kNoSkinNearby};
+}
+
+// Bilinear footprint of map position (s, t) over texel centres, clamped to the map.
+struct Footprint {
+  size_t i00, i10, i01, i11;  //!< texel indices
+  float w00, w10, w01, w11;   //!< weights
+};
+
+Footprint footprint(int n, const ShadowReceiver& r) {
+  const float sc = r.s - 0.5f, tc = r.t - 0.5f;
+  const float fs0 = std::floor(sc), ft0 = std::floor(tc);
+  const float ws = sc - fs0, wt = tc - ft0;
+  const int i0 = static_cast<int>(fs0), j0 = static_cast<int>(ft0);
+  const size_t ia = static_cast<size_t>(std::clamp(i0, 0, n - 1)), ib = static_cast<size_t>(std::clamp(i0 + 1, 0, n - 1));
+  const size_t ja = static_cast<size_t>(std::clamp(j0, 0, n - 1)), jb = static_cast<size_t>(std::clamp(j0 + 1, 0, n - 1));
+  const size_t stride = static_cast<size_t>(n);
+  return Footprint{ja * stride + ia, ja * stride + ib, jb * stride + ia, jb * stride + ib,
+                   (1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
+}
+
+// The visibility channel where both sample points light p: bilinear, uncovered texels at the lit share.
+float lookupLit(const Image<TwoChannelTexel>& m, const ShadowReceiver& r) {
+  if (!r.inMap) return kLitShare;
+  const Footprint f = footprint(m.width(), r);
+  const TwoChannelTexel* t = m.data();
+  auto value = [](float v) { return v >= 0.0f ? v : kLitShare; };
+  return f.w00 * value(t[f.i00].visibility) + f.w10 * value(t[f.i10].visibility) +
+         f.w01 * value(t[f.i01].visibility) + f.w11 * value(t[f.i11].visibility);
+}
+
+// The visibility channel in the penumbra (the other sample point is hidden): bilinear over covered
+// texels only (weights renormalized); the lit share where none is covered (file comment, "Lookups").
+float lookupPenumbra(const Image<TwoChannelTexel>& m, const ShadowReceiver& r) {
+  if (!r.inMap) return kLitShare;
+  const Footprint f = footprint(m.width(), r);
+  const TwoChannelTexel* t = m.data();
+  const float v00 = t[f.i00].visibility, v10 = t[f.i10].visibility;
+  const float v01 = t[f.i01].visibility, v11 = t[f.i11].visibility;
+  const float w00 = v00 >= 0.0f ? f.w00 : 0.0f, w10 = v10 >= 0.0f ? f.w10 : 0.0f;
+  const float w01 = v01 >= 0.0f ? f.w01 : 0.0f, w11 = v11 >= 0.0f ? f.w11 : 0.0f;
+  const float weight = w00 + w10 + w01 + w11;
+  if (!(weight > 0.0f)) return kLitShare;
+  return (w00 * v00 + w10 * v10 + w01 * v01 + w11 * v11) / weight;
+}
+
+}  // namespace
+
+HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(options) {
+  if (options.subdivisions < 1 || options.subdivisions > 64)
+    fail("heidrich: subdivisions = {} is not valid: expected an int in [1, 64]", options.subdivisions);
+  if (!(options.edgeThreshold > 0.0f) || !std::isfinite(options.edgeThreshold))
+    fail("heidrich: edge_threshold = {} is not valid: expected a finite number of texel sizes > 0",
+         options.edgeThreshold);
+}
+
+void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
+  maps_.clear();  // a failed prepare() leaves nothing for visibility() to use
+  visibility_.clear();
+  if (light.shape() != LightShape::Segment)
+    fail("heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "
+         "(\"type\": \"segment\" with end points a and b)",
+         toString(light.shape()));
+  timings_ = {};
+  Timer total;
+  const int k = options_.subdivisions;
+  // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps
+  // that axis: Light::lightFrame takes a disk's normal, turned to face the scene.
+  const Frame frame = light.lightFrame(scene.bounds());
+  const float tiny = 1e-4f * light.extent();
+  Timer stage;
+  for (int j = 0; j <= k; ++j) {
+    const float u = static_cast<float>(j) / static_cast<float>(k);
+    const Vec3 wsSample = light.a() + u * (light.b() - light.a());
+    LightMap map = createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize);
+    map.objectId = Image<int32_t>();  // only depths are used
+    maps_.push_back(std::move(map));
+    ++shadowMapsBuilt_;
+    reportProgress(0.5 * (j + 1) / (k + 1));
+  }
+  sharedFrame_ = true;
+  lsOffsets_.clear();
+  for (const LightMap& map : maps_) {
+    sharedFrame_ = sharedFrame_ && map.lsFrame.x == maps_[0].lsFrame.x && map.lsFrame.y == maps_[0].lsFrame.y &&
+                   map.lsFrame.z == maps_[0].lsFrame.z;
+    lsOffsets_.push_back(maps_[0].lightFromRender(map.wsOrigin));
+  }
+  shadowMapsMs_ = stage.elapsedMs();
+  stage.reset();
+  std::vector<heidrich::SkinMesh> skins(maps_.size());
+  skinTriangles_ = 0;
+  for (size_t j = 0; j < maps_.size(); ++j) {
+    skins[j] = heidrich::buildSkin(maps_[j], heidrich::detectEdges(maps_[j], options_.edgeThreshold),
+                                   options_.edgeThreshold);
+    skinTriangles_ += skins[j].triangles.size();
+  }
+  skinsMs_ = stage.elapsedMs();
+  stage.reset();
+  // Sub-segment q = [sample q, sample q + 1]: each end's visibility channel holds the other end's
+  // skins, warped into its view.
+  for (int q = 0; q < k; ++q) {
+    const size_t a = static_cast<size_t>(q), b = static_cast<size_t>(q + 1);
+    visibility_.push_back(heidrich::makeTwoChannelMap(maps_[a], heidrich::renderVisibilityMap(skins[b], maps_[a])));
+    visibility_.push_back(heidrich::makeTwoChannelMap(maps_[b], heidrich::renderVisibilityMap(skins[a], maps_[b])));
+    visibilityMapsBuilt_ += 2;
+    reportProgress(0.5 + 0.5 * (q + 1) / k);
+  }
+  visibilityMapsMs_ = stage.elapsedMs();
+  prepareMs_ = total.elapsedMs();
+  timings_.add("prepare", prepareMs_);
+}
+
+void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+  if (maps_.empty()) fail("heidrich: visibility() called before prepare()");
+  Timer timer;
+  const int k = static_cast<int>(maps_.size()) - 1;
+  const float subWeight = 1.0f / static_cast<float>(k);
+  const LightMap& map0 = maps_[0];
+  forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+    const Vec3& p = gbuffer.wsPosition(x, y);
+    const Vec3& n = gbuffer.wsGeometricNormal(x, y);
+    const Vec3 lsP = map0.lightFromRender(p), lsN = map0.lsFrame.toLocal(n);
+    auto receiver = [&](size_t j) {
+      return sharedFrame_ ? heidrich::receiverInMap(maps_[j], lsP - lsOffsets_[j], lsN, options_.bias)
+                          : makeReceiver(maps_[j], p, n, options_.bias);
+    };
+    // shade(p) per sub-segment, the receiver of each sample point computed once. Most pixels are
+    // fully lit or in the umbra, far from any skin: one texel read per map decides them.
+    ShadowReceiver r0 = receiver(0);
+    float sum = 0.0f;
+    for (int q = 0; q < k; ++q) {
+      const Image<TwoChannelTexel>& vis0 = visibility_[static_cast<size_t>(2 * q)];
+      const Image<TwoChannelTexel>& vis1 = visibility_[static_cast<size_t>(2 * q + 1)];
+      const ShadowReceiver r1 = receiver(static_cast<size_t>(q + 1));
+      const TexelRead a = readTexel(vis0, r0), b = readTexel(vis1, r1);
+      float l = 0.0f;
+      if (a.lit && b.lit)
+        l = std::min(1.0f, (a.nearSkin ? lookupLit(vis0, r0) : kLitShare) + (b.nearSkin ? lookupLit(vis1, r1) : kLitShare));
+      else if (a.lit)
+        l = a.nearSkin ? lookupPenumbra(vis0, r0) : kLitShare;
+      else if (b.lit)
+        l = b.nearSkin ? lookupPenumbra(vis1, r1) : kLitShare;
+      sum += l;
+      r0 = r1;
+    }
+    return std::min(1.0f, sum * subWeight);  // k terms of at most 1 each, times 1 / k, plus rounding
+  });
+  timings_ = {};
+  timings_.add("prepare", prepareMs_);
+  timings_.add("visibility", timer.elapsedMs());
+}
+
+std::vector<std::pair<std::string, double>> HeidrichTechnique::stats() const {
+  return {{"sample_points", static_cast<double>(maps_.size())},
+          {"skin_triangles", static_cast<double>(skinTriangles_)},
+          {"shadow_maps_built", static_cast<double>(shadowMapsBuilt_)},
+          {"visibility_maps_built", static_cast<double>(visibilityMapsBuilt_)},
+          {"shadow_maps_ms", shadowMapsMs_},
+          {"edges_and_skins_ms", skinsMs_},
+          {"visibility_maps_ms", visibilityMapsMs_}};
+}
+
+TechniqueInfo heidrichTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "heidrich";
+  info.summary =
+      "soft shadow maps for linear lights: a depth + visibility map per sample point, skin polygons of the "
+      "depth discontinuities warped into the other view and Gouraud-shaded (segment lights)";
+  info.source = "Heidrich, Brabec, Seidel 2000";
+  info.params = {
+      mapSizeParamSpec(),
+      ParamSpec{.name = "subdivisions", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 1.0, .max = 64.0,
+                .choices = {}, .unit = "sub-segments",
+                .help = "k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); "
+                        "raise it where part of the light shows between occluders that hide both end points"},
+      ParamSpec{.name = "edge_threshold", .type = ParamType::Float, .defaultValue = double{HeidrichOptions{}.edgeThreshold},
+                .min = 0.01, .max = 1000.0, .choices = {}, .unit = "texels",
+                .help = "smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel "
+                        "at its depth"},
+      biasConstantParamSpec(),
+      biasSlopeParamSpec(),
+  };
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    HeidrichOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.subdivisions = static_cast<int>(params.getInt("subdivisions"));
+    options.edgeThreshold = static_cast<float>(params.getFloat("edge_threshold"));
+    options.bias = depthBiasFromParams(params);
+    return std::make_unique<HeidrichTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

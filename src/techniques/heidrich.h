@@ -1,0 +1,113 @@
+// `heidrich`: soft shadow maps for linear lights (Heidrich, Brabec, Seidel 2000, "Soft shadow maps for
+// linear lights", Rendering Techniques 2000, pp. 269-280; papers/heidrich-brabec-seidel-2000-...-slides).
+// Declared here (rather than only registered) so that tests can run the stages on their own and read
+// the maps and counters of a run. See heidrich.cpp for the algorithm, its approximations and its
+// parameters.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "penumbra/image.h"
+#include "penumbra/raster.h"
+#include "penumbra/technique.h"
+#include "shadow_map.h"
+
+namespace penumbra {
+
+struct HeidrichOptions {
+  int mapSize = 1024;        //!< texels per side of each sample point's shadow and visibility map, in [16, 8192]
+  int subdivisions = 1;      //!< k: sub-segments of the light (k + 1 sample points), in [1, 64]
+  float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth, > 0
+  DepthBias bias;            //!< depth-compare bias of the shadow-map channel (shadow_map.h)
+};
+
+namespace heidrich {
+
+// Value of a visibility-map texel that no skin polygon covers: "no penumbra information here". A
+// lookup reads it as the lit default (the sample's full share, 1/2 of its sub-segment; slides,
+// "Generating the Visibility Map") or skips it (see heidrich.cpp, "Lookups").
+inline constexpr float kUncovered = -1.0f;
+// In a two-channel map: uncovered, and so is every texel of its 3x3 neighbourhood, which holds every
+// texel a bilinear lookup at a point of this texel reads: the lookup needs no other texel.
+inline constexpr float kNoSkinNearby = -2.0f;
+
+// Edge detection (slides, "Step 2"): 1 where the Laplacian of the Gaussian-smoothed depth (3x3
+// binomial, then the 5-point Laplacian) exceeds edgeThresholdTexels / 4 texel sizes at that texel's
+// depth, or where its support holds an empty texel. A depth step of D texel sizes gives |LoG| = D / 4
+// at the texels on both sides of it, so the test flags steps of more than edgeThresholdTexels.
+Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels);
+
+// The skin polygons of one depth map (slides, "Step 3: triangulate depth values"): the depth map as a
+// mesh of texel centres, keeping the triangles of every 2x2 quad that touches an edge texel and spans
+// a depth gap of more than edgeThresholdTexels; each vertex carries its Gouraud value, 0 ("black")
+// on the occluder side of the gap, 1 ("white") on the receiver side.
+struct SkinMesh {
+  std::vector<Vec3> wsPositions;
+  std::vector<float> value;  //!< per vertex: 0 occluder, 1 receiver
+  std::vector<glm::uvec3> triangles;
+};
+SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels);
+
+// The skin warped into `view` (a perspective map) and rasterized there with Gouraud (screen-linear)
+// interpolation, with the view's depth channel as the depth buffer: skins behind the surface the view
+// sees are dropped, the nearest skin in front shades it. kUncovered where no skin lands.
+Image<float> renderVisibilityMap(const SkinMesh& skin, const LightMap& view);
+
+// One texel of a sample point's two-channel shadow map (slides, "Visibility Map": "additional shadow
+// map channel"), the channels side by side so a lookup reads both from one cache line.
+struct TwoChannelTexel {
+  float lsDepth;     //!< the depth channel (LightMap::lsDepth)
+  float visibility;  //!< the visibility channel; kUncovered or kNoSkinNearby where no skin lands
+};
+Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>& visibility);
+
+// makeReceiver (shadow_map.h) for a perspective map, from the receiver's position and geometric normal
+// already in the map's light space: the maps of one segment share their axes, so a pixel transforms
+// its point and normal once and each map only subtracts its origin's offset.
+ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsPosition, const Vec3& lsNormal, const DepthBias& bias);
+
+}  // namespace heidrich
+
+class HeidrichTechnique final : public ShadowTechnique {
+ public:
+  explicit HeidrichTechnique(const HeidrichOptions& options);
+
+  std::string_view name() const override { return "heidrich"; }
+  // Renders the k + 1 shadow maps and the 2k visibility maps; throws Error for a light that is not a
+  // segment. Always rebuilds: prepare() is the call that says the light or the scene changed.
+  void prepare(const Scene& scene, const Light& light) override;
+  // Reads the maps only: a camera-only change (a new G-buffer) re-runs this pass alone.
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override;
+  PassTimings timings() const override { return timings_; }
+  // "sample_points", "skin_triangles" (of the last prepare), "shadow_maps_built" and
+  // "visibility_maps_built" (counted over the technique's lifetime), and the prepare stages in ms:
+  // "shadow_maps_ms", "edges_and_skins_ms", "visibility_maps_ms".
+  std::vector<std::pair<std::string, double>> stats() const override;
+
+  int samplePoints() const { return static_cast<int>(maps_.size()); }
+  const LightMap& shadowMap(int sample) const { return maps_.at(static_cast<size_t>(sample)); }
+  // Two-channel map of sub-segment q's first (end = 0) or second (end = 1) sample point.
+  const Image<heidrich::TwoChannelTexel>& visibilityMap(int subSegment, int end) const {
+    return visibility_.at(static_cast<size_t>(2 * subSegment + end));
+  }
+  int shadowMapsBuilt() const { return shadowMapsBuilt_; }
+  int visibilityMapsBuilt() const { return visibilityMapsBuilt_; }
+
+ private:
+  HeidrichOptions options_;
+  std::vector<LightMap> maps_;           //!< sample point j's shadow map (depth channel)
+  std::vector<Image<heidrich::TwoChannelTexel>> visibility_;  //!< 2q + e: map of sub-segment q's end e
+  bool sharedFrame_ = false;      //!< every map has map 0's axes (always, unless the light points at the scene)
+  std::vector<Vec3> lsOffsets_;   //!< map j's origin in map 0's light space
+  size_t skinTriangles_ = 0;
+  int shadowMapsBuilt_ = 0;
+  int visibilityMapsBuilt_ = 0;
+  double shadowMapsMs_ = 0.0, skinsMs_ = 0.0, visibilityMapsMs_ = 0.0;
+  PassTimings timings_;
+  double prepareMs_ = 0.0;
+};
+
+}  // namespace penumbra
