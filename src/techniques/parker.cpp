@@ -1,0 +1,219 @@
+// `parker`: Parker, Shirley and Smits 1998, "Single Sample Soft Shadows" (papers/parker-shirley-
+// smits-1998-single-sample-soft-shadows.md). One shadow ray per pixel to the light's centre; the
+// shadow of a soft-edged object from a point light stands in for the soft shadow of the real object
+// from the area light (Section 3, Figure 1):
+//  - inner object = the object itself (Figure 2: anything smaller leaks light between touching
+//    objects), tested with an Embree occlusion ray exactly as `raytraced-hard` (src/rt/shadow_ray.h:
+//    same origin offset, same end short of the light), so parker is 0 exactly where that hard
+//    shadow is 0 — except on analytic spheres, which are the true spheres their meshes are inscribed
+//    in, so their umbra is a sliver larger;
+//  - outer object = the object grown by b = D t0 / |l - o| (Appendix; t0 the distance along the ray
+//    to the point nearest the occluder, D the light's diameter): a sphere of radius R + b for an
+//    analytic sphere, the rounded triangles of the Appendix for meshes (src/rt/outer_objects.h);
+//  - tau = (d - R) / b, s = 3 tau^2 - 2 tau^3 (the Bernstein form) or the exact sinusoid
+//    (1 + sin(pi tau - pi/2)) / 2 (Section 3);
+//  - every outer object the ray passes is seen (a light buffer over the directions leaving the
+//    light's centre, not only the first hit), combined by min (the paper's choice), product or sum.
+//
+// Approximations (the paper's): the penumbra lies wholly outside the hard shadow and is as wide as
+// the whole physical penumbra (Section 3: "the umbra region will be larger than in a physically-
+// based computation"); the light is treated as a sphere of diameter D. Light shapes: sphere (D =
+// 2 radius), disk, rect and polygon (D = their bounding diameter, 2 Light::extent(): the sphere that
+// holds the emitter, as the paper's "roughly spherical lights" assumption needs one size), and
+// directional (D = 2 tan(angular_diameter / 2), the solar disk's diameter at unit distance; b = D t0).
+// The radiance profile (limb darkening) is not modelled. A segment light is rejected: its penumbra
+// exists only along its length, which an outer object grown equally in every direction cannot give
+// (use `heidrich`).
+//
+// Parameters: falloff (bernstein | sinusoid), combine (min | product | sum), analytic_spheres
+// (bool), light_diameter (world units; directional: per unit distance; auto = as above),
+// grid_resolution (cells per side of each face of the light buffer's cube map).
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "rt/outer_objects.h"
+#include "rt/shadow_ray.h"
+
+namespace penumbra {
+namespace {
+
+struct ParkerOptions {
+  rt::OuterFalloff falloff = rt::OuterFalloff::Bernstein;
+  rt::OuterCombine combine = rt::OuterCombine::Min;
+  bool analyticSpheres = true;
+  std::optional<float> lightDiameter;  //!< world units (directional: per unit distance); nullopt = derived
+  int gridResolution = 64;             //!< light-buffer cells per cube-face side
+};
+
+class ParkerTechnique final : public ShadowTechnique {
+ public:
+  explicit ParkerTechnique(const ParkerOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "parker"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    if (light.shape() == LightShape::Segment)
+      fail("parker: a segment light is not supported (its penumbra runs only along the segment, which an outer object "
+           "grown equally in every direction cannot give); supported: sphere, disk, rect, polygon, directional; use "
+           "heidrich for a segment light");
+    timings_ = {};
+    Timer timer;
+    // The paper's D: the diameter of the (roughly spherical) light.
+    const float diameter = options_.lightDiameter.value_or(2.0f * light.extent());
+    rt::OuterObjectOptions outerOptions;
+    outerOptions.lightDiameter = diameter;
+    outerOptions.analyticSpheres = options_.analyticSpheres;
+    outerOptions.gridResolution = options_.gridResolution;
+    outer_ = std::make_unique<rt::OuterObjects>(scene, light, outerOptions);
+
+    // Inner objects: the meshes, except those whose analytic sphere the outer objects test.
+    Scene inner;
+    inner.source = scene.source;
+    analyticIds_.clear();
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      if (!outer_->usesAnalyticSphere()[i]) inner.objects.push_back(scene.objects[i]);
+      else analyticIds_.push_back(scene.objects[i].id);
+    }
+    std::sort(analyticIds_.begin(), analyticIds_.end());
+    rays_ = std::make_unique<RayScene>(inner);
+    light_ = light;
+    // The full scene's scale, as raytraced-hard and the reference use, so the rays are the same.
+    epsilon_ = shadowRayEpsilon(scene.bounds());
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (!rays_ || !outer_ || !light_) fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
+    Timer timer;
+    const int width = gbuffer.width(), height = gbuffer.height();
+    v = Image<float>(width, height, 1.0f);
+    const Light& light = *light_;
+    const rt::OuterObjects& outer = *outer_;
+    const rt::OuterFalloff falloff = options_.falloff;
+    const rt::OuterCombine combine = options_.combine;
+    const bool directional = light.isDirectional();
+    std::atomic<int64_t> rays{0};
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+      Ray packet[16];
+      int xs[16];
+      bool occluded[16];
+      int64_t rangeRays = 0;
+      for (int y = range.begin(); y < range.end(); ++y) {
+        int count = 0;
+        auto flush = [&] {
+          rays_->occluded16(packet, count, occluded);
+          rangeRays += count;
+          for (int i = 0; i < count; ++i) {
+            if (occluded[i]) {
+              v(xs[i], y) = 0.0f;  // the inner object: umbra
+              continue;
+            }
+            // shadowRay stops epsilon short of the centre: the distance to the centre is tMax + epsilon.
+            const float toLight = directional ? kInfinity : packet[i].tMax + epsilon_;
+            v(xs[i], y) = outer.attenuation(packet[i].origin, packet[i].direction, toLight, falloff, combine);
+          }
+          count = 0;
+        };
+        for (int x = 0; x < width; ++x) {
+          if (!gbuffer.hit(x, y)) continue;
+          const Vec3 wsP = gbuffer.wsPosition(x, y);
+          const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+          // A receiver on an analytic sphere's tessellation whose facet faces away from the light
+          // is shadowed by its own closed surface, as raytraced-hard's ray through the facet finds
+          // (near the terminator the true sphere would still face the light: the G-buffer, and the
+          // reference, see the facets).
+          if (!analyticIds_.empty() && glm::dot(wsNg, light.directionToCenter(wsP)) < 0.0f &&
+              std::binary_search(analyticIds_.begin(), analyticIds_.end(), gbuffer.objectId(x, y))) {
+            v(x, y) = 0.0f;
+            continue;
+          }
+          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon_);
+          packet[count] = rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon_);
+          xs[count++] = x;
+          if (count == 16) flush();
+        }
+        if (count > 0) flush();
+      }
+      rays += rangeRays;
+    });
+    rayCount_ = static_cast<double>(rays.load());
+    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
+                                         [](const auto& p) { return p.first == "visibility"; }),
+                          timings_.passes.end());
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+  std::vector<std::pair<std::string, double>> stats() const override {
+    if (!outer_) return {};
+    return {{"analytic_spheres", static_cast<double>(outer_->analyticSphereCount())},
+            {"silhouette_edges", static_cast<double>(outer_->silhouetteEdgeCount())},
+            {"light_buffer_entries", static_cast<double>(outer_->gridEntryCount())},
+            {"rays", rayCount_}};
+  }
+
+ private:
+  ParkerOptions options_;
+  std::unique_ptr<rt::OuterObjects> outer_;
+  std::unique_ptr<RayScene> rays_;
+  std::optional<Light> light_;
+  std::vector<int32_t> analyticIds_;  //!< ids of the objects whose analytic sphere is used, sorted
+  float epsilon_ = 0.0f;
+  double rayCount_ = 0.0;
+  PassTimings timings_;
+};
+
+}  // namespace
+
+TechniqueInfo parkerTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "parker";
+  info.summary = "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the penumbra";
+  info.source = "papers/parker-shirley-smits-1998-single-sample-soft-shadows.md";
+  info.params = {
+      ParamSpec{.name = "falloff", .type = ParamType::String, .defaultValue = std::string("bernstein"), .min = std::nullopt,
+                .max = std::nullopt, .choices = {"bernstein", "sinusoid"}, .unit = "",
+                .help = "attenuation across the outer object: bernstein s = 3 tau^2 - 2 tau^3 (the paper's), or the exact "
+                        "sinusoid (1 + sin(pi tau - pi/2)) / 2 of a straight edge under a spherical light"},
+      ParamSpec{.name = "combine", .type = ParamType::String, .defaultValue = std::string("min"), .min = std::nullopt,
+                .max = std::nullopt, .choices = {"min", "product", "sum"}, .unit = "",
+                .help = "how the attenuations of several grazed objects combine: min (the paper's thresholding, never "
+                        "darker than it should be), product s1 s2, or sum 1 - ((1 - s1) + (1 - s2)) (at least 0)"},
+      ParamSpec{.name = "analytic_spheres", .type = ParamType::Bool, .defaultValue = true, .min = std::nullopt,
+                .max = std::nullopt, .choices = {}, .unit = "",
+                .help = "objects made from a sphere primitive are the true sphere (inner radius R, outer R + b) instead of "
+                        "their tessellated mesh"},
+      ParamSpec{.name = "light_diameter", .type = ParamType::Float, .defaultValue = 0.0, .min = 1e-6, .max = 1e6,
+                .choices = {}, .unit = "world units (directional: per unit distance)",
+                .help = "D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: "
+                        "2 tan(angular_diameter / 2))",
+                .autoDefault = true},
+      ParamSpec{.name = "grid_resolution", .type = ParamType::Int, .defaultValue = int64_t{64}, .min = 1.0, .max = 1024.0,
+                .choices = {}, .unit = "cells",
+                .help = "cells per side of each cube-map face of the light buffer that lists the outer objects each "
+                        "shadow ray can touch (speed only: the result does not depend on it)"},
+  };
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    ParkerOptions o;
+    o.falloff = params.getString("falloff") == "sinusoid" ? rt::OuterFalloff::Sinusoid : rt::OuterFalloff::Bernstein;
+    const std::string& combine = params.getString("combine");
+    o.combine = combine == "product" ? rt::OuterCombine::Product : combine == "sum" ? rt::OuterCombine::Sum : rt::OuterCombine::Min;
+    o.analyticSpheres = params.getBool("analytic_spheres");
+    if (!params.isAuto("light_diameter")) o.lightDiameter = static_cast<float>(params.getFloat("light_diameter"));
+    o.gridResolution = static_cast<int>(params.getInt("grid_resolution"));
+    return std::make_unique<ParkerTechnique>(o);
+  };
+  return info;
+}
+
+}  // namespace penumbra
