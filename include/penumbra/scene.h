@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,17 +27,36 @@ struct Mesh {
   Vec3 faceNormal(size_t i) const;
 };
 
+// A true sphere in world space. An object built from a `sphere` primitive whose transform keeps it
+// a sphere (uniform scale, rotation, translation) remembers it, so a technique that handles spheres
+// analytically (parker) can use it; every other technique uses the object's tessellated mesh,
+// which is inscribed in it (its vertices lie on the sphere).
+struct AnalyticSphere {
+  Vec3 center{0.0f};
+  float radius = 0.0f;  //!< world units, > 0
+};
+
 struct Object {
   std::string name;
   int32_t id = 0;  //!< object id, >= 0, unique in the scene
   Mesh mesh;
   Vec3 albedo{0.8f};
+  std::optional<AnalyticSphere> sphere;  //!< set when the mesh tessellates this sphere
 };
 
 struct ImageSize {
   int width = 512;
   int height = 512;
 };
+
+// The largest camera image penumbra renders: each side in [1, kMaxImageSide] pixels and at most
+// kMaxImagePixels pixels in all. The G-buffer alone takes 48 bytes per pixel (3.2 GB at the limit,
+// 12.9 GB at 16384 x 16384), and V, the reference's standard error and the shaded image add about
+// 20 more, so 16384 x 16384 is refused rather than left to run out of memory part way.
+inline constexpr int kMaxImageSide = 16384;
+inline constexpr int64_t kMaxImagePixels = int64_t{8192} * 8192;
+// Throws Error "<where>: image size W x H ..." naming the limit that W x H breaks.
+void checkImageSize(int width, int height, const std::string& where);
 
 struct Scene {
   std::string name;    //!< built-in name or file stem

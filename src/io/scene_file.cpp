@@ -474,8 +474,22 @@ Mat4 readMatrix(const Field& field) {
   return m;
 }
 
+// The world-space sphere that a centred sphere of `radius` becomes under renderFromObject, or
+// nothing when the transform shears or scales it unevenly (the object is then only a mesh).
+std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& renderFromObject) {
+  const Mat3 m(renderFromObject);
+  const float scale = glm::length(m[0]);
+  // Relative tolerance of a few float ulps of a rotation's entries (glm::rotate rounds them).
+  const float tolerance = 1e-5f * scale;
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::abs(glm::length(m[i]) - scale) <= tolerance)) return std::nullopt;
+    if (!(std::abs(glm::dot(m[i], m[(i + 1) % 3])) <= tolerance * scale)) return std::nullopt;
+  }
+  return AnalyticSphere{Vec3(renderFromObject[3]), radius * scale};
+}
+
 Object readObject(const Field& field, size_t index, const std::string& baseDir) {
-  const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix"});
+  const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "analytic_sphere"});
   Object object;
   object.name = o.required("name").string();
   object.id = o.has("id") ? o.required("id").integer(0, 0x7fffffff) : static_cast<int32_t>(index);
@@ -504,8 +518,20 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir) 
   }
 
   if (o.has("transform") && o.has("matrix")) field.error("expected at most one of 'transform' and 'matrix', got both");
-  if (auto t = o.optional("transform")) transformMesh(object.mesh, readTransform(*t));
-  if (auto m = o.optional("matrix")) transformMesh(object.mesh, readMatrix(*m));
+  Mat4 renderFromObject(1.0f);
+  if (auto t = o.optional("transform")) transformMesh(object.mesh, renderFromObject = readTransform(*t));
+  if (auto m = o.optional("matrix")) transformMesh(object.mesh, renderFromObject = readMatrix(*m));
+  // A sphere primitive stays a true sphere under rotation, uniform scale and translation.
+  if (auto p = o.optional("primitive"); p && p->value().at("type") == "sphere")
+    object.sphere = analyticSphere(p->child("radius").number(), renderFromObject);
+  if (auto a = o.optional("analytic_sphere")) {
+    // Written by sceneToJson next to the inline tessellation, in world space.
+    if (!o.has("inline") || o.has("transform") || o.has("matrix"))
+      a->error("expected only on an object with 'inline' geometry and no 'transform' or 'matrix' (it is in world "
+               "space, as sceneToJson writes it); for a new sphere use \"primitive\": {{\"type\": \"sphere\"}}");
+    const ObjectField ao(*a, {"center", "radius"});
+    object.sphere = AnalyticSphere{ao.required("center").vec3(), ao.required("radius").positive()};
+  }
   return object;
 }
 
@@ -635,8 +661,9 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
 
   if (auto image = o.optional("image")) {
     const ObjectField io(*image, {"width", "height"});
-    scene.image.width = io.required("width").integer(1, 16384);
-    scene.image.height = io.required("height").integer(1, 16384);
+    scene.image.width = io.required("width").integer(1, kMaxImageSide);
+    scene.image.height = io.required("height").integer(1, kMaxImageSide);
+    checkImageSize(scene.image.width, scene.image.height, source + ": image");
   }
   scene.camera = readCamera(o.required("camera"));
   if (auto ambient = o.optional("ambient")) scene.ambient = ambient->nonNegative();
@@ -698,7 +725,9 @@ std::string sceneToJson(const Scene& scene) {
       mesh["normals"] = json::array();
       for (const Vec3& n : object.mesh.normals) mesh["normals"].push_back(vec3Json(n));
     }
-    const json o = {{"name", object.name}, {"id", object.id}, {"albedo", vec3Json(object.albedo)}, {"inline", std::move(mesh)}};
+    json o = {{"name", object.name}, {"id", object.id}, {"albedo", vec3Json(object.albedo)}, {"inline", std::move(mesh)}};
+    if (object.sphere)
+      o["analytic_sphere"] = {{"center", vec3Json(object.sphere->center)}, {"radius", floatJson(object.sphere->radius)}};
     out += (i ? ",\n    " : "\n    ") + o.dump();
   }
   out += scene.objects.empty() ? "]" : "\n  ]";

@@ -42,9 +42,7 @@ GBuffer allocateGBuffer(int width, int height) {
 }  // namespace
 
 GBuffer renderGBuffer(const Scene& scene, int width, int height) {
-  if (width < 1 || height < 1 || width > raster::kMaxImageSize || height > raster::kMaxImageSize)
-    fail("renderGBuffer: image size must be within 1..{} pixels per side (got {} x {})", raster::kMaxImageSize,
-         width, height);
+  checkImageSize(width, height, "renderGBuffer");
   const Camera& camera = scene.camera;
   camera.validate();
   GBuffer g = allocateGBuffer(width, height);

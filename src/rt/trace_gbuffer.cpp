@@ -15,7 +15,7 @@
 namespace penumbra {
 
 GBuffer traceGBuffer(const Scene& scene, const RayScene& rays, int width, int height) {
-  if (width <= 0 || height <= 0) fail("traceGBuffer: image size must be positive (got {} x {})", width, height);
+  checkImageSize(width, height, "traceGBuffer");
   scene.camera.validate();
   GBuffer g(width, height);
   std::unordered_map<int32_t, const Mesh*> meshById;  // ids are unique within a scene

@@ -16,6 +16,13 @@ TechniqueInfo pcfTechniqueInfo();
 TechniqueInfo pcssTechniqueInfo();
 TechniqueInfo multisampleTechniqueInfo();
 TechniqueInfo brabecTechniqueInfo();
+TechniqueInfo plmTechniqueInfo();
+TechniqueInfo smoothiesTechniqueInfo();
+TechniqueInfo kirschTechniqueInfo();
+TechniqueInfo heidrichTechniqueInfo();
+TechniqueInfo parkerTechniqueInfo();
+TechniqueInfo ssvTechniqueInfo();
+TechniqueInfo wedgesTechniqueInfo();
 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = {
@@ -27,6 +34,13 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       pcssTechniqueInfo(),
       multisampleTechniqueInfo(),
       brabecTechniqueInfo(),
+      plmTechniqueInfo(),
+      smoothiesTechniqueInfo(),
+      kirschTechniqueInfo(),
+      heidrichTechniqueInfo(),
+      parkerTechniqueInfo(),
+      ssvTechniqueInfo(),
+      wedgesTechniqueInfo(),
   };
   return registry;
 }
