@@ -9,8 +9,12 @@
 // (face normals), because a mix would interpolate normals that exist with ones that do not.
 // Points and lines are not surfaces and are not imported; a file without any triangle is an error.
 // assimp's logger stays the default null logger, so nothing is printed.
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
 #include <system_error>
 
 #include <assimp/Importer.hpp>
@@ -21,6 +25,91 @@
 #include "penumbra/scene_io.h"
 
 namespace penumbra {
+namespace {
+
+// assimp 5.2.5 (Debian 12) loops forever on a PLY file whose header never reaches its `end_header`
+// line (a truncated file does that), so such a file is refused before assimp sees it. assimp picks
+// the PLY reader by the extension or by the leading "ply" line; both are checked here.
+void checkPlyHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line)) return;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (line != "ply" && extension != ".ply") return;
+  // The PLY header is text lines up to "end_header"; real headers are well under this many lines.
+  constexpr int kMaxHeaderLines = 100000;
+  for (int i = 0; i < kMaxHeaderLines && std::getline(in, line); ++i) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "end_header") return;
+  }
+  fail("{}: the PLY header has no 'end_header' line; expected a complete PLY file (is it truncated?)", path);
+}
+
+// assimp 5.2.5 reserves memory for the element counts a PLY or OFF header declares before reading
+// any element, so a header that declares billions (assimp-testmodels' invalid/OutOfMemory.off) takes
+// all the machine's memory. Every element takes at least one byte of the file, so a count larger
+// than the file is refused before assimp sees it.
+void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
+  std::ifstream in(path, std::ios::binary);
+  std::string first;
+  if (!(in >> first)) return;
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const auto tooMany = [&](const std::string& what, const std::string& count) {
+    // Digits only: a malformed count is the reader's to report.
+    if (count.empty() || count.size() > 19 || count.find_first_not_of("0123456789") != std::string::npos) return;
+    if (std::stoull(count) > fileSize)
+      fail("{}: the header declares {} {}, more than the file's {} bytes could hold; expected a complete file", path,
+           count, what, fileSize);
+  };
+  if (first == "ply" || extension == ".ply") {
+    std::string line;
+    std::getline(in, line);
+    for (int i = 0; i < 100000 && std::getline(in, line); ++i) {
+      std::istringstream words(line);
+      std::string keyword, name, count;
+      words >> keyword;
+      if (keyword == "end_header") return;
+      if (keyword == "element" && words >> name >> count) tooMany(name + " elements", count);
+    }
+  } else if (extension == ".off" || (first.size() >= 3 && first.compare(first.size() - 3, 3, "OFF") == 0)) {
+    // "[C][N][4][n]OFF" then the vertex and face counts (on the same line or the next), '#' comments between.
+    std::string token;
+    std::vector<std::string> counts;
+    if (first.find("OFF") == std::string::npos) counts.push_back(first);
+    while (counts.size() < 2 && in >> token) {
+      if (token[0] == '#') {
+        std::getline(in, token);
+        continue;
+      }
+      counts.push_back(token);
+    }
+    if (counts.size() == 2) {
+      tooMany("vertices", counts[0]);
+      tooMany("faces", counts[1]);
+      // assimp 5.2.5 aborts the process on an OFF file with fewer vertex and face lines than its
+      // header declares (found by the mesh-file fuzz target), so a truncated file is refused here.
+      if (counts[0].find_first_not_of("0123456789") == std::string::npos &&
+          counts[1].find_first_not_of("0123456789") == std::string::npos && counts[0].size() < 19 && counts[1].size() < 19) {
+        const unsigned long long declared = std::stoull(counts[0]) + std::stoull(counts[1]);
+        std::string line;
+        std::getline(in, line);  // the rest of the counts line
+        unsigned long long lines = 0;
+        while (lines < declared && std::getline(in, line)) {
+          const size_t start = line.find_first_not_of(" \t\r");
+          if (start != std::string::npos && line[start] != '#') ++lines;
+        }
+        if (lines < declared)
+          fail("{}: the header declares {} vertices and {} faces but only {} lines follow; expected a complete file", path,
+               counts[0], counts[1], lines);
+      }
+    }
+  }
+}
+
+}  // namespace
 
 Mesh importMesh(const std::string& path) {
   std::error_code ec;
@@ -30,16 +119,43 @@ Mesh importMesh(const std::string& path) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) fail("{}: cannot read the mesh file ({})", path, ec.message());
   if (size == 0) fail("{}: the mesh file is empty; expected triangles", path);
+  checkPlyHeader(path);
+  checkDeclaredCounts(path, size);
 
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_TEXCOORDS | aiComponent_COLORS |
                                                           aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_BONEWEIGHTS |
                                                           aiComponent_ANIMATIONS | aiComponent_TEXTURES | aiComponent_LIGHTS |
                                                           aiComponent_CAMERAS | aiComponent_MATERIALS);
-  const aiScene* scene = importer.ReadFile(path, aiProcess_RemoveComponent | aiProcess_Triangulate |
-                                                     aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
+  const aiScene* scene = importer.ReadFile(path, aiProcess_RemoveComponent);
   if (scene == nullptr) fail("{}: cannot import the mesh file: {}", path, importer.GetErrorString());
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail("{}: the mesh file is incomplete (assimp could not read all of it)", path);
+  // Faces are checked before any post-processing step reads them: assimp's triangulation aborts the
+  // process (an assertion) on a face without indices, and later steps index vertices by them.
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* in = scene->mMeshes[m];
+    for (unsigned f = 0; f < in->mNumFaces; ++f) {
+      if (in->mFaces[f].mNumIndices == 0)
+        fail("{}: face {} (of mesh {}) has no vertices; expected a polygon with 3 or more", path, f, m);
+      for (unsigned k = 0; k < in->mFaces[f].mNumIndices; ++k)
+        if (in->mFaces[f].mIndices[k] >= in->mNumVertices)
+          fail("{}: face {} (of mesh {}) uses vertex {}, but the mesh has {} vertices; expected indices below {}", path,
+               f, m, in->mFaces[f].mIndices[k], in->mNumVertices, in->mNumVertices);
+    }
+  }
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  if (scene == nullptr) fail("{}: cannot import the mesh file: {}", path, importer.GetErrorString());
+  // Non-finite positions are refused before vertices are joined: JoinIdenticalVertices compares with
+  // a tolerance that a NaN passes, and silently replaces a NaN vertex by a finite one.
+  for (unsigned m = 0, index = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned v = 0; v < scene->mMeshes[m]->mNumVertices; ++v, ++index) {
+      const aiVector3D& p = scene->mMeshes[m]->mVertices[v];
+      if (!isFinite(Vec3(p.x, p.y, p.z)))
+        fail("{}: vertex {} (of mesh {}) is not finite ({}, {}, {}); expected finite coordinates", path, index, m, p.x,
+             p.y, p.z);
+    }
+  scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
+  if (scene == nullptr) fail("{}: cannot import the mesh file: {}", path, importer.GetErrorString());
 
   bool allHaveNormals = scene->mNumMeshes > 0;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) allHaveNormals = allHaveNormals && scene->mMeshes[m]->HasNormals();
