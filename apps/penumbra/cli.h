@@ -87,6 +87,27 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
 // of this setup filled in.
 Report beginReport(const std::string& kind, const Setup& setup, const std::string& baseline);
 
+// The truth of `penumbra compare` kept on disk between runs (reference_cache.cpp): keyed by a hash
+// of the scene, light, image size, the reference's parameters and the version.
+struct CachedTruth {
+  Image<float> v;
+  PassTimings timings;  //!< of the run that rendered it
+  std::vector<std::pair<std::string, double>> stats;
+};
+class ReferenceCache {
+ public:
+  ReferenceCache(std::string dir, const Setup& setup, const Params& referenceParams);
+  // The entry, or nullopt with `why` saying why not (missing, unreadable, another key).
+  std::optional<CachedTruth> load(std::string& why) const;
+  // Throws Error naming the directory when it cannot be written.
+  void store(const Image<float>& v, const PassTimings& timings,
+             const std::vector<std::pair<std::string, double>>& stats) const;
+  const std::string& path() const { return exrPath_; }
+
+ private:
+  std::string dir_, key_, exrPath_, metaPath_;
+};
+
 // Creates the output directory (and parents). Throws Error naming it when that fails.
 void makeOutputDir(const std::string& dir);
 // dir/file, refused when it would overwrite the input scene file.

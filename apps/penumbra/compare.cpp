@@ -1,10 +1,22 @@
 // `penumbra compare`: every chosen technique against the ray-traced reference on the same
-// G-buffer (DESIGN.md, "Data flow"). The reference runs first; each technique's V is compared
-// with it over the error mask (metrics.h), timed, and written out; the table goes to the terminal,
-// DIR/compare.json and DIR/compare.md. Time ratios are to a baseline measured in the same run.
+// G-buffer (DESIGN.md, "Data flow"), written as a report a person opens to choose a technique:
+// DIR/report/index.html (sortable table, plots, images beside it), compare.json (every number of
+// the page), compare.md, and per technique the shaded image (PNG), V (EXR and PNG) and the signed
+// error map against the reference (PNG).
+//
+// The truth is the `reference` technique with the scene's parameters and --spp/--seed; it is cached
+// under DIR/cache (reference_cache.cpp) so a second compare of the same setup does not trace it
+// again. `reference` named among the techniques is a row like any other, with its own
+// --param reference.*, measured against the truth (rendered once when its parameters equal the
+// truth's). With --map-sizes every technique that has a `map_size` parameter also runs at each
+// size (the others once); a scan line through the penumbra (--profile-row, or the row with the
+// most penumbra pixels in the truth) is kept for the profile plot. Time ratios are to a baseline
+// measured in the same run.
 #include <algorithm>
+#include <filesystem>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli.h"
 #include "penumbra/error.h"
@@ -12,47 +24,130 @@
 #include "penumbra/metrics.h"
 #include "penumbra/raster.h"
 #include "penumbra/report.h"
+#include "penumbra/report_figures.h"
+#include "penumbra/scene_io.h"
 #include "penumbra/shade.h"
 
 namespace penumbra::cli {
 
 namespace {
 
+namespace fs = std::filesystem;
+
 constexpr const char* kReference = "reference";
+constexpr const char* kMapSize = "map_size";
 
 struct CompareOptions {
   FrameOptions frame;
   std::vector<std::string> techniques;
   std::string baseline;
   std::string outDir = "out";
+  std::vector<int> mapSizes;
+  std::optional<int> profileRow;
+  double errorRange = 0.5;
+  std::string cacheDir;  //!< empty: DIR/cache
+  bool noCache = false;
 };
+
+// A row's shown name: techniques with a sample count say it, so a cheap reference row is not
+// mistaken for the truth.
+std::string rowLabel(const TechniqueInfo& info, const Params& params) {
+  if (!info.hasParam("spp")) return info.name;
+  return fmt::format("{} ({} spp)", info.name, params.getInt("spp"));
+}
+
+std::string joinParams(const KeyValues& params) {
+  std::string s;
+  for (const auto& [k, v] : params) s += fmt::format("{}{}={}", s.empty() ? "" : " ", k, v);
+  return s;
+}
+
+bool sameParams(const Params& a, const Params& b) { return describeParams(a) == describeParams(b); }
+
+std::vector<float> rowOf(const Image<float>& v, int y) { return {v.row(y), v.row(y) + v.width()}; }
+
+std::string shellQuote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./,=:+") ==
+                        std::string::npos)
+    return s;
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// A command line that renders the same report (the scene as it was named; scene.json beside the
+// page is a copy of it).
+std::string reproduceCommand(const CompareOptions& options, const Setup& setup, const std::vector<std::string>& names,
+                             const std::string& baseline) {
+  std::vector<std::string> args = {"penumbra", "compare", "--scene", options.frame.scene, "--width",
+                                   std::to_string(setup.width), "--height", std::to_string(setup.height)};
+  if (setup.lightIndex != 0) args.insert(args.end(), {"--light", std::to_string(setup.lightIndex)});
+  if (options.frame.spp) args.insert(args.end(), {"--spp", std::to_string(*options.frame.spp)});
+  if (options.frame.seed) args.insert(args.end(), {"--seed", std::to_string(*options.frame.seed)});
+  args.insert(args.end(), {"--techniques", fmt::format("{}", fmt::join(names, ","))});
+  if (!options.baseline.empty()) args.insert(args.end(), {"--baseline", baseline});
+  for (const std::string& p : options.frame.params) args.insert(args.end(), {"--param", p});
+  if (!options.mapSizes.empty()) args.insert(args.end(), {"--map-sizes", fmt::format("{}", fmt::join(options.mapSizes, ","))});
+  if (options.profileRow) args.insert(args.end(), {"--profile-row", std::to_string(*options.profileRow)});
+  args.insert(args.end(), {"--error-range", fmt::format("{:g}", options.errorRange), "--out", options.outDir});
+  std::string command;
+  for (const std::string& a : args) command += (command.empty() ? "" : " ") + shellQuote(a);
+  return command;
+}
 
 int runCompare(const CompareOptions& options) {
   ThreadLimit threads(options.frame.threads);
-  // The reference first (it is the truth every row is measured against), then the requested
-  // techniques, then the baseline if it was not requested (ratios need it measured in this run).
-  std::vector<std::string> names = {kReference};
-  for (const std::string& name : techniqueList(options.techniques))
-    if (name != kReference) names.push_back(name);
+  std::vector<std::string> names = techniqueList(options.techniques);
   const std::string baseline = options.baseline.empty() ? defaultBaseline() : options.baseline;
   findTechnique(baseline);
   if (std::find(names.begin(), names.end(), baseline) == names.end()) names.push_back(baseline);
+  const bool referenceRow = std::find(names.begin(), names.end(), kReference) != names.end();
+  for (const std::string& kv : options.frame.params)
+    if (kv.rfind(std::string(kReference) + ".", 0) == 0 && !referenceRow)
+      fail("command line: parameter '{}' is for a `reference` row, but reference is not among --techniques; the "
+           "truth's samples are set by --spp (and --seed)",
+           kv);
   checkPrefixedParams(options.frame.params, names);
 
   const Setup setup = loadSetup(options.frame);
   const Light& light = setupLight(setup);
-  // Resolve every technique's parameters before the (long) reference runs, so a typo fails fast.
+  if (options.profileRow && (*options.profileRow < 0 || *options.profileRow >= setup.height))
+    fail("--profile-row {} is out of range: the image has {} rows (valid: 0 to {})", *options.profileRow, setup.height,
+         setup.height - 1);
+  std::vector<int> mapSizes = options.mapSizes;
+  std::sort(mapSizes.begin(), mapSizes.end());
+  mapSizes.erase(std::unique(mapSizes.begin(), mapSizes.end()), mapSizes.end());
+
+  // Resolve every parameter set before the (long) truth runs, so a typo fails fast. The truth takes
+  // the scene file's reference parameters and --spp/--seed, never the --param of a reference row.
+  const TechniqueInfo& referenceInfo = findTechnique(kReference);
+  FrameOptions truthFrame = options.frame;
+  truthFrame.params.clear();
+  const ParamSet truthGiven = gatherParams(setup, referenceInfo, truthFrame, true);
+  const Params truthParams = resolveParams(referenceInfo.name, referenceInfo.params, truthGiven);
   std::vector<ParamSet> given;
-  for (const std::string& name : names) {
-    const TechniqueInfo& info = findTechnique(name);
+  std::vector<std::vector<ParamSet>> sweepGiven(names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
     given.push_back(gatherParams(setup, info, options.frame, true));
     resolveParams(info.name, info.params, given.back());
+    if (!info.hasParam(kMapSize)) continue;
+    for (int size : mapSizes) {
+      ParamSet atSize = given.back();
+      atSize.set(kMapSize, int64_t{size}, "command line (--map-sizes)");
+      resolveParams(info.name, info.params, atSize);
+      sweepGiven[i].push_back(std::move(atSize));
+    }
   }
-  std::vector<std::string> files = {"compare.json", "compare.md"};
+
+  const std::string reportDir = (fs::path(options.outDir) / "report").string();
+  const std::string stem = setup.scene.name + "_";
+  std::vector<std::string> files = {"index.html", "compare.json", "compare.md", "scene.json"};
   for (const std::string& name : names)
-    for (const char* suffix : {".png", "_v.exr", "_v.png"}) files.push_back(setup.scene.name + "_" + name + suffix);
-  for (const std::string& file : files) outputPath(setup, options.outDir, file);
-  makeOutputDir(options.outDir);
+    for (const char* suffix : {".png", "_v.exr", "_v.png", "_err.png"}) files.push_back(stem + name + suffix);
+  for (const char* suffix : {".png", "_v.exr", "_v.png"}) files.push_back(stem + "truth" + suffix);
+  for (const std::string& file : files) outputPath(setup, reportDir, file);
+  makeOutputDir(reportDir);
 
   fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
              setup.lightIndex, describeLight(light));
@@ -66,33 +161,136 @@ int runCompare(const CompareOptions& options) {
                      {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
   if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
   if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  report.mapSizes = mapSizes;
+  report.errorMapRange = options.errorRange;
+  report.command = reproduceCommand(options, setup, names, baseline);
 
-  Image<float> vReference;
+  auto writeImages = [&](const std::string& base, const Image<float>& v, ReportRow& row, const Image<float>* truthV) {
+    writePng(outputPath(setup, reportDir, base + ".png"), shade(setup.scene, light, gbuffer, v));
+    writeExr(outputPath(setup, reportDir, base + "_v.exr"), v);
+    writePngGray(outputPath(setup, reportDir, base + "_v.png"), v);
+    row.images = {{"shaded", base + ".png"}, {"visibility", base + "_v.png"}, {"visibility_exr", base + "_v.exr"}};
+    if (truthV) {
+      writePng(outputPath(setup, reportDir, base + "_err.png"), signedErrorMap(v, *truthV, mask, options.errorRange));
+      row.images.emplace_back("error", base + "_err.png");
+    }
+  };
+
+  // The truth: from the cache when this exact setup was rendered before.
+  ReportRow truth;
+  truth.technique = kReference;
+  truth.label = rowLabel(referenceInfo, truthParams);
+  truth.params = describeParams(truthParams);
+  Image<float> vTruth;
+  std::optional<ReferenceCache> cache;
+  if (!options.noCache)
+    cache.emplace(options.cacheDir.empty() ? (fs::path(options.outDir) / "cache").string() : options.cacheDir, setup,
+                  truthParams);
+  std::string why = "--no-cache";
+  std::optional<CachedTruth> cached = cache ? cache->load(why) : std::nullopt;
+  if (cached && (cached->v.width() != setup.width || cached->v.height() != setup.height)) {
+    why = "its image size differs";
+    cached.reset();
+  }
+  if (cached) {
+    fmt::print("truth: reused {} ({}; rendered earlier in {:.1f} ms)\n", cache->path(), joinParams(truth.params),
+               cached->timings.total());
+    vTruth = std::move(cached->v);
+    truth.timings = cached->timings;
+    truth.stats = cached->stats;
+    truth.cached = true;
+  } else {
+    fmt::print("truth: rendering reference {} ({})\n", joinParams(truth.params),
+               cache ? fmt::format("cache {}: {}", cache->path(), why) : why);
+    TechniqueRun run = runTechnique(setup, gbuffer, referenceInfo, truthGiven);
+    vTruth = std::move(run.v);
+    truth.timings = run.timings;
+    truth.stats = run.stats;
+    if (cache) cache->store(vTruth, truth.timings, truth.stats);
+  }
+  truth.error = compareVisibility(vTruth, vTruth, mask);
+  writeImages(stem + "truth", vTruth, truth, nullptr);
+
+  ScanProfile profile;
+  profile.row = options.profileRow ? *options.profileRow : mostPenumbraRow(vTruth, mask);
+  profile.choice = options.profileRow ? "--profile-row" : "the row with the most penumbra pixels in the reference";
+  profile.reference = rowOf(vTruth, profile.row);
+  profile.mask.assign(mask.row(profile.row), mask.row(profile.row) + mask.width());
+  truth.profile = profile.reference;
+  report.profile = profile;
+
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
-    TechniqueRun run = runTechnique(setup, gbuffer, info, given[i]);
-    if (i == 0) vReference = run.v;
+    const Params params = resolveParams(info.name, info.params, given[i]);
     ReportRow row;
     row.technique = info.name;
-    row.params = describeParams(run.params);
-    row.error = compareVisibility(run.v, vReference, mask);
-    row.timings = run.timings;
-    row.stats = run.stats;
-    const std::string base = setup.scene.name + "_" + info.name;
-    writePng(outputPath(setup, options.outDir, base + ".png"), shade(setup.scene, light, gbuffer, run.v));
-    writeExr(outputPath(setup, options.outDir, base + "_v.exr"), run.v);
-    writePngGray(outputPath(setup, options.outDir, base + "_v.png"), run.v);
-    row.images = {{"shaded", base + ".png"}, {"visibility", base + "_v.png"}, {"visibility_exr", base + "_v.exr"}};
+    row.label = rowLabel(info, params);
+    row.params = describeParams(params);
+    Image<float> v;
+    if (info.name == kReference && sameParams(params, truthParams)) {
+      // The same parameters as the truth: the same deterministic image; rendering it again would only cost time.
+      v = vTruth;
+      row.timings = truth.timings;
+      row.stats = truth.stats;
+      row.cached = truth.cached;
+      row.images = truth.images;
+      row.images.emplace_back("error", stem + info.name + "_err.png");
+      writePng(outputPath(setup, reportDir, stem + info.name + "_err.png"),
+               signedErrorMap(v, vTruth, mask, options.errorRange));
+    } else {
+      fmt::print("{}{}{}\n", row.shownName(), row.params.empty() ? "" : ": ", joinParams(row.params));
+      std::optional<TechniqueRun> attempt;
+      try {
+        attempt = runTechnique(setup, gbuffer, info, given[i]);
+      } catch (const Error& e) {
+        // Every registered technique by default: one that cannot handle this scene (most often its
+        // light's shape) is listed with the reason instead of ending the whole comparison. A
+        // technique asked for by name fails loudly.
+        if (!options.techniques.empty()) throw;
+        fmt::print("{}: skipped: {}\n", info.name, e.what());
+        report.skipped.emplace_back(info.name, e.what());
+        continue;
+      }
+      TechniqueRun& run = *attempt;
+      v = std::move(run.v);
+      row.timings = run.timings;
+      row.stats = run.stats;
+      writeImages(stem + info.name, v, row, &vTruth);
+    }
+    row.error = compareVisibility(v, vTruth, mask);
+    row.profile = rowOf(v, profile.row);
+
+    if (!mapSizes.empty()) {
+      row.mapSizeVaries = info.hasParam(kMapSize);
+      for (size_t s = 0; s < mapSizes.size(); ++s) {
+        MapSizePoint point{mapSizes[s], *row.error, row.timings};
+        if (row.mapSizeVaries && (params.isAuto(kMapSize) || params.getInt(kMapSize) != mapSizes[s])) {
+          fmt::print("{}: map_size={}\n", row.shownName(), mapSizes[s]);
+          const TechniqueRun run = runTechnique(setup, gbuffer, info, sweepGiven[i][s]);
+          point.error = compareVisibility(run.v, vTruth, mask);
+          point.timings = run.timings;
+        }
+        row.mapSizeSweep.push_back(point);
+      }
+    }
     report.rows.push_back(std::move(row));
   }
   fillBaselineRatios(report);
+  report.truth = std::move(truth);
 
-  const std::string jsonPath = outputPath(setup, options.outDir, "compare.json");
-  const std::string mdPath = outputPath(setup, options.outDir, "compare.md");
+  const std::string jsonPath = outputPath(setup, reportDir, "compare.json");
+  const std::string mdPath = outputPath(setup, reportDir, "compare.md");
+  const std::string htmlPath = outputPath(setup, reportDir, "index.html");
+  report.files = {{"every number of this page", "compare.json"}, {"Markdown tables", "compare.md"},
+                  {"the scene, meshes inline", "scene.json"}};
+  writeTextFile(outputPath(setup, reportDir, "scene.json"), sceneToJson(setup.scene));
   writeTextFile(jsonPath, reportToJson(report));
   writeTextFile(mdPath, reportToMarkdown(report));
-  fmt::print("G-buffer {:.2f} ms; error mask: {} pixels\n\n{}\nwrote {}, {} and images to {}\n", gbufferMs,
-             report.rows.front().error->maskPixels, reportToText(report), jsonPath, mdPath, options.outDir);
+  writeTextFile(htmlPath, reportToHtml(report));
+  fmt::print("G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
+             "it)\n",
+             gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report), htmlPath, "compare.json",
+             "compare.md");
   return 0;
 }
 
@@ -101,15 +299,33 @@ int runCompare(const CompareOptions& options) {
 Command addCompareCommand(CLI::App& parent) {
   auto options = std::make_shared<CompareOptions>();
   CLI::App* app = parent.add_subcommand(
-      "compare", "compare techniques with the ray-traced reference: error, timings, images, compare.json/.md");
+      "compare",
+      "compare techniques with the ray-traced reference: a report DIR/report/index.html with images, error maps, "
+      "plots, compare.json/.md");
   app->add_option("--techniques,-t", options->techniques,
-                  "comma-separated technique names (default: every registered technique)")
+                  "comma-separated technique names (default: every registered technique); `reference` here is a row "
+                  "with its own --param reference.*, measured against the truth")
       ->delimiter(',');
   app->add_option("--baseline", options->baseline,
                   "technique the time ratios are relative to (default: hard if registered, else raytraced-hard)");
   addFrameOptions(*app, options->frame,
-                  "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
-  app->add_option("--out,-o", options->outDir, "output directory (created if missing)")->capture_default_str();
+                  "technique parameter technique.key=value, e.g. pcss.map_size=512 (repeatable; overrides the scene "
+                  "file); the truth's samples are --spp, not reference.spp");
+  app->add_option("--map-sizes", options->mapSizes,
+                  "comma-separated shadow-map sizes (texels per side): every technique with a map_size parameter "
+                  "also runs at each, for the error-against-map-size plot and table")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  app->add_option("--profile-row", options->profileRow,
+                  "image row of the scan-line profile (default: the row with the most penumbra pixels in the reference)");
+  app->add_option("--error-range", options->errorRange,
+                  "signed error maps span V - V_ref in [-R, R] (V units; larger errors saturate)")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
+  app->add_option("--out,-o", options->outDir, "output directory: the report goes to DIR/report, the cache to DIR/cache")
+      ->capture_default_str();
+  app->add_option("--cache-dir", options->cacheDir, "reference cache directory (default: DIR/cache)");
+  app->add_flag("--no-cache", options->noCache, "render the truth even when it is cached, and do not store it");
   return {app, [options] { return runCompare(*options); }};
 }
 

@@ -1,6 +1,8 @@
 // Report writers (include/penumbra/report.h): JSON via nlohmann::json, Markdown and plain-text
-// tables by hand. Errors are in the units of DESIGN.md (RMSE8: 8-bit steps of V, max error: V),
-// times in milliseconds; the ratio to the baseline is total time over the baseline's total time.
+// tables by hand (the HTML page is html_report.cpp). Errors are in the units of DESIGN.md (RMSE8:
+// 8-bit steps of V, max error: V), times in milliseconds; the ratio to the baseline is total time
+// over the baseline's total time. Scan-line profiles are written rounded to 1e-4 in V (well below
+// the 1/255 step of RMSE8), the same values the page plots.
 #include "penumbra/report.h"
 
 #include <algorithm>
@@ -49,7 +51,7 @@ std::vector<std::vector<std::string>> tableCells(const Report& report) {
                                report.baseline.empty() ? "x baseline" : "x " + report.baseline, "stats", "params"});
   cells.push_back(header);
   for (const ReportRow& row : report.rows) {
-    std::vector<std::string> line = {row.technique};
+    std::vector<std::string> line = {row.shownName()};
     if (withError) {
       if (row.error)
         line.insert(line.end(), {number(row.error->rmse8), number(row.error->penumbraRmse8),
@@ -105,6 +107,67 @@ void fillBaselineRatios(Report& report) {
   }
 }
 
+namespace {
+
+nlohmann::json errorJson(const ErrorStats& e) {
+  return {{"rmse8", e.rmse8},
+          {"penumbra_rmse8", e.penumbraRmse8},
+          {"max_abs_error", e.maxAbsError},
+          {"mask_pixels", e.maskPixels},
+          {"penumbra_pixels", e.penumbraPixels}};
+}
+
+nlohmann::json profileJson(const std::vector<float>& values) {
+  nlohmann::json a = nlohmann::json::array();
+  for (float v : values) a.push_back(roundedProfileValue(v));
+  return a;
+}
+
+nlohmann::json rowJson(const ReportRow& row) {
+  using nlohmann::json;
+  json r;
+  r["name"] = row.technique;
+  r["label"] = row.shownName();
+  json params = json::object();
+  for (const auto& [k, v] : row.params) params[k] = v;
+  r["params"] = params;
+  if (row.error) r.update(errorJson(*row.error));
+  r["prepare_ms"] = row.timings.get("prepare");
+  r["visibility_ms"] = row.timings.get("visibility");
+  r["total_ms"] = row.timings.total();
+  json passes = json::array();
+  for (const auto& [name, ms] : row.timings.passes) passes.push_back({{"pass", name}, {"ms", ms}});
+  r["passes"] = passes;
+  r["ratio_to_baseline"] = row.ratioToBaseline ? json(*row.ratioToBaseline) : json(nullptr);
+  json stats = json::object();
+  // Non-finite values have no JSON form; null says "not measured" rather than inventing a number.
+  for (const auto& [k, v] : row.stats) stats[k] = std::isfinite(v) ? json(v) : json(nullptr);
+  r["stats"] = stats;
+  json images = json::object();
+  for (const auto& [k, v] : row.images) images[k] = v;
+  r["images"] = images;
+  if (row.cached) r["cached"] = true;
+  if (!row.profile.empty()) r["profile"] = profileJson(row.profile);
+  if (!row.mapSizeSweep.empty()) {
+    json sweep = json::array();
+    for (const MapSizePoint& p : row.mapSizeSweep) {
+      json point = errorJson(p.error);
+      point["map_size"] = p.mapSize;
+      point["prepare_ms"] = p.timings.get("prepare");
+      point["visibility_ms"] = p.timings.get("visibility");
+      point["total_ms"] = p.timings.total();
+      sweep.push_back(point);
+    }
+    r["map_size_sweep"] = sweep;
+    r["map_size_varies"] = row.mapSizeVaries;
+  }
+  return r;
+}
+
+}  // namespace
+
+double roundedProfileValue(float v) { return std::round(static_cast<double>(v) * 1.0e4) / 1.0e4; }
+
 std::string reportToJson(const Report& report) {
   using nlohmann::json;
   json j;
@@ -117,36 +180,30 @@ std::string reportToJson(const Report& report) {
   json settings = json::object();
   for (const auto& [k, v] : report.settings) settings[k] = v;
   j["settings"] = settings;
-  json rows = json::array();
-  for (const ReportRow& row : report.rows) {
-    json r;
-    r["name"] = row.technique;
-    json params = json::object();
-    for (const auto& [k, v] : row.params) params[k] = v;
-    r["params"] = params;
-    if (row.error) {
-      r["rmse8"] = row.error->rmse8;
-      r["penumbra_rmse8"] = row.error->penumbraRmse8;
-      r["max_abs_error"] = row.error->maxAbsError;
-      r["mask_pixels"] = row.error->maskPixels;
-      r["penumbra_pixels"] = row.error->penumbraPixels;
-    }
-    r["prepare_ms"] = row.timings.get("prepare");
-    r["visibility_ms"] = row.timings.get("visibility");
-    r["total_ms"] = row.timings.total();
-    json passes = json::array();
-    for (const auto& [name, ms] : row.timings.passes) passes.push_back({{"pass", name}, {"ms", ms}});
-    r["passes"] = passes;
-    r["ratio_to_baseline"] = row.ratioToBaseline ? json(*row.ratioToBaseline) : json(nullptr);
-    json stats = json::object();
-    // Non-finite values have no JSON form; null says "not measured" rather than inventing a number.
-    for (const auto& [k, v] : row.stats) stats[k] = std::isfinite(v) ? json(v) : json(nullptr);
-    r["stats"] = stats;
-    json images = json::object();
-    for (const auto& [k, v] : row.images) images[k] = v;
-    r["images"] = images;
-    rows.push_back(r);
+  if (!report.command.empty()) j["command"] = report.command;
+  if (!report.files.empty()) {
+    json files = json::object();
+    for (const auto& [k, v] : report.files) files[k] = v;
+    j["files"] = files;
   }
+  if (report.truth) j["truth"] = rowJson(*report.truth);
+  if (report.errorMapRange > 0.0) j["error_map_range"] = report.errorMapRange;
+  if (!report.mapSizes.empty()) j["map_sizes"] = report.mapSizes;
+  if (report.profile) {
+    json mask = json::array();
+    for (uint8_t m : report.profile->mask) mask.push_back(m ? 1 : 0);
+    j["profile"] = {{"row", report.profile->row},
+                    {"choice", report.profile->choice},
+                    {"reference", profileJson(report.profile->reference)},
+                    {"mask", mask}};
+  }
+  if (!report.skipped.empty()) {
+    json skipped = json::array();
+    for (const auto& [name, why] : report.skipped) skipped.push_back({{"name", name}, {"reason", why}});
+    j["skipped"] = skipped;
+  }
+  json rows = json::array();
+  for (const ReportRow& row : report.rows) rows.push_back(rowJson(row));
   j["techniques"] = rows;
   return j.dump(2) + "\n";
 }
@@ -158,7 +215,13 @@ std::string reportToMarkdown(const Report& report) {
   md += fmt::format("- image: {} x {}\n", report.width, report.height);
   if (!report.baseline.empty()) md += fmt::format("- time ratios relative to `{}`, measured in the same run\n", report.baseline);
   for (const auto& [k, v] : report.settings) md += fmt::format("- {}: {}\n", k, v);
-  md += fmt::format("- penumbra {}\n\n", report.version);
+  if (report.truth)
+    md += fmt::format("- truth: `reference` {}{}\n", joinParams(report.truth->params),
+                      report.truth->cached ? " (read from the reference cache)" : "");
+  if (report.profile) md += fmt::format("- scan-line profile: row {} ({})\n", report.profile->row, report.profile->choice);
+  md += fmt::format("- penumbra {}\n", report.version);
+  if (!report.command.empty()) md += fmt::format("- reproduce: `{}`\n", report.command);
+  md += "\n";
   if (anyError(report))
     md += "RMSE8 = sqrt(mean((V - V_ref)^2)) x 255 over pixels facing the light; penumbra RMSE8 over those where "
           "V or V_ref is in (0.01, 0.99); max err in V. The reference row's error is 0 by definition: its own "
@@ -174,13 +237,31 @@ std::string reportToMarkdown(const Report& report) {
       md += "\n";
     }
   }
+  if (!report.mapSizes.empty() && anyError(report)) {
+    md += "\n## RMSE8 against shadow-map size\n\nOne column per map size (texels per side); a technique without a map "
+          "size ran once and repeats its value.\n\n| technique |";
+    for (int size : report.mapSizes) md += fmt::format(" {} |", size);
+    md += "\n|---|";
+    for (size_t i = 0; i < report.mapSizes.size(); ++i) md += "---:|";
+    md += "\n";
+    for (const ReportRow& row : report.rows) {
+      if (row.mapSizeSweep.size() != report.mapSizes.size()) continue;
+      md += fmt::format("| {}{} |", row.shownName(), row.mapSizeVaries ? "" : " (no map)");
+      for (const MapSizePoint& p : row.mapSizeSweep) md += fmt::format(" {} |", number(p.error.rmse8));
+      md += "\n";
+    }
+  }
+  if (!report.skipped.empty()) {
+    md += "\n## Not run\n\n";
+    for (const auto& [name, why] : report.skipped) md += fmt::format("- `{}`: {}\n", name, why);
+  }
   bool anyImages = false;
   for (const ReportRow& row : report.rows) anyImages = anyImages || !row.images.empty();
   if (anyImages) {
     md += "\n## Images\n\n";
     for (const ReportRow& row : report.rows) {
       if (row.images.empty()) continue;
-      md += fmt::format("**{}**:", row.technique);
+      md += fmt::format("**{}**:", row.shownName());
       for (const auto& [kind, file] : row.images) md += fmt::format(" [{}]({})", kind, file);
       md += "\n\n";
     }

@@ -1,13 +1,19 @@
 // End-to-end tests of the `penumbra` binary (apps/penumbra): every kind of bad input ends in one
 // line "penumbra: error: ..." naming what is wrong and exit code 1 (CLI11 usage errors: its own
 // non-zero code); render and compare write their files; compare's table measures `none` against
-// the reference. Tiny images (32 x 32, 4 spp) keep the whole file to a few seconds.
+// the reference; compare's page (DIR/report/index.html) shows the numbers of the JSON beside it
+// and only images that exist; a second compare reads the truth from the cache; --map-sizes runs
+// the techniques with a map_size at each size. Tiny images (32 x 32, 4 spp) keep the whole file to
+// a few seconds.
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -15,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "penumbra/image_io.h"
+#include "penumbra/registry.h"
 
 namespace penumbra {
 namespace {
@@ -240,27 +247,184 @@ TEST_F(CliTest, CompareWritesReportWithReferenceAndNone) {
   write("s.json", sceneJson(kLight, kObjects));
   const Result r = run("compare --scene s.json --techniques none,raytraced-hard " + kTiny);
   ASSERT_EQ(r.code, 0) << r.output;
-  ASSERT_TRUE(exists("out/compare.json"));
-  ASSERT_TRUE(exists("out/compare.md"));
+  for (const std::string file : {"index.html", "compare.json", "compare.md", "scene.json"})
+    ASSERT_TRUE(exists("out/report/" + file)) << file;
   for (const std::string suffix : {".png", "_v.exr", "_v.png"}) {
-    EXPECT_TRUE(exists("out/tiny_reference" + suffix)) << suffix;
-    EXPECT_TRUE(exists("out/tiny_none" + suffix)) << suffix;
+    EXPECT_TRUE(exists("out/report/tiny_truth" + suffix)) << suffix;
+    EXPECT_TRUE(exists("out/report/tiny_none" + suffix)) << suffix;
   }
-  const nlohmann::json j = nlohmann::json::parse(read("out/compare.json"));
-  const nlohmann::json* reference = nullptr;
+  EXPECT_TRUE(exists("out/report/tiny_none_err.png"));
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
   const nlohmann::json* none = nullptr;
-  for (const auto& row : j["techniques"]) {
-    if (row["name"] == "reference") reference = &row;
+  for (const auto& row : j["techniques"])
     if (row["name"] == "none") none = &row;
-  }
-  ASSERT_TRUE(reference && none) << j.dump(2);
-  EXPECT_EQ(j["techniques"][0]["name"], "reference");  // the truth runs first
-  EXPECT_LT(reference->at("rmse8").get<double>(), 1e-9);
+  ASSERT_TRUE(none) << j.dump(2);
+  EXPECT_EQ(j["truth"]["name"], "reference");
+  EXPECT_EQ(j["truth"]["params"]["spp"], "4");  // --spp sets the truth
+  EXPECT_LT(j["truth"]["rmse8"].get<double>(), 1e-9);
   EXPECT_GT(none->at("rmse8").get<double>(), 1.0);  // a sphere over a plane: a real shadow in frame
-  EXPECT_GT(none->at("rmse8").get<double>(), reference->at("rmse8").get<double>());
-  EXPECT_TRUE(reference->at("stats").contains("mean_std_error")) << reference->dump(2);
+  EXPECT_TRUE(j["truth"]["stats"].contains("mean_std_error")) << j["truth"].dump(2);
   EXPECT_FALSE(j["baseline"].is_null());
   EXPECT_TRUE(none->at("ratio_to_baseline").is_number());
+  // The scene written beside the page is the scene that was rendered.
+  EXPECT_NE(read("out/report/scene.json").find("\"tiny\""), std::string::npos);
+}
+
+// technique label -> the data-value of each cell of the page's results table.
+std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) {
+  std::map<std::string, std::vector<std::string>> out;
+  const std::regex rowRe("<tr data-technique=\"([^\"]*)\">(.*?)</tr>");
+  const std::regex cellRe("<td data-value=\"([^\"]*)\">");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), rowRe); it != std::sregex_iterator(); ++it) {
+    const std::string cells = (*it)[2];
+    auto& values = out[(*it)[1]];
+    for (auto c = std::sregex_iterator(cells.begin(), cells.end(), cellRe); c != std::sregex_iterator(); ++c)
+      values.push_back((*c)[1]);
+  }
+  return out;
+}
+
+TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const Result r = run("compare --scene s.json --techniques reference,none,raytraced-hard,hard -p reference.spp=2 "
+                       "--map-sizes 32,16 " + kTiny);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  const std::string html = read("out/report/index.html");
+  const auto table = pageTable(html);
+  ASSERT_EQ(table.size(), 4u) << html;
+  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "prepare_ms", "visibility_ms", "total_ms",
+                        "ratio_to_baseline"};
+  for (const auto& row : j["techniques"]) {
+    const auto it = table.find(row["label"].get<std::string>());
+    ASSERT_NE(it, table.end()) << row["label"] << "\n" << html;
+    ASSERT_EQ(it->second.size(), 8u);
+    for (size_t k = 0; k < std::size(keys); ++k)
+      EXPECT_DOUBLE_EQ(std::stod(it->second[k + 1]), row[keys[k]].get<double>()) << row["label"] << " " << keys[k];
+    // Every image the page shows exists beside it.
+    for (const auto& [kind, file] : row["images"].items())
+      EXPECT_TRUE(exists("out/report/" + file.get<std::string>())) << file;
+  }
+  const std::regex srcRe("<img src=\"([^\"]*)\"");
+  size_t images = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), srcRe); it != std::sregex_iterator(); ++it, ++images)
+    EXPECT_TRUE(exists("out/report/" + (*it)[1].str())) << (*it)[1];
+  EXPECT_EQ(images, 2u + 4u * 4u);  // the truth's two, then per row: truth shaded, shaded, V, error
+
+  // The reference row is a technique with its own samples, measured against the 4-spp truth.
+  const auto& referenceRow = j["techniques"][0];
+  EXPECT_EQ(referenceRow["label"], "reference (2 spp)");
+  EXPECT_EQ(referenceRow["params"]["spp"], "2");
+  EXPECT_GT(referenceRow["rmse8"].get<double>(), 0.0);  // 2 vs 4 samples: noise differs
+  EXPECT_EQ(j["truth"]["params"]["spp"], "4");
+
+  // --map-sizes: sorted; `hard` ran at each size, the others once and repeated.
+  EXPECT_EQ(j["map_sizes"], nlohmann::json::array({16, 32}));
+  for (const auto& row : j["techniques"]) {
+    ASSERT_EQ(row["map_size_sweep"].size(), 2u) << row["name"];
+    const double a = row["map_size_sweep"][0]["rmse8"], b = row["map_size_sweep"][1]["rmse8"];
+    EXPECT_EQ(row["map_size_varies"].get<bool>(), row["name"] == "hard") << row["name"];
+    if (row["name"] == "hard") EXPECT_NE(a, b);  // a 16^2 and a 32^2 map do not cast the same shadow
+    else EXPECT_EQ(a, b);
+  }
+  const std::string md = read("out/report/compare.md");
+  EXPECT_NE(md.find("| technique | 16 | 32 |"), std::string::npos) << md;
+  // The profile: one value per column of the chosen row, for the truth and every row.
+  const int row = j["profile"]["row"];
+  EXPECT_GE(row, 0);
+  EXPECT_LT(row, 32);
+  EXPECT_EQ(j["profile"]["reference"].size(), 32u);
+  for (const auto& t : j["techniques"]) EXPECT_EQ(t["profile"].size(), 32u);
+  EXPECT_NE(html.find("id=\"plot-map-size\""), std::string::npos);
+}
+
+TEST_F(CliTest, CompareReusesTheCachedTruth) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const std::string args = "compare --scene s.json --techniques none " + kTiny;
+  const Result first = run(args);
+  ASSERT_EQ(first.code, 0) << first.output;
+  EXPECT_NE(first.output.find("truth: rendering"), std::string::npos) << first.output;
+  const std::string truthV = read("out/report/tiny_truth_v.exr");
+  const nlohmann::json j1 = nlohmann::json::parse(read("out/report/compare.json"));
+  EXPECT_FALSE(j1["truth"].contains("cached"));
+
+  const Result second = run(args);
+  ASSERT_EQ(second.code, 0) << second.output;
+  EXPECT_NE(second.output.find("truth: reused"), std::string::npos) << second.output;
+  EXPECT_EQ(second.output.find("truth: rendering"), std::string::npos) << second.output;
+  const nlohmann::json j2 = nlohmann::json::parse(read("out/report/compare.json"));
+  EXPECT_TRUE(j2["truth"]["cached"].get<bool>());
+  EXPECT_EQ(read("out/report/tiny_truth_v.exr"), truthV);
+  // The timings and stats are those of the run that rendered it, not of reading the file.
+  EXPECT_EQ(j2["truth"]["total_ms"], j1["truth"]["total_ms"]);
+  EXPECT_EQ(j2["truth"]["stats"], j1["truth"]["stats"]);
+  EXPECT_EQ(j2["techniques"][0]["rmse8"], j1["techniques"][0]["rmse8"]);
+
+  // Anything the truth depends on is part of the key: another sample count or image size renders again.
+  for (const std::string& other : {std::string("--spp 5 --width 32 --height 32"), std::string("--spp 4 --width 32 --height 16")}) {
+    const Result r = run("compare --scene s.json --techniques none --out out " + other);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("truth: rendering"), std::string::npos) << other << "\n" << r.output;
+  }
+  // So does a change of the scene itself.
+  write("s.json", sceneJson(R"({"type": "sphere", "center": [0, 4.5, 0], "radius": 0.5})", kObjects));
+  const Result moved = run(args);
+  EXPECT_NE(moved.output.find("truth: rendering"), std::string::npos) << moved.output;
+  const Result noCache = run(args + " --no-cache");
+  EXPECT_NE(noCache.output.find("truth: rendering"), std::string::npos) << noCache.output;
+  const Result elsewhere = run(args + " --cache-dir shared-cache");
+  ASSERT_EQ(elsewhere.code, 0) << elsewhere.output;
+  size_t entries = 0;
+  for (const auto& entry : fs::directory_iterator(dir_ / "shared-cache")) entries += entry.path().extension() == ".exr";
+  EXPECT_EQ(entries, 1u);
+  // A damaged entry is rendered anew, not trusted.
+  for (const auto& entry : fs::directory_iterator(dir_ / "out/cache"))
+    if (entry.path().extension() == ".json") std::ofstream(entry.path()) << "{";
+  const Result damaged = run(args);
+  ASSERT_EQ(damaged.code, 0) << damaged.output;
+  EXPECT_NE(damaged.output.find("cannot be read"), std::string::npos) << damaged.output;
+}
+
+TEST_F(CliTest, CompareOptionsAreChecked) {
+  write("s.json", sceneJson(kLight, kObjects));
+  expectError("compare --scene s.json --techniques none --profile-row 32 " + kTiny,
+              {"--profile-row 32", "0 to 31"});
+  expectError("compare --scene s.json --techniques none -p reference.spp=2 " + kTiny,
+              {"reference.spp=2", "--spp"});
+  expectError("compare --scene s.json --techniques hard --map-sizes 16,3 " + kTiny, {"map_size", "3", "--map-sizes"});
+  const Result r = run("compare --scene s.json --techniques none --profile-row 7 " + kTiny);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  EXPECT_EQ(j["profile"]["row"], 7);
+  EXPECT_EQ(j["profile"]["choice"], "--profile-row");
+  EXPECT_NE(j["command"].get<std::string>().find("--profile-row 7"), std::string::npos);
+}
+
+// With no --techniques every registered technique runs; one that does not support the light's shape
+// is listed with its reason instead of ending the comparison, and fails when asked for by name.
+TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const Result r = run("compare --scene s.json --width 24 --height 24 --spp 2 --out out");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  std::set<std::string> seen;
+  for (const auto& row : j["techniques"]) seen.insert(row["name"].get<std::string>());
+  std::string skippedName;
+  if (j.contains("skipped"))
+    for (const auto& s : j["skipped"]) {
+      seen.insert(s["name"].get<std::string>());
+      EXPECT_NE(s["reason"].get<std::string>().find("sphere"), std::string::npos) << s.dump();
+      skippedName = s["name"];
+    }
+  for (const TechniqueInfo& info : techniqueRegistry()) EXPECT_TRUE(seen.count(info.name)) << info.name;
+  EXPECT_EQ(seen.size(), techniqueRegistry().size());
+  if (!skippedName.empty()) {
+    // Only prepare() knows, so the error comes after the progress lines of the work before it.
+    const Result named = run("compare --scene s.json --techniques " + skippedName + " " + kTiny);
+    EXPECT_EQ(named.code, 1) << named.output;
+    EXPECT_NE(named.output.find("penumbra: error: " + skippedName), std::string::npos) << named.output;
+    EXPECT_NE(named.output.find("sphere"), std::string::npos) << named.output;
+  }
 }
 
 TEST_F(CliTest, EmptySceneRendersFullyLit) {

@@ -1,9 +1,13 @@
-// Tests of src/eval/report.cpp: the JSON report parses back to the values it was given, the
-// baseline ratio is total / baseline total, and the text formats hold every row.
+// Tests of src/eval/report.cpp and src/eval/html_report.cpp: the JSON report parses back to the
+// values it was given, the baseline ratio is total / baseline total, the text formats hold every
+// row, and the HTML page shows the JSON's numbers (table cells, plot points, profile), escapes
+// names, refers to nothing outside its directory, and joins only non-dominated points on its front.
 #include "penumbra/report.h"
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -106,6 +110,203 @@ TEST(Report, TextAndMarkdownListEveryRow) {
   }
   EXPECT_NE(md.find("| technique |"), std::string::npos);
   EXPECT_NE(md.find("built-in:torus"), std::string::npos);
+}
+
+// A compare report with a profile, a map-size sweep and error maps.
+Report richReport() {
+  Report r = sampleReport();
+  r.rows[1].mapSizeVaries = false;
+  ReportRow map;
+  map.technique = "hard";
+  map.error = ErrorStats{20.125, 60.5, 0.75, 100, 10};
+  map.timings.add("prepare", 0.25);
+  map.timings.add("visibility", 0.5);
+  map.images = {{"shaded", "t_hard.png"}, {"visibility", "t_hard_v.png"}, {"error", "t_hard_err.png"}};
+  r.rows.push_back(map);
+  r.mapSizes = {16, 64};
+  r.rows[0].mapSizeSweep = {{16, *r.rows[0].error, r.rows[0].timings}, {64, *r.rows[0].error, r.rows[0].timings}};
+  r.rows[1].mapSizeSweep = {{16, *r.rows[1].error, r.rows[1].timings}, {64, *r.rows[1].error, r.rows[1].timings}};
+  r.rows[2].mapSizeVaries = true;
+  r.rows[2].mapSizeSweep = {{16, ErrorStats{31.5, 70, 1, 100, 10}, map.timings}, {64, *map.error, map.timings}};
+  ScanProfile profile;
+  profile.row = 3;
+  profile.choice = "--profile-row";
+  profile.reference = {1.0f, 0.5f, 0.123456f, 0.0f};
+  profile.mask = {0, 1, 1, 1};
+  r.profile = profile;
+  for (ReportRow& row : r.rows) row.profile = {1.0f, 0.25f, 0.0f, 0.0f};
+  r.errorMapRange = 0.5;
+  r.truth = r.rows[0];
+  r.truth->images = {{"shaded", "t_truth.png"}, {"visibility", "t_truth_v.png"}};
+  r.command = "penumbra compare --scene torus";
+  fillBaselineRatios(r);
+  return r;
+}
+
+// technique -> column -> data-value of the page's results table.
+std::map<std::string, std::vector<std::string>> tableValues(const std::string& html) {
+  std::map<std::string, std::vector<std::string>> out;
+  const std::regex rowRe("<tr data-technique=\"([^\"]*)\">(.*?)</tr>");
+  const std::regex cellRe("<td data-value=\"([^\"]*)\">");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), rowRe); it != std::sregex_iterator(); ++it) {
+    const std::string cells = (*it)[2];
+    auto& values = out[(*it)[1]];
+    for (auto c = std::sregex_iterator(cells.begin(), cells.end(), cellRe); c != std::sregex_iterator(); ++c)
+      values.push_back((*c)[1]);
+  }
+  return out;
+}
+
+TEST(Report, HtmlTableHoldsTheJsonNumbers) {
+  const Report r = richReport();
+  const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
+  const auto table = tableValues(reportToHtml(r));
+  ASSERT_EQ(table.size(), j["techniques"].size());
+  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "prepare_ms", "visibility_ms", "total_ms",
+                        "ratio_to_baseline"};
+  for (const auto& row : j["techniques"]) {
+    const auto it = table.find(row["label"].get<std::string>());
+    ASSERT_NE(it, table.end()) << row["label"];
+    ASSERT_EQ(it->second.size(), 1 + std::size(keys));
+    EXPECT_EQ(it->second[0], row["label"].get<std::string>());
+    for (size_t k = 0; k < std::size(keys); ++k)
+      EXPECT_DOUBLE_EQ(std::stod(it->second[k + 1]), row[keys[k]].get<double>()) << row["label"] << " " << keys[k];
+  }
+}
+
+TEST(Report, HtmlPlotsAreDrawnFromTheJsonNumbers) {
+  const Report r = richReport();
+  const std::string html = reportToHtml(r);
+  const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
+  // Error against time: one point per row, at the row's total ms and RMSE8.
+  const std::regex pointRe("data-technique=\"([^\"]*)\" data-ms=\"([^\"]*)\" data-rmse8=\"([^\"]*)\"");
+  size_t points = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), pointRe); it != std::sregex_iterator(); ++it) {
+    ++points;
+    bool found = false;
+    for (const auto& row : j["techniques"])
+      if (row["label"] == (*it)[1].str()) {
+        found = true;
+        EXPECT_DOUBLE_EQ(std::stod((*it)[2]), row["total_ms"].get<double>());
+        EXPECT_DOUBLE_EQ(std::stod((*it)[3]), row["rmse8"].get<double>());
+      }
+    EXPECT_TRUE(found) << (*it)[1];
+  }
+  EXPECT_EQ(points, r.rows.size());
+  // Map-size plot: a marker per size for the technique whose error varies with it.
+  const std::regex sizeRe("data-technique=\"hard\" data-map-size=\"(\\d+)\" data-rmse8=\"([^\"]*)\"");
+  std::vector<std::pair<int, double>> sizes;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), sizeRe); it != std::sregex_iterator(); ++it)
+    sizes.emplace_back(std::stoi((*it)[1]), std::stod((*it)[2]));
+  ASSERT_EQ(sizes.size(), 2u);
+  for (size_t s = 0; s < 2; ++s) {
+    EXPECT_EQ(sizes[s].first, j["techniques"][2]["map_size_sweep"][s]["map_size"].get<int>());
+    EXPECT_DOUBLE_EQ(sizes[s].second, j["techniques"][2]["map_size_sweep"][s]["rmse8"].get<double>());
+  }
+  // The profile: the JSON holds the rounded values the page plots, one vertex per pixel.
+  EXPECT_DOUBLE_EQ(j["profile"]["reference"][2].get<double>(), 0.1235);
+  EXPECT_EQ(j["profile"]["row"], 3);
+  const std::regex truthRe("data-technique=\"truth\" stroke=\"[^\"]*\" points=\"([^\"]*)\"");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(html, m, truthRe));
+  const std::string vertices = m[1];
+  EXPECT_EQ(std::count(vertices.begin(), vertices.end(), ','), 4);
+  EXPECT_NE(html.find("id=\"plot-error-time\""), std::string::npos);
+  EXPECT_NE(html.find("id=\"plot-map-size\""), std::string::npos);
+  EXPECT_NE(html.find("id=\"plot-profile\""), std::string::npos);
+  EXPECT_NE(html.find("id=\"error-legend\""), std::string::npos);
+  EXPECT_NE(html.find("&#177;0.5"), std::string::npos);  // the legend states the symmetric range
+}
+
+// Every marker inside the plotting frame (x in [64, 700], y in [16, 348] of the 720 x 400 view box):
+// an axis that stopped at the last round tick below the largest error would cut it off.
+TEST(Report, HtmlPlotPointsLieInsideTheFrame) {
+  const std::string html = reportToHtml(richReport());
+  const std::regex circleRe("<circle class=\"point\"[^>]* cx=\"([^\"]*)\" cy=\"([^\"]*)\"");
+  size_t count = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), circleRe); it != std::sregex_iterator(); ++it) {
+    ++count;
+    const double cx = std::stod((*it)[1]), cy = std::stod((*it)[2]);
+    EXPECT_GE(cx, 64.0 - 1e-6);
+    EXPECT_LE(cx, 700.0 + 1e-6);
+    EXPECT_GE(cy, 16.0 - 1e-6) << (*it)[0];
+    EXPECT_LE(cy, 348.0 + 1e-6) << (*it)[0];
+  }
+  EXPECT_EQ(count, 3u + 2u);  // three on the error-time plot, two sizes of `hard` on the map-size plot
+}
+
+// The profile plot zooms to where anything is shadowed, with a margin of max(8, span / 4) pixels.
+TEST(Report, HtmlProfileZoomsToTheShadowedColumns) {
+  Report r = richReport();
+  r.profile->reference.assign(200, 1.0f);
+  r.profile->mask.assign(200, 1);
+  for (int x = 100; x < 110; ++x) r.profile->reference[static_cast<size_t>(x)] = 0.5f;
+  for (ReportRow& row : r.rows) row.profile.assign(200, 1.0f);
+  r.rows[1].profile[105] = 0.0f;
+  const std::string html = reportToHtml(r);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(html, m, std::regex("data-technique=\"truth\" stroke=\"[^\"]*\" points=\"([^\"]*)\"")));
+  const std::string vertices = m[1];
+  EXPECT_EQ(std::count(vertices.begin(), vertices.end(), ','), 118 - 92);
+  EXPECT_NE(html.find("columns 92 to 117 of 200"), std::string::npos);
+  // The JSON keeps the whole row.
+  EXPECT_EQ(nlohmann::json::parse(reportToJson(r))["profile"]["reference"].size(), 200u);
+}
+
+TEST(Report, HtmlFrontJoinsOnlyNonDominatedPoints) {
+  Report r;
+  r.kind = "compare";
+  r.width = r.height = 4;
+  const std::tuple<const char*, double, double> rows[] = {
+      {"fast", 1.0, 10.0}, {"dominated", 2.0, 20.0}, {"accurate", 10.0, 5.0}, {"slow-bad", 50.0, 8.0}};
+  for (const auto& [name, ms, err] : rows) {
+    ReportRow row;
+    row.technique = name;
+    row.error = ErrorStats{err, err, 0.1, 10, 1};
+    row.timings.add("visibility", ms);
+    r.rows.push_back(row);
+  }
+  const std::string html = reportToHtml(r);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(html, m, std::regex("<polyline class=\"front\" points=\"([^\"]*)\"")));
+  const std::string front = m[1];
+  EXPECT_EQ(std::count(front.begin(), front.end(), ','), 2) << front;  // fast, accurate
+}
+
+TEST(Report, HtmlEscapesNamesAndStaysOnDisk) {
+  Report r = richReport();
+  r.rows[1].label = "<b>bold</b> & \"quoted\"";
+  r.light = "sphere <script>alert(1)</script>";
+  const std::string html = reportToHtml(r);
+  EXPECT_EQ(html.find("<b>bold</b>"), std::string::npos);
+  EXPECT_EQ(html.find("<script>alert"), std::string::npos);
+  EXPECT_NE(html.find("&lt;b&gt;bold&lt;/b&gt; &amp; &quot;quoted&quot;"), std::string::npos);
+  // Self-contained: no stylesheet, script or image from elsewhere; the only URL is SVG's namespace name.
+  for (const char* forbidden : {"<link", "@import", "src=\"http", "href=\"http", "url(http", "//cdn", "src=\"/"})
+    EXPECT_EQ(html.find(forbidden), std::string::npos) << forbidden;
+  const std::regex srcRe("src=\"([^\"]*)\"");
+  size_t images = 0;
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), srcRe); it != std::sregex_iterator(); ++it) {
+    ++images;
+    EXPECT_EQ((*it)[1].str().find('/'), std::string::npos) << (*it)[1];  // beside the page
+  }
+  EXPECT_GT(images, 0u);
+  EXPECT_NE(html.find("t_hard_err.png"), std::string::npos);
+  EXPECT_NE(html.find("t_truth.png"), std::string::npos);
+}
+
+TEST(Report, MarkdownHasTheMapSizeTable) {
+  const std::string md = reportToMarkdown(richReport());
+  EXPECT_NE(md.find("| technique | 16 | 64 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| hard | 31.50 | 20.12 |"), std::string::npos) << md;  // 20.125 (exact in binary) rounds to even
+  EXPECT_NE(md.find("| raytraced-hard (no map) | 12.50 | 12.50 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("scan-line profile: row 3"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(reportToJson(richReport()));
+  EXPECT_EQ(j["map_sizes"], nlohmann::json::array({16, 64}));
+  EXPECT_FALSE(j["techniques"][1]["map_size_varies"].get<bool>());
+  EXPECT_TRUE(j["techniques"][2]["map_size_varies"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["error_map_range"].get<double>(), 0.5);
+  EXPECT_EQ(j["truth"]["images"]["shaded"], "t_truth.png");
 }
 
 TEST(Report, DescribeLightNamesShapeAndValues) {
