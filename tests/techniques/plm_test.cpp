@@ -31,20 +31,7 @@ constexpr float kHeight = 1.5f;
 constexpr float kAngleDegrees = 20.0f;
 
 Scene straightEdgeScene(float edgeX, LightProfile profile = LightProfile::Uniform) {
-  Scene scene;
-  Object ground;
-  ground.name = "ground";
-  ground.id = 0;
-  ground.mesh = makePlane(8.0f, 8.0f);
-  Object occluder;
-  occluder.name = "occluder";
-  occluder.id = 1;
-  occluder.mesh.positions = {Vec3(-3.0f, kHeight, -3.0f), Vec3(edgeX, kHeight, -3.0f), Vec3(edgeX, kHeight, 3.0f),
-                             Vec3(-3.0f, kHeight, 3.0f)};
-  occluder.mesh.triangles = {{0u, 2u, 1u}, {0u, 3u, 2u}};  // wound to face +y, the light
-  scene.objects = {ground, occluder};
-  scene.lights.push_back(Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(kAngleDegrees), profile));
-  return scene;
+  return testing::straightEdgeScene(edgeX, kHeight, kAngleDegrees, profile);
 }
 
 // Exact V at signed distance d (world units, + outside the occluder) from the edge's shadow line:
@@ -59,16 +46,6 @@ double exactV(double d, double u = 0.0) {
   return 1.0 - blocked / (kPiD * (1.0 - u / 3.0));
 }
 
-Image<float> runOn(const std::string& technique, const Scene& scene, const GBuffer& g, std::vector<std::string> params) {
-  ParamSet given;
-  for (const std::string& kv : params) given.setFromKeyValue(kv, "test");
-  auto t = createTechnique(technique, given);
-  t->prepare(scene, scene.lights.at(0));
-  Image<float> v;
-  t->visibility(g, v);
-  return v;
-}
-
 constexpr float kEdgeX = 0.37f;  // not on a texel boundary of any map size
 
 TEST(Plm, StraightEdgeIsExactAcrossThePenumbraAt32) {
@@ -77,7 +54,7 @@ TEST(Plm, StraightEdgeIsExactAcrossThePenumbraAt32) {
   double worst = 0.0;
   for (float z : {-1.3f, 0.21f, 1.77f}) {  // three scan lines across the edge's shadow
     const GBuffer g = groundLineGBuffer(Vec3(kEdgeX - 0.4f, 0.0f, z), Vec3(kEdgeX + 0.4f, 0.0f, z), n);
-    const Image<float> v = runOn("plm", scene, g, {"map_size=32"});
+    const Image<float> v = runTechnique("plm", scene, g, {"map_size=32"});
     for (int i = 0; i < n; ++i) {
       const double d = g.wsPosition(i, 0).x - kEdgeX;
       worst = std::max(worst, std::abs(v(i, 0) - exactV(d)));
@@ -91,8 +68,8 @@ TEST(Plm, StraightEdgeUnderALimbDarkenedSunNeedsTheIlluminationTable) {
   const Scene scene = straightEdgeScene(kEdgeX, LightProfile::LimbDarkened);
   const int n = 401;
   const GBuffer g = groundLineGBuffer(Vec3(kEdgeX - 0.4f, 0.0f, 0.3f), Vec3(kEdgeX + 0.4f, 0.0f, 0.3f), n);
-  const Image<float> withTable = runOn("plm", scene, g, {"map_size=32"});
-  const Image<float> linear = runOn("plm", scene, g, {"map_size=32", "illumination_table=false"});
+  const Image<float> withTable = runTechnique("plm", scene, g, {"map_size=32"});
+  const Image<float> linear = runTechnique("plm", scene, g, {"map_size=32", "illumination_table=false"});
   double worstTable = 0.0, worstLinear = 0.0;
   for (int i = 0; i < n; ++i) {
     const double exact = exactV(g.wsPosition(i, 0).x - kEdgeX, kLimbDarkeningU);
@@ -119,8 +96,8 @@ TEST(Plm, QuarterTexelMoveOfTheOccluderMovesTheHalfContourAQuarterTexel) {
   for (float start : {0.0f, 0.1f, 0.6f}) {  // start positions within a texel
     const float x0 = -0.5f + start * texel;
     const GBuffer g = groundLineGBuffer(Vec3(x0 - 0.5f, 0.0f, 0.4f), Vec3(x0 + 0.5f + texel, 0.0f, 0.4f), n);
-    const double before = halfContour(g, runOn("plm", straightEdgeScene(x0), g, {"map_size=32"}));
-    const double after = halfContour(g, runOn("plm", straightEdgeScene(x0 + 0.25f * texel), g, {"map_size=32"}));
+    const double before = halfContour(g, runTechnique("plm", straightEdgeScene(x0), g, {"map_size=32"}));
+    const double after = halfContour(g, runTechnique("plm", straightEdgeScene(x0 + 0.25f * texel), g, {"map_size=32"}));
     // Measured shift: 0.25 texel; the bound is 0.25 +- 0.1.
     EXPECT_NEAR((after - before) / texel, 0.25, 0.1) << "start " << start;
   }

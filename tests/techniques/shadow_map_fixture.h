@@ -16,6 +16,7 @@
 
 #include "penumbra/gbuffer.h"
 #include "penumbra/metrics.h"
+#include "penumbra/primitives.h"
 #include "penumbra/raster.h"
 #include "penumbra/reference.h"
 #include "penumbra/registry.h"
@@ -54,16 +55,43 @@ inline const ShadowTestScene& shadowTestScene(const std::string& name) {
   return *cache.emplace(name, std::move(s)).first->second;
 }
 
-// Runs technique `name` with "key=value" parameters on the scene's G-buffer.
-inline Image<float> runTechnique(const std::string& name, const ShadowTestScene& s,
+// Runs technique `name` with "key=value" parameters on `gbuffer`, lit by the scene's first light.
+inline Image<float> runTechnique(const std::string& name, const Scene& scene, const GBuffer& gbuffer,
                                  const std::vector<std::string>& keyValues = {}) {
   ParamSet given;
   for (const std::string& kv : keyValues) given.setFromKeyValue(kv, "test");
   auto technique = createTechnique(name, given);
-  technique->prepare(s.scene, s.light());
+  technique->prepare(scene, scene.lights.at(0));
   Image<float> v;
-  technique->visibility(s.gbuffer, v);
+  technique->visibility(gbuffer, v);
   return v;
+}
+
+// Runs technique `name` with "key=value" parameters on the test scene's G-buffer.
+inline Image<float> runTechnique(const std::string& name, const ShadowTestScene& s,
+                                 const std::vector<std::string>& keyValues = {}) {
+  return runTechnique(name, s.scene, s.gbuffer, keyValues);
+}
+
+// The straight-edge setup of Lawlor 2006's exactness claim: an 8 x 8 ground at y = 0 and, `height`
+// above it, a horizontal rectangle covering x < edgeX (|z| < 3), under a directional disk light of
+// `angleDegrees` straight down.
+inline Scene straightEdgeScene(float edgeX, float height, float angleDegrees,
+                               LightProfile profile = LightProfile::Uniform) {
+  Scene scene;
+  Object ground;
+  ground.name = "ground";
+  ground.id = 0;
+  ground.mesh = makePlane(8.0f, 8.0f);
+  Object occluder;
+  occluder.name = "occluder";
+  occluder.id = 1;
+  occluder.mesh.positions = {Vec3(-3.0f, height, -3.0f), Vec3(edgeX, height, -3.0f), Vec3(edgeX, height, 3.0f),
+                             Vec3(-3.0f, height, 3.0f)};
+  occluder.mesh.triangles = {{0u, 2u, 1u}, {0u, 3u, 2u}};  // wound to face +y, the light
+  scene.objects = {ground, occluder};
+  scene.lights.push_back(Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(angleDegrees), profile));
+  return scene;
 }
 
 // A G-buffer of n points evenly spaced from a to b on an upward-facing receiver (object id 0): a

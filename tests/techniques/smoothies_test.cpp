@@ -24,31 +24,10 @@ constexpr float kHeight = 1.5f;
 constexpr float kAngleDegrees = 20.0f;
 constexpr float kEdgeX = 0.37f;
 
-// An 8 x 8 ground and, kHeight above it, a rectangle covering x < kEdgeX, under a directional disk
-// light straight down (the straight-edge setup of plm_test.cpp).
-Scene straightEdgeScene() {
-  Scene scene;
-  Object ground;
-  ground.id = 0;
-  ground.mesh = makePlane(8.0f, 8.0f);
-  Object occluder;
-  occluder.id = 1;
-  occluder.mesh.positions = {Vec3(-3.0f, kHeight, -3.0f), Vec3(kEdgeX, kHeight, -3.0f), Vec3(kEdgeX, kHeight, 3.0f),
-                             Vec3(-3.0f, kHeight, 3.0f)};
-  occluder.mesh.triangles = {{0u, 2u, 1u}, {0u, 3u, 2u}};
-  scene.objects = {ground, occluder};
-  scene.lights.push_back(Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(kAngleDegrees)));
-  return scene;
-}
+Scene straightEdgeScene() { return testing::straightEdgeScene(kEdgeX, kHeight, kAngleDegrees); }
 
-Image<float> run(const std::string& technique, const Scene& scene, const GBuffer& g, const std::string& mapSize) {
-  ParamSet given;
-  given.setFromKeyValue(mapSize, "test");
-  auto t = createTechnique(technique, given);
-  t->prepare(scene, scene.lights.at(0));
-  Image<float> v;
-  t->visibility(g, v);
-  return v;
+Image<float> run(const std::string& technique, const Scene& scene, const GBuffer& g, const std::string& param) {
+  return runTechnique(technique, scene, g, {param});
 }
 
 TEST(Smoothies, HardUmbraAndAnOuterFadeAcrossThePhysicalPenumbra) {

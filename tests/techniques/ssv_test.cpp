@@ -70,13 +70,7 @@ GBuffer groundGridGBuffer(float lo, float hi, int n) {
 }
 
 Image<float> run(const std::string& name, const Scene& scene, const GBuffer& g, const std::vector<std::string>& kv = {}) {
-  ParamSet given;
-  for (const std::string& s : kv) given.setFromKeyValue(s, "test");
-  auto t = createTechnique(name, given);
-  t->prepare(scene, scene.lights.at(0));
-  Image<float> v;
-  t->visibility(g, v);
-  return v;
+  return testing::runTechnique(name, scene, g, kv);
 }
 
 Image<float> reference(const Scene& scene, const GBuffer& g, uint32_t spp) {

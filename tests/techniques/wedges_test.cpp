@@ -48,11 +48,7 @@ Scene plateScene(const Light& light, const std::vector<Object>& plates) {
 }
 
 Image<float> run(const std::string& name, const Scene& scene, const GBuffer& g) {
-  auto t = createTechnique(name);
-  t->prepare(scene, scene.lights.at(0));
-  Image<float> v;
-  t->visibility(g, v);
-  return v;
+  return testing::runTechnique(name, scene, g);
 }
 
 // Visible fraction of the rect light [-hx, hx] x [-hz, hz] at height H from ground point (px, pz)
