@@ -245,6 +245,20 @@ namespace {
   // The texel's index in map.depth, in the vectorized loop. int32 is enough: taps lie within the
   // map's size of (s, t) (the callers limit the radius to it), so |i|, |j| < 2 * 8192.
   const int32_t stride = static_cast<int32_t>(map.stride);
+  // A disk that lies inside the map with a texel to spare needs no per-tap bounds (|offset| <= the
+  // radius up to rounding, which the spare texel covers).
+  const float reach = radiusTexels + 1.0f;
+  if (r.s - reach >= 0.0f && r.t - reach >= 0.0f && r.s + reach < static_cast<float>(map.size) &&
+      r.t + reach < static_cast<float>(map.size)) {
+    for (size_t k = 0; k < n; ++k) {
+      const int32_t i = floorToInt(r.s + ox[k]), j = floorToInt(r.t + oy[k]);
+      index[k] = j * stride + i;
+      threshold[k] = r.lsDepth + r.dzds * (static_cast<float>(i) + 0.5f - r.s) +
+                     r.dzdt * (static_cast<float>(j) + 0.5f - r.t) - r.bias;
+    }
+    for (size_t k = 0; k < n; ++k) d[k] = map.depth[index[k]];
+    return;
+  }
   int iMin = map.size, jMin = map.size, iMax = -1, jMax = -1;
   for (size_t k = 0; k < n; ++k) {
     ti[k] = floorToInt(r.s + ox[k]);
