@@ -7,7 +7,7 @@
 //  - heidrichCameraMove/k: the slides' "static walk-through": maps prepared once, then every frame
 //    sees a moved camera (two G-buffers alternating) and runs the visibility pass only, for heidrich
 //    and for hard, interleaved; counter visibility_over_hard (the target: <= 2).
-#include <benchmark/benchmark.h>
+#include "bench_common.h"
 
 #include <memory>
 #include <string>
@@ -21,10 +21,9 @@
 namespace penumbra {
 namespace {
 
-struct LinearBenchScene {
-  Scene scene;
-  GBuffer gbuffer;       //!< the scene's camera
-  GBuffer movedGbuffer;  //!< the camera moved sideways and up
+// The scene's camera (gbuffer) and the camera moved sideways and up (movedGbuffer).
+struct LinearBenchScene : bench::BenchScene {
+  GBuffer movedGbuffer;
 };
 
 const LinearBenchScene& linear1024() {
@@ -48,33 +47,9 @@ std::unique_ptr<ShadowTechnique> make(const std::string& name, const std::vector
 }
 
 void heidrichOverHard(benchmark::State& state) {
-  const LinearBenchScene& s = linear1024();
-  const Light& light = s.scene.lights.at(0);
   auto hard = make("hard", {});
   auto heidrich = make("heidrich", {"subdivisions=" + std::to_string(state.range(0))});
-  Image<float> v;
-  double ms[2][2] = {};  // [technique][pass]
-  for (auto _ : state) {
-    int index = 0;
-    for (ShadowTechnique* t : {hard.get(), heidrich.get()}) {
-      Timer timer;
-      t->prepare(s.scene, light);
-      ms[index][0] += timer.elapsedMs();
-      timer.reset();
-      t->visibility(s.gbuffer, v);
-      benchmark::DoNotOptimize(v.data());
-      ms[index][1] += timer.elapsedMs();
-      ++index;
-    }
-  }
-  const double n = static_cast<double>(state.iterations());
-  state.counters["hard_prepare_ms"] = ms[0][0] / n;
-  state.counters["hard_visibility_ms"] = ms[0][1] / n;
-  state.counters["heidrich_prepare_ms"] = ms[1][0] / n;
-  state.counters["heidrich_visibility_ms"] = ms[1][1] / n;
-  state.counters["prepare_over_hard"] = ms[1][0] / ms[0][0];
-  state.counters["visibility_over_hard"] = ms[1][1] / ms[0][1];
-  state.counters["total_over_hard"] = (ms[1][0] + ms[1][1]) / (ms[0][0] + ms[0][1]);
+  bench::timeAgainstBaseline(state, linear1024(), "hard", *hard, "heidrich", *heidrich);
 }
 BENCHMARK(heidrichOverHard)->Arg(1)->Arg(2)->Arg(4)->Unit(benchmark::kMillisecond)->UseRealTime();
 

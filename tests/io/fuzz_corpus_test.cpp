@@ -114,6 +114,13 @@ TEST(FuzzCorpus, MeshSeedsGiveTheirKnownOutcome) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("has no vertices"), std::string::npos) << e.what();
   }
+  // A fuzz finding: an OFF face of no vertices read out of bounds inside assimp's OFF reader.
+  try {
+    import("crash-assimp-off-empty-face");
+    ADD_FAILURE() << "an OFF face without vertices must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("expected its vertex count, 3 or more"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
