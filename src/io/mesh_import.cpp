@@ -58,9 +58,10 @@ void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
   std::string extension = std::filesystem::path(path).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   const auto tooMany = [&](const std::string& what, const std::string& count) {
-    // Digits only: a malformed count is the reader's to report.
-    if (count.empty() || count.size() > 19 || count.find_first_not_of("0123456789") != std::string::npos) return;
-    if (std::stoull(count) > fileSize)
+    // assimp reads a count with strtoul, so a sign or an overflow becomes a huge allocation too.
+    if (count.empty() || count.find_first_not_of("0123456789") != std::string::npos)
+      fail("{}: the header's count of {} is '{}'; expected a non-negative integer", path, what, count);
+    if (count.size() > 19 || std::stoull(count) > fileSize)
       fail("{}: the header declares {} {}, more than the file's {} bytes could hold; expected a complete file", path,
            count, what, fileSize);
   };

@@ -121,6 +121,13 @@ TEST(FuzzCorpus, MeshSeedsGiveTheirKnownOutcome) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("expected its vertex count, 3 or more"), std::string::npos) << e.what();
   }
+  // A fuzz finding: a vertex count too long for 64 bits overflowed in assimp into a 16 GB allocation.
+  try {
+    import("oom-assimp-off-overflowing-count");
+    ADD_FAILURE() << "an overflowing count must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than the file"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
