@@ -254,6 +254,16 @@ json parseJson(const std::string& text, const std::string& source) {
     if (const size_t at = detail.find("column"); at != std::string::npos)
       if (const size_t colon = detail.find(": ", at); colon != std::string::npos) detail = detail.substr(colon + 2);
     fail("{}: malformed JSON at line {}, column {}: {}", source, line, column, detail);
+  } catch (const json::out_of_range& e) {
+    // A number literal too large for a double ("1e999"); nlohmann names it but not where it is.
+    std::string detail = e.what();
+    if (const size_t bracket = detail.find("] "); bracket != std::string::npos) detail = detail.substr(bracket + 2);
+    std::string path;
+    for (const Frame& f : stack) {
+      if (f.isArray) path += fmt::format("[{}]", f.index);
+      else if (!f.key.empty()) path += (path.empty() ? "" : ".") + f.key;
+    }
+    fail("{}: {}: {}; expected a number within the range of a double", source, path.empty() ? "JSON" : path, detail);
   }
 }
 
