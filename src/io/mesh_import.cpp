@@ -29,7 +29,7 @@ namespace {
 
 // assimp 5.2.5 (Debian 12) loops forever on a PLY file whose header never reaches its `end_header`
 // line (a truncated file does that), so such a file is refused before assimp sees it. assimp picks
-// the PLY reader by the extension or by the leading "ply" line; both are checked here.
+// the PLY reader by the extension or by a leading "ply"; both are checked here.
 void checkPlyHeader(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
@@ -37,7 +37,9 @@ void checkPlyHeader(const std::string& path) {
   if (!line.empty() && line.back() == '\r') line.pop_back();
   std::string extension = std::filesystem::path(path).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (line != "ply" && extension != ".ply") return;
+  // assimp's content check takes any file that opens with "ply" (a fuzz finding: "ply t..." named
+  // .obj went to the PLY reader, which then read past its buffer), so the prefix decides here too.
+  if (line.rfind("ply", 0) != 0 && extension != ".ply") return;
   // The PLY header is text lines up to "end_header"; real headers are well under this many lines.
   constexpr int kMaxHeaderLines = 100000;
   for (int i = 0; i < kMaxHeaderLines && std::getline(in, line); ++i) {

@@ -137,6 +137,14 @@ TEST(FuzzCorpus, MeshSeedsGiveTheirKnownOutcome) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("more than the file"), std::string::npos) << e.what();
   }
+  // A fuzz finding: a file named .obj that opens with "ply" went to assimp's PLY reader, which read
+  // past its buffer on a header without end_header; such a file is refused first.
+  try {
+    import("crash-assimp-ply-prefix-overread");
+    ADD_FAILURE() << "a PLY-looking file without end_header must be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("end_header"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
