@@ -43,13 +43,7 @@ struct Strip {
   float x0, x1;  //!< x extent of a flat occluder at height h (z extent -2..2)
 };
 
-Object makeObject(int32_t id, Mesh mesh) {
-  Object o;
-  o.name = "object" + std::to_string(id);
-  o.id = id;
-  o.mesh = std::move(mesh);
-  return o;
-}
+using testing::makeObject;
 
 // Ground 8 x 8 at y = 0, strips at height h, light from (-1.5, H, 0) to (1.5, H, 0). Symmetric bounds
 // keep the light's axis straight down: the ground is parallel to every map plane.

@@ -26,17 +26,12 @@
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/scene_io.h"
+#include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
 namespace {
 
-Object makeObject(int32_t id, Mesh mesh) {
-  Object o;
-  o.name = "object" + std::to_string(id);
-  o.id = id;
-  o.mesh = std::move(mesh);
-  return o;
-}
+using testing::makeObject;
 
 Mesh translated(Mesh mesh, const Vec3& offset) {
   transformMesh(mesh, glm::translate(Mat4(1.0f), offset));

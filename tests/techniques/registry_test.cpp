@@ -13,17 +13,12 @@
 #include "penumbra/metrics.h"
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
+#include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
 namespace {
 
-Object makeObject(int32_t id, Mesh mesh) {
-  Object o;
-  o.name = "object" + std::to_string(id);
-  o.id = id;
-  o.mesh = std::move(mesh);
-  return o;
-}
+using testing::makeObject;
 
 // A ground plane and a box above it, lit from above by `light`, seen from above.
 Scene groundAndBox(const Light& light) {

@@ -73,6 +73,15 @@ inline Image<float> runTechnique(const std::string& name, const ShadowTestScene&
   return runTechnique(name, s.scene, s.gbuffer, keyValues);
 }
 
+// An object with id `id`, named after it, made of `mesh`.
+inline Object makeObject(int32_t id, Mesh mesh) {
+  Object o;
+  o.name = "object" + std::to_string(id);
+  o.id = id;
+  o.mesh = std::move(mesh);
+  return o;
+}
+
 // The straight-edge setup of Lawlor 2006's exactness claim: an 8 x 8 ground at y = 0 and, `height`
 // above it, a horizontal rectangle covering x < edgeX (|z| < 3), under a directional disk light of
 // `angleDegrees` straight down.
