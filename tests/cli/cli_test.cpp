@@ -22,6 +22,7 @@
 
 #include "penumbra/image_io.h"
 #include "penumbra/registry.h"
+#include "eval/html_table.h"
 
 namespace penumbra {
 namespace {
@@ -270,19 +271,7 @@ TEST_F(CliTest, CompareWritesReportWithReferenceAndNone) {
   EXPECT_NE(read("out/report/scene.json").find("\"tiny\""), std::string::npos);
 }
 
-// technique label -> the data-value of each cell of the page's results table.
-std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) {
-  std::map<std::string, std::vector<std::string>> out;
-  const std::regex rowRe("<tr data-technique=\"([^\"]*)\">(.*?)</tr>");
-  const std::regex cellRe("<td data-value=\"([^\"]*)\">");
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), rowRe); it != std::sregex_iterator(); ++it) {
-    const std::string cells = (*it)[2];
-    auto& values = out[(*it)[1]];
-    for (auto c = std::sregex_iterator(cells.begin(), cells.end(), cellRe); c != std::sregex_iterator(); ++c)
-      values.push_back((*c)[1]);
-  }
-  return out;
-}
+std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) { return testing::htmlTableValues(html); }
 
 TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
   write("s.json", sceneJson(kLight, kObjects));

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "penumbra/error.h"
+#include "eval/html_table.h"
 
 namespace penumbra {
 namespace {
@@ -143,19 +144,7 @@ Report richReport() {
   return r;
 }
 
-// technique -> column -> data-value of the page's results table.
-std::map<std::string, std::vector<std::string>> tableValues(const std::string& html) {
-  std::map<std::string, std::vector<std::string>> out;
-  const std::regex rowRe("<tr data-technique=\"([^\"]*)\">(.*?)</tr>");
-  const std::regex cellRe("<td data-value=\"([^\"]*)\">");
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), rowRe); it != std::sregex_iterator(); ++it) {
-    const std::string cells = (*it)[2];
-    auto& values = out[(*it)[1]];
-    for (auto c = std::sregex_iterator(cells.begin(), cells.end(), cellRe); c != std::sregex_iterator(); ++c)
-      values.push_back((*c)[1]);
-  }
-  return out;
-}
+std::map<std::string, std::vector<std::string>> tableValues(const std::string& html) { return testing::htmlTableValues(html); }
 
 TEST(Report, HtmlTableHoldsTheJsonNumbers) {
   const Report r = richReport();
