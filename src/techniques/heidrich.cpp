@@ -277,37 +277,12 @@ Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>
   return out;
 }
 
-namespace {
-
-// num / den limited to [-kMaxDepthSlope, kMaxDepthSlope], also when den is 0 (as makeReceiver does).
-float limitedRatio(float num, float den) {
-  if (std::abs(num) <= kMaxDepthSlope * std::abs(den)) return num / den;
-  const float sign = (num < 0.0f) != (den < 0.0f) ? -1.0f : 1.0f;
-  return sign * kMaxDepthSlope;
-}
-
-}  // namespace
-
 ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
-  // makeReceiver's steps and rounding, for a perspective map (shadow_map.cpp has the derivation).
-  ShadowReceiver r;
-  if (!(lsP.z > 0.0f)) return r;
+  // makeReceiver for a perspective map whose frame the caller already transformed into.
+  if (!(lsP.z > 0.0f)) return {};
   const float half = 0.5f * static_cast<float>(map.size);
   const float scale = 1.0f / (lsP.z * map.tanHalfFov);
-  r.s = half * (1.0f + lsP.x * scale);
-  r.t = half * (1.0f - lsP.y * scale);
-  r.lsDepth = lsP.z;
-  const float size = static_cast<float>(map.size);
-  if (!(r.s >= 0.0f && r.s < size && r.t >= 0.0f && r.t < size) || !std::isfinite(r.lsDepth)) return r;
-  r.inMap = true;
-  r.texelWorld = map.texelWorldSize(r.lsDepth);
-  const float nDotD = glm::dot(lsN, lsP) / lsP.z;
-  const float gs = limitedRatio(-lsN.x, nDotD);
-  const float gt = limitedRatio(lsN.y, nDotD);
-  r.dzds = gs * r.texelWorld;
-  r.dzdt = gt * r.texelWorld;
-  r.bias = r.texelWorld * (bias.constantTexels + bias.slope * std::sqrt(gs * gs + gt * gt));
-  return r;
+  return receiverAt(map, Vec3(half * (1.0f + lsP.x * scale), half * (1.0f - lsP.y * scale), lsP.z), lsP, lsN, bias);
 }
 
 }  // namespace heidrich

@@ -83,12 +83,8 @@ float limitedRatio(float num, float den) {
 
 }  // namespace
 
-ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
-                            const DepthBias& bias) {
+ShadowReceiver receiverAt(const LightMap& map, const Vec3& stz, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
   ShadowReceiver r;
-  const Vec3 lsP = map.lightFromRender(wsPosition);
-  if (!map.orthographic && !(lsP.z > 0.0f)) return r;  // behind a local light: not in its map
-  const Vec3 stz = map.project(wsPosition);
   r.s = stz.x;
   r.t = stz.y;
   r.lsDepth = stz.z;
@@ -100,7 +96,6 @@ ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const V
   // is X = z (a, b, 1), a growing with s and b falling with t by texelWorld / z per texel, so
   // dz/ds = -Nx texelWorld / (N.d) and dz/dt = +Ny texelWorld / (N.d) with N.d = N.P / z.
   // Orthographic: X = (x, y, z), the same with N.d = Nz. Both in texel sizes per texel here.
-  const Vec3 lsN = map.lsFrame.toLocal(wsGeometricNormal);
   const float nDotD = map.orthographic ? lsN.z : glm::dot(lsN, lsP) / lsP.z;
   const float gs = limitedRatio(-lsN.x, nDotD);
   const float gt = limitedRatio(lsN.y, nDotD);
@@ -108,6 +103,13 @@ ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const V
   r.dzdt = gt * r.texelWorld;
   r.bias = r.texelWorld * (bias.constantTexels + bias.slope * std::sqrt(gs * gs + gt * gt));
   return r;
+}
+
+ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
+                            const DepthBias& bias) {
+  const Vec3 lsP = map.lightFromRender(wsPosition);
+  if (!map.orthographic && !(lsP.z > 0.0f)) return {};  // behind a local light: not in its map
+  return receiverAt(map, map.project(wsPosition), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
 }
 
 float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels) {

@@ -86,6 +86,11 @@ struct ShadowReceiver {
   bool inMap = false;        //!< false: behind a local light or outside the map's frustum (lit)
 };
 
+// The receiver at map position stz = (s, t, depth) of light-space point lsP with light-space normal lsN:
+// the map bounds test, the receiver plane's slopes and the bias. makeReceiver's second half, for
+// callers that already hold the light-space point (heidrich's maps share one frame).
+ShadowReceiver receiverAt(const LightMap& map, const Vec3& stz, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias);
+
 ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
                             const DepthBias& bias);
 
