@@ -7,6 +7,11 @@
 #include <bit>
 #include <cmath>
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define PENUMBRA_AVX512_KERNELS 1
+#endif
+
 #include "penumbra/error.h"
 
 namespace penumbra {
@@ -175,8 +180,9 @@ constexpr size_t kTapChunk = 64;
 constexpr size_t kLanes = 4;  // the partial sums below are combined as four
 static_assert(kTapChunk % kLanes == 0);
 // The three disk kernels are also compiled for AVX2, picked at load time where the CPU has it (GCC
-// function multi-versioning): phases 1 and 3 then run 8 lanes wide instead of 4. No FMA in the list,
-// so no multiply-add is fused and every clone rounds alike: V is bit-identical on every CPU.
+// function multi-versioning): phases 1 and 3 then run 8 lanes wide instead of 4. No multiply-add is
+// fused (no FMA in the list, and this file is compiled with -ffp-contract=off for the AVX-512 path
+// below), so every path rounds alike: V is bit-identical on every CPU.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
 #define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
 #else
@@ -282,9 +288,205 @@ namespace {
 
 }  // namespace
 
+#if PENUMBRA_AVX512_KERNELS
+// GCC 12's AVX-512 intrinsics start from a deliberately undefined vector (_mm512_undefined_*), which
+// its own -Wmaybe-uninitialized reports at every inlined use.
+#if !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+namespace {
+
+// The nearest-texel disks (searchBlockers, pcfDiskNearest) 16 taps to a 512-bit vector, where the CPU
+// has AVX-512F and the tap count is a multiple of 16 (pcss' 16 + 32): one gather per 16 taps instead
+// of GCC's 16 scalar loads, and no loop remainders. Every lane computes what the scalar kernels
+// compute, with the same operations in the same order and no multiply-add, and the sums keep
+// laneSum's order (four partial sums over quarters, per chunk of kTapChunk), so V is bit-identical to
+// the other clones.
+bool cpuHasAvx512() {
+  static const bool has = __builtin_cpu_supports("avx512f");
+  return has;
+}
+
+// Taps [0, 16) of p: each tap's compare threshold and its texel's depth (+inf outside the map).
+[[gnu::target("avx512f")]] inline void nearestTaps16(const DepthTexels& map, const ShadowReceiver& r,
+                                                      float radiusTexels, const Vec2* p, const Vec2& rotation,
+                                                      bool diskInsideMap, __m512& threshold, __m512& depth) {
+  static_assert(sizeof(Vec2) == 2 * sizeof(float));
+  const __m512 lo = _mm512_loadu_ps(&p[0].x), hi = _mm512_loadu_ps(&p[8].x);
+  const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+  const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
+  const __m512 px = _mm512_permutex2var_ps(lo, even, hi), py = _mm512_permutex2var_ps(lo, odd, hi);
+  const __m512 cosA = _mm512_set1_ps(rotation.x), sinA = _mm512_set1_ps(rotation.y);
+  const __m512 radius = _mm512_set1_ps(radiusTexels);
+  const __m512 ox = _mm512_mul_ps(radius, _mm512_sub_ps(_mm512_mul_ps(px, cosA), _mm512_mul_ps(py, sinA)));
+  const __m512 oy = _mm512_mul_ps(radius, _mm512_add_ps(_mm512_mul_ps(px, sinA), _mm512_mul_ps(py, cosA)));
+  const __m512 s = _mm512_set1_ps(r.s), t = _mm512_set1_ps(r.t);
+  // floor as an int (floorToInt's value for every |x| < 2^31).
+  constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+  const __m512i i = _mm512_cvt_roundps_epi32(_mm512_add_ps(s, ox), kFloor);
+  const __m512i j = _mm512_cvt_roundps_epi32(_mm512_add_ps(t, oy), kFloor);
+  const __m512 half = _mm512_set1_ps(0.5f);
+  const __m512 a = _mm512_mul_ps(_mm512_set1_ps(r.dzds), _mm512_sub_ps(_mm512_add_ps(_mm512_cvtepi32_ps(i), half), s));
+  const __m512 b = _mm512_mul_ps(_mm512_set1_ps(r.dzdt), _mm512_sub_ps(_mm512_add_ps(_mm512_cvtepi32_ps(j), half), t));
+  threshold = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(_mm512_set1_ps(r.lsDepth), a), b), _mm512_set1_ps(r.bias));
+  const __m512i index = _mm512_add_epi32(_mm512_mullo_epi32(j, _mm512_set1_epi32(static_cast<int32_t>(map.stride))), i);
+  if (diskInsideMap) {
+    depth = _mm512_i32gather_ps(index, map.depth, 4);
+    return;
+  }
+  const __m512i zero = _mm512_setzero_si512(), size = _mm512_set1_epi32(map.size);
+  const __mmask16 inside = _mm512_cmpge_epi32_mask(i, zero) & _mm512_cmpge_epi32_mask(j, zero) &
+                           _mm512_cmplt_epi32_mask(i, size) & _mm512_cmplt_epi32_mask(j, size);
+  depth = _mm512_mask_i32gather_ps(_mm512_set1_ps(kInfinity), inside, index, map.depth, 4);
+}
+
+// laneSum of one chunk's values, given as its quarters' running sum: (l0 + l1) + (l2 + l3).
+[[gnu::target("avx512f")]] inline float quarterLanes(__m128 lanes) {
+  alignas(16) float l[4];
+  _mm_store_ps(l, lanes);
+  return (l[0] + l[1]) + (l[2] + l[3]);
+}
+
+// lanes += the four quarters of v, in order (laneSum's partial sums, four taps at a time).
+[[gnu::target("avx512f")]] inline __m128 addQuarters(__m128 lanes, __m512 v) {
+  lanes = _mm_add_ps(lanes, _mm512_castps512_ps128(v));
+  lanes = _mm_add_ps(lanes, _mm512_extractf32x4_ps(v, 1));
+  lanes = _mm_add_ps(lanes, _mm512_extractf32x4_ps(v, 2));
+  return _mm_add_ps(lanes, _mm512_extractf32x4_ps(v, 3));
+}
+
+// Whether a disk of radiusTexels around (s, t) lies inside the map with a texel to spare (nearestTaps).
+inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels) {
+  const float reach = radiusTexels + 1.0f;
+  return r.s - reach >= 0.0f && r.t - reach >= 0.0f && r.s + reach < static_cast<float>(map.size) &&
+         r.t + reach < static_cast<float>(map.size);
+}
+
+[[gnu::target("avx512f")]] BlockerSearch searchBlockers16(const DepthTexels& map, const ShadowReceiver& r,
+                                                          float radiusTexels, std::span<const Vec2> pattern,
+                                                          const Vec2& rotation) {
+  const bool inside = diskInside(map, r, radiusTexels);
+  int blockers = 0;
+  float depthSum = 0.0f;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    __m128 lanes = _mm_setzero_ps();
+    for (size_t k = 0; k < n; k += 16) {
+      __m512 threshold, d;
+      nearestTaps16(map, r, radiusTexels, pattern.data() + first + k, rotation, inside, threshold, d);
+      const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
+      blockers += std::popcount(static_cast<unsigned>(blocked));
+      lanes = addQuarters(lanes, _mm512_maskz_mov_ps(blocked, d));
+    }
+    depthSum += quarterLanes(lanes);
+  }
+  BlockerSearch result;
+  result.blockers = blockers;
+  if (blockers > 0) result.meanDepth = depthSum / static_cast<float>(blockers);
+  return result;
+}
+
+[[gnu::target("avx512f")]] float pcfDiskNearest16(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
+                                                  std::span<const Vec2> pattern, const Vec2& rotation) {
+  const bool inside = diskInside(map, r, radiusTexels);
+  const __m512 one = _mm512_set1_ps(1.0f);
+  float sum = 0.0f;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    __m128 lanes = _mm_setzero_ps();
+    for (size_t k = 0; k < n; k += 16) {
+      __m512 threshold, d;
+      nearestTaps16(map, r, radiusTexels, pattern.data() + first + k, rotation, inside, threshold, d);
+      const __mmask16 lit = _mm512_cmp_ps_mask(d, threshold, _CMP_NLT_UQ);
+      lanes = addQuarters(lanes, _mm512_maskz_mov_ps(lit, one));
+    }
+    sum += quarterLanes(lanes);
+  }
+  return sum / static_cast<float>(pattern.size());
+}
+
+// pcfDisk's taps 16 at a time (AVX-512F), as the scalar loop computes them.
+[[gnu::target("avx512f")]] float pcfDisk16(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
+                                           std::span<const Vec2> pattern, const Vec2& rotation) {
+  // Each tap reads texels up to 1.5 texels beyond the disk (its 1-texel box, and floor's texel).
+  const bool inside = diskInside(map, r, radiusTexels + 1.0f);
+  const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+  const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
+  const __m512 cosA = _mm512_set1_ps(rotation.x), sinA = _mm512_set1_ps(rotation.y);
+  const __m512 radius = _mm512_set1_ps(radiusTexels), half = _mm512_set1_ps(0.5f), one = _mm512_set1_ps(1.0f);
+  const __m512 s = _mm512_set1_ps(r.s), t = _mm512_set1_ps(r.t), lsDepth = _mm512_set1_ps(r.lsDepth);
+  const __m512 dzds = _mm512_set1_ps(r.dzds), dzdt = _mm512_set1_ps(r.dzdt), bias = _mm512_set1_ps(r.bias);
+  const __m512i stride = _mm512_set1_epi32(static_cast<int32_t>(map.stride)), size = _mm512_set1_epi32(map.size);
+  const __m512i zero = _mm512_setzero_si512(), unit = _mm512_set1_epi32(1);
+  const __m512 empty = _mm512_set1_ps(kInfinity);
+  constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+  float sum = 0.0f;
+  for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
+    const size_t n = std::min(kTapChunk, pattern.size() - first);
+    __m128 lanes = _mm_setzero_ps();
+    for (size_t k = 0; k < n; k += 16) {
+      const Vec2* p = pattern.data() + first + k;
+      const __m512 lo = _mm512_loadu_ps(&p[0].x), hi = _mm512_loadu_ps(&p[8].x);
+      const __m512 px = _mm512_permutex2var_ps(lo, even, hi), py = _mm512_permutex2var_ps(lo, odd, hi);
+      const __m512 ox = _mm512_mul_ps(radius, _mm512_sub_ps(_mm512_mul_ps(px, cosA), _mm512_mul_ps(py, sinA)));
+      const __m512 oy = _mm512_mul_ps(radius, _mm512_add_ps(_mm512_mul_ps(px, sinA), _mm512_mul_ps(py, cosA)));
+      const __m512 sc = _mm512_sub_ps(_mm512_add_ps(s, ox), half), tc = _mm512_sub_ps(_mm512_add_ps(t, oy), half);
+      const __m512i i = _mm512_cvt_roundps_epi32(sc, kFloor), j = _mm512_cvt_roundps_epi32(tc, kFloor);
+      const __m512 fs = _mm512_cvtepi32_ps(i), ft = _mm512_cvtepi32_ps(j);
+      const __m512 ws = _mm512_sub_ps(sc, fs), wt = _mm512_sub_ps(tc, ft);
+      const __m512 a0 = _mm512_mul_ps(dzds, _mm512_sub_ps(_mm512_add_ps(fs, half), s));
+      const __m512 a1 = _mm512_mul_ps(dzds, _mm512_sub_ps(_mm512_add_ps(fs, _mm512_set1_ps(1.5f)), s));
+      const __m512 b0 = _mm512_mul_ps(dzdt, _mm512_sub_ps(_mm512_add_ps(ft, half), t));
+      const __m512 b1 = _mm512_mul_ps(dzdt, _mm512_sub_ps(_mm512_add_ps(ft, _mm512_set1_ps(1.5f)), t));
+      const __m512 t00 = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(lsDepth, a0), b0), bias);
+      const __m512 t10 = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(lsDepth, a1), b0), bias);
+      const __m512 t01 = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(lsDepth, a0), b1), bias);
+      const __m512 t11 = _mm512_sub_ps(_mm512_add_ps(_mm512_add_ps(lsDepth, a1), b1), bias);
+      const __m512i index = _mm512_add_epi32(_mm512_mullo_epi32(j, stride), i);
+      __m512 d00, d10, d01, d11;
+      if (inside) {
+        d00 = _mm512_i32gather_ps(index, map.depth, 4);
+        d10 = _mm512_i32gather_ps(_mm512_add_epi32(index, unit), map.depth, 4);
+        d01 = _mm512_i32gather_ps(_mm512_add_epi32(index, stride), map.depth, 4);
+        d11 = _mm512_i32gather_ps(_mm512_add_epi32(index, _mm512_add_epi32(stride, unit)), map.depth, 4);
+      } else {
+        const __m512i i1 = _mm512_add_epi32(i, unit), j1 = _mm512_add_epi32(j, unit);
+        const __mmask16 col0 = _mm512_cmpge_epi32_mask(i, zero) & _mm512_cmplt_epi32_mask(i, size);
+        const __mmask16 col1 = _mm512_cmpge_epi32_mask(i1, zero) & _mm512_cmplt_epi32_mask(i1, size);
+        const __mmask16 row0 = _mm512_cmpge_epi32_mask(j, zero) & _mm512_cmplt_epi32_mask(j, size);
+        const __mmask16 row1 = _mm512_cmpge_epi32_mask(j1, zero) & _mm512_cmplt_epi32_mask(j1, size);
+        d00 = _mm512_mask_i32gather_ps(empty, col0 & row0, index, map.depth, 4);
+        d10 = _mm512_mask_i32gather_ps(empty, col1 & row0, _mm512_add_epi32(index, unit), map.depth, 4);
+        d01 = _mm512_mask_i32gather_ps(empty, col0 & row1, _mm512_add_epi32(index, stride), map.depth, 4);
+        d11 = _mm512_mask_i32gather_ps(empty, col1 & row1, _mm512_add_epi32(index, _mm512_add_epi32(stride, unit)),
+                                       map.depth, 4);
+      }
+      const __m512 l00 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(d00, t00, _CMP_NLT_UQ), one);
+      const __m512 l10 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(d10, t10, _CMP_NLT_UQ), one);
+      const __m512 l01 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(d01, t01, _CMP_NLT_UQ), one);
+      const __m512 l11 = _mm512_maskz_mov_ps(_mm512_cmp_ps_mask(d11, t11, _CMP_NLT_UQ), one);
+      const __m512 top = _mm512_add_ps(l00, _mm512_mul_ps(ws, _mm512_sub_ps(l10, l00)));
+      const __m512 bottom = _mm512_add_ps(l01, _mm512_mul_ps(ws, _mm512_sub_ps(l11, l01)));
+      lanes = addQuarters(lanes, _mm512_add_ps(top, _mm512_mul_ps(wt, _mm512_sub_ps(bottom, top))));
+    }
+    sum += quarterLanes(lanes);
+  }
+  return std::clamp(sum / static_cast<float>(pattern.size()), 0.0f, 1.0f);
+}
+
+}  // namespace
+#if !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#endif
+
 PENUMBRA_KERNEL_CLONES
 BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
                              std::span<const Vec2> pattern, const Vec2& rotation) {
+#if PENUMBRA_AVX512_KERNELS
+  if (pattern.size() % 16 == 0 && cpuHasAvx512()) return searchBlockers16(map, r, radiusTexels, pattern, rotation);
+#endif
   alignas(64) float threshold[kTapChunk], d[kTapChunk], blockerDepth[kTapChunk];
   int blockers = 0;
   float depthSum = 0.0f;
@@ -310,6 +512,9 @@ PENUMBRA_KERNEL_CLONES
 float pcfDiskNearest(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
                      const Vec2& rotation) {
   if (pattern.empty()) return 1.0f;
+#if PENUMBRA_AVX512_KERNELS
+  if (pattern.size() % 16 == 0 && cpuHasAvx512()) return pcfDiskNearest16(map, r, radiusTexels, pattern, rotation);
+#endif
   alignas(64) float threshold[kTapChunk], d[kTapChunk], lit[kTapChunk];
   float sum = 0.0f;
   for (size_t first = 0; first < pattern.size(); first += kTapChunk) {
@@ -327,6 +532,9 @@ PENUMBRA_KERNEL_CLONES
 float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
               const Vec2& rotation) {
   if (pattern.empty()) return 1.0f;
+#if PENUMBRA_AVX512_KERNELS
+  if (pattern.size() % 16 == 0 && cpuHasAvx512()) return pcfDisk16(map, r, radiusTexels, pattern, rotation);
+#endif
   const float* depth = map.depth;
   const size_t stride = map.stride;
   alignas(64) float ox[kTapChunk], oy[kTapChunk], ws[kTapChunk], wt[kTapChunk], tap[kTapChunk];

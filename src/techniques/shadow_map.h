@@ -9,7 +9,8 @@
 //    maps", SIGGRAPH), exact for the nearest-texel compare function;
 //  - the PCSS blocker search (Fernando 2005, "Percentage-closer soft shadows", SIGGRAPH sketch):
 //    mean depth of the blockers in a disk of texels, and PCF over a disk (bilinear or nearest-texel
-//    taps), vectorized in chunks of taps (shadow_map.cpp); and a nearest-blocker ring search (the
+//    taps), vectorized in chunks of taps, 16 to a vector where the CPU has AVX-512F (shadow_map.cpp;
+//    every path gives the same V); and a nearest-blocker ring search (the
 //    search of Brabec & Seidel 2002, Sec. 3.2).
 //
 // Conventions (DESIGN.md "Light space", include/penumbra/raster.h): map coordinates (s, t) in texels,

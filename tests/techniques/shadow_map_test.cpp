@@ -6,6 +6,7 @@
 // disk patterns, and the rejection of bad map sizes and kernels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -151,6 +152,92 @@ TEST(ShadowMap, BlockerSearchAveragesTheBlockersItFinds) {
   // Nothing in front of a receiver nearer than every blocker.
   const ShadowReceiver near = makeReceiver(m, Vec3(0.0f, 0.0f, 1.0f), kFacingLight, DepthBias{});
   EXPECT_EQ(searchBlockers(m, near, 6.0f, disk, Vec2(1, 0)).blockers, 0);
+}
+
+// The vectorized disk kernels (every CPU path: the AVX-512 kernels take tap counts that are
+// multiples of 16, the other clones the rest) against a scalar oracle built from litAtTexel: the same
+// taps, the same compare and the same order of sums, so every result must be equal — V does not
+// depend on the CPU. Half the receivers are placed so that one tap lands exactly on a texel border,
+// where one rounding more or less (a fused multiply-add in one path) moves it to the next texel.
+TEST(ShadowMap, DiskKernelsMatchAScalarOracleTapForTap) {
+  LightMap m = orthoMap(1024);
+  uint32_t state = 12345u;
+  const auto uniform = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  };
+  for (int j = 0; j < m.size; ++j)
+    for (int i = 0; i < m.size; ++i) m.lsDepth(i, j) = uniform() < 0.2f ? kInfinity : 5.0f + 10.0f * uniform();
+  const auto offset = [](const Vec2& p, float radius, const Vec2& rotation) {
+    return Vec2(radius * (p.x * rotation.x - p.y * rotation.y), radius * (p.x * rotation.y + p.y * rotation.x));
+  };
+  int cases = 0, blockedTaps = 0;
+  for (int n : {1, 7, 16, 17, 32, 48, 64, 80, 128, 130}) {
+    const std::vector<Vec2> disk = vogelDisk(n);
+    for (int trial = 0; trial < 2000; ++trial) {
+      ShadowReceiver r;
+      r.inMap = true;
+      r.s = -20.0f + 1064.0f * uniform();  // some disks straddle the map's border, some leave it
+      r.t = -20.0f + 1064.0f * uniform();
+      r.lsDepth = 6.0f + 8.0f * uniform();
+      r.dzds = 0.02f * (uniform() - 0.5f);
+      r.dzdt = 0.02f * (uniform() - 0.5f);
+      r.bias = 0.01f;
+      const float radius = 0.5f + 40.0f * uniform();
+      const Vec2 rotation = pixelRotation(trial, n);
+      if (trial % 2 == 1) {
+        // Tap k's t lands on the border of a texel row, or a float away from it: the nearest taps'
+        // border (t + o) or the 1-texel boxes' (t + o - 1/2).
+        const Vec2 o = offset(disk[static_cast<size_t>(trial / 4) % disk.size()], radius, rotation);
+        r.t = std::floor(r.t) + (trial % 4 == 1 ? 0.0f : 0.5f) - o.y;
+      }
+      int blockers = 0, lit = 0;
+      // The kernels' sum order: four partial sums over the taps of each chunk of 64.
+      float depthSum = 0.0f, lanes[4] = {};
+      for (size_t k = 0; k < disk.size(); ++k) {
+        const Vec2 o = offset(disk[k], radius, rotation);
+        const int i = static_cast<int>(std::floor(r.s + o.x)), j = static_cast<int>(std::floor(r.t + o.y));
+        if (litAtTexel(m, r, i, j) == 0.0f) {
+          ++blockers;
+          lanes[k % 4] += m.lsDepth(i, j);
+        } else {
+          ++lit;
+        }
+        if (k % 64 == 63 || k + 1 == disk.size()) {
+          depthSum += (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+          lanes[0] = lanes[1] = lanes[2] = lanes[3] = 0.0f;
+        }
+      }
+      // pcfDisk: a 1-texel box (bilinear weights of four compares) at every tap.
+      float boxSum = 0.0f, boxLanes[4] = {};
+      for (size_t k = 0; k < disk.size(); ++k) {
+        const Vec2 o = offset(disk[k], radius, rotation);
+        const float sc = r.s + o.x - 0.5f, tc = r.t + o.y - 0.5f;
+        const int i = static_cast<int>(std::floor(sc)), j = static_cast<int>(std::floor(tc));
+        const float ws = sc - static_cast<float>(i), wt = tc - static_cast<float>(j);
+        const float l00 = litAtTexel(m, r, i, j), l10 = litAtTexel(m, r, i + 1, j);
+        const float l01 = litAtTexel(m, r, i, j + 1), l11 = litAtTexel(m, r, i + 1, j + 1);
+        const float top = l00 + ws * (l10 - l00), bottom = l01 + ws * (l11 - l01);
+        boxLanes[k % 4] += top + wt * (bottom - top);
+        if (k % 64 == 63 || k + 1 == disk.size()) {
+          boxSum += (boxLanes[0] + boxLanes[1]) + (boxLanes[2] + boxLanes[3]);
+          boxLanes[0] = boxLanes[1] = boxLanes[2] = boxLanes[3] = 0.0f;
+        }
+      }
+      ASSERT_EQ(pcfDisk(m, r, radius, disk, rotation), std::clamp(boxSum / static_cast<float>(n), 0.0f, 1.0f))
+          << "n " << n << " trial " << trial;
+      const BlockerSearch search = searchBlockers(m, r, radius, disk, rotation);
+      ASSERT_EQ(search.blockers, blockers) << "n " << n << " trial " << trial;
+      if (blockers > 0) {
+        ASSERT_EQ(search.meanDepth, depthSum / static_cast<float>(blockers)) << "n " << n << " trial " << trial;
+      }
+      ASSERT_EQ(pcfDiskNearest(m, r, radius, disk, rotation), static_cast<float>(lit) / static_cast<float>(n))
+          << "n " << n << " trial " << trial;
+      ++cases;
+      blockedTaps += blockers;
+    }
+  }
+  EXPECT_GT(blockedTaps, cases * 5);  // the compares went both ways: measured 386044 blocked taps in 20000 cases
 }
 
 TEST(ShadowMap, PcfDiskOfAHalfPlaneIsAboutHalfLit) {
