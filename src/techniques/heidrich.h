@@ -41,9 +41,11 @@ inline constexpr float kNoSkinNearby = -2.0f;
 Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels);
 
 // The skin polygons of one depth map (slides, "Step 3: triangulate depth values"): the depth map as a
-// mesh of texel centres, keeping the triangles of every 2x2 quad that touches an edge texel and spans
-// a depth gap of more than edgeThresholdTexels; each vertex carries its Gouraud value, 0 ("black")
-// on the occluder side of the gap, 1 ("white") on the receiver side.
+// mesh of texel centres, keeping the triangles of every 2x2 quad that touches an edge texel and has
+// two neighbouring corners whose depths step by more than edgeThresholdTexels texel sizes plus the
+// steeper of the steps beyond them (a discontinuity, not a steep or creased continuous surface); each
+// vertex carries its Gouraud value, 0 ("black") on the occluder side of the gap, 1 ("white") on the
+// receiver side.
 struct SkinMesh {
   std::vector<Vec3> wsPositions;
   std::vector<float> value;  //!< per vertex: 0 occluder, 1 receiver
@@ -52,9 +54,15 @@ struct SkinMesh {
 SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels);
 
 // The skin warped into `view` (a perspective map) and rasterized there with Gouraud (screen-linear)
-// interpolation, with the view's depth channel as the depth buffer: skins behind the surface the view
-// sees are dropped, the nearest skin in front shades it. kUncovered where no skin lands.
-Image<float> renderVisibilityMap(const SkinMesh& skin, const LightMap& view);
+// interpolation, against the view's depth channel. `front`: the slides' visibility channel, the nearest
+// skin in front of the surface the view sees (or at it, for a skin's receiver half: heidrich.cpp);
+// kUncovered where none lands. `behind`: the nearest skin behind that surface, as (value, light-space
+// depth); value kUncovered where none lands.
+struct VisibilityLayers {
+  Image<float> front;
+  Image<Vec2> behind;
+};
+VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& view);
 
 // One texel of a sample point's two-channel shadow map (slides, "Visibility Map": "additional shadow
 // map channel"), the channels side by side so a lookup reads both from one cache line.
@@ -93,6 +101,10 @@ class HeidrichTechnique final : public ShadowTechnique {
   const Image<heidrich::TwoChannelTexel>& visibilityMap(int subSegment, int end) const {
     return visibility_.at(static_cast<size_t>(2 * subSegment + end));
   }
+  // Its second channel: the other end's skins behind the surface this end sees (value, depth).
+  const Image<Vec2>& behindMap(int subSegment, int end) const {
+    return behind_.at(static_cast<size_t>(2 * subSegment + end));
+  }
   int shadowMapsBuilt() const { return shadowMapsBuilt_; }
   int visibilityMapsBuilt() const { return visibilityMapsBuilt_; }
 
@@ -100,6 +112,8 @@ class HeidrichTechnique final : public ShadowTechnique {
   HeidrichOptions options_;
   std::vector<LightMap> maps_;           //!< sample point j's shadow map (depth channel)
   std::vector<Image<heidrich::TwoChannelTexel>> visibility_;  //!< 2q + e: map of sub-segment q's end e
+  std::vector<Image<Vec2>> behind_;      //!< 2q + e: the skins behind the surface sub-segment q's end e sees
+  std::vector<Vec3> wsSamples_;          //!< sample point j in world space
   bool sharedFrame_ = false;      //!< every map has map 0's axes (always, unless the light points at the scene)
   std::vector<Vec3> lsOffsets_;   //!< map j's origin in map 0's light space
   size_t skinTriangles_ = 0;
