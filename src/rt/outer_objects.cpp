@@ -12,6 +12,17 @@
 // argument with b = D t0, t0 <= z(m) + y - z_min gives y <= (rp + R + D max(0, z(m) - z_min)) / (1 - D)
 // as a radius around m's projection on the grid plane. Where the bound does not close (D >= A_max,
 // y >= |m - l|) the capsule goes into every cell: still exact, only slower.
+//
+// The cone tests work on cosines and sines (cos(a + b) = cos a cos b - sin a sin b, every angle
+// in [0, pi/2]), so building the buffer needs no trigonometric function; each rounding is covered
+// by a slack that only adds entries. Cells' cones are computed only inside the 8 x 8 tiles some
+// piece reaches (for `torus`, 65 of the 384 tiles).
+//
+// The per-ray loop reads a cell's list in blocks of kBlock capsules, branch-free, so the compiler
+// turns each block into vector operations (CMakeLists.txt builds this file without errno for sqrt
+// and with selects it may if-convert); the min combination keeps one running minimum per lane.
+// Every lane computes exactly the scalar formulas, so V does not depend on the grid, the block
+// size or the vector width.
 #include "rt/outer_objects.h"
 
 #include <algorithm>
@@ -22,13 +33,25 @@
 
 #include "penumbra/error.h"
 
+// An 8-wide build of the per-ray loop beside the baseline's 4-wide one, chosen at run time, where
+// the baseline has no AVX2 of its own.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__AVX2__)
+#define PENUMBRA_OUTER_AVX2 1
+#else
+#define PENUMBRA_OUTER_AVX2 0
+#endif
+
 namespace penumbra::rt {
 namespace {
 
-// Half-angle of a cube face seen from its centre direction to a corner: acos(1 / sqrt(3)).
-constexpr float kFaceHalfAngle = 0.9553166181245093f;
+// A cube face seen from its centre direction to a corner: cos and sin of acos(1 / sqrt(3)).
+constexpr float kFaceCosHalf = 0.57735026918962576f;
+constexpr float kFaceSinHalf = 0.81649658092772603f;
 constexpr int kTile = 8;  // cells per side of the tiles that cull footprints before single cells
 constexpr float kNoTau = std::numeric_limits<float>::max();
+// Absorbs the rounding of the cone tests' cosines (a few float ulps of 1); being conservative only
+// adds entries.
+constexpr float kConeSlack = 1e-6f;
 
 // Direction of cube-map face `face` at face coordinates (u, v) in [-1, 1], not normalized.
 Vec3 faceDirection(int face, float u, float v) {
@@ -40,28 +63,11 @@ Vec3 faceDirection(int face, float u, float v) {
   return d;
 }
 
-// The direction cone of the face rectangle [u0, u1] x [v0, v1]: unit axis and cos of its half-angle
-// (the largest angle from the axis to a corner; the corners are the farthest points of the rectangle).
-struct DirectionCone {
+// A piece seen from the light's centre: unit direction, distance, and ball radius.
+struct PieceView {
   Vec3 axis;
-  float halfAngle;
+  float distance, reach;
 };
-DirectionCone rectangleCone(int face, float u0, float u1, float v0, float v1) {
-  DirectionCone cone;
-  cone.axis = glm::normalize(faceDirection(face, 0.5f * (u0 + u1), 0.5f * (v0 + v1)));
-  float minCos = 1.0f;
-  for (const float u : {u0, u1})
-    for (const float v : {v0, v1}) minCos = std::min(minCos, glm::dot(cone.axis, glm::normalize(faceDirection(face, u, v))));
-  cone.halfAngle = std::acos(std::clamp(minCos, -1.0f, 1.0f));
-  return cone;
-}
-
-bool conesOverlap(const Vec3& axisA, float halfAngleA, const Vec3& axisB, float halfAngleB) {
-  const float sum = halfAngleA + halfAngleB;
-  if (sum >= kPi) return true;
-  // A small slack absorbs the rounding of the cosines; being conservative only adds entries.
-  return glm::dot(axisA, axisB) >= std::cos(sum) - 1e-6f;
-}
 
 // Exact float bits of a position, so welding merges only vertices at the same place.
 std::array<uint32_t, 3> positionBits(const Vec3& p) {
@@ -71,6 +77,244 @@ std::array<uint32_t, 3> positionBits(const Vec3& p) {
     std::memcpy(&bits[k], &f, sizeof(float));
   }
   return bits;
+}
+
+// Cones of directions in structure-of-arrays form: unit axis, cos and sin of the half-angle (at
+// most pi/2), and the largest distance from the light's centre to a scene point inside the cone
+// (the receivers' A_max there).
+struct ConeArrays {
+  std::vector<float> ax, ay, az, cosHalf, sinHalf, maxDistance;
+  explicit ConeArrays(size_t count)
+      : ax(count), ay(count), az(count), cosHalf(count), sinHalf(count), maxDistance(count, 0.0f) {}
+  void set(size_t i, const Vec3& axis, float c, float s, float distance) {
+    ax[i] = axis.x;
+    ay[i] = axis.y;
+    az[i] = axis.z;
+    cosHalf[i] = c;
+    sinHalf[i] = s;
+    maxDistance[i] = distance;
+  }
+};
+
+// out[k] = whether rays through cone first + k can come within the piece's footprint y (the top of
+// the file): no receiver there (maxDistance 0) -> no; the bound does not close (D >= A_max, or
+// y >= |m - l|) -> yes; otherwise whether the piece's cone of reachable directions, asin(y / |m - l|)
+// around its direction, overlaps the cone. Branch-free, so that the loop vectorizes.
+void reachMask(const PieceView& piece, float diameter, const ConeArrays& cones, size_t first, size_t count,
+               uint32_t* __restrict out) {
+  const float* __restrict ax = cones.ax.data() + first;
+  const float* __restrict ay = cones.ay.data() + first;
+  const float* __restrict az = cones.az.data() + first;
+  const float* __restrict cosHalf = cones.cosHalf.data() + first;
+  const float* __restrict sinHalf = cones.sinHalf.data() + first;
+  const float* __restrict maxDistance = cones.maxDistance.data() + first;
+  const float px = piece.axis.x, py = piece.axis.y, pz = piece.axis.z, distance = piece.distance, reach = piece.reach;
+  for (size_t k = 0; k < count; ++k) {
+    // y <= (rp + R + D max(0, 1 - |m - l| / A_max)) / (1 - D / A_max).
+    const float ratio = diameter / maxDistance[k];
+    const float y = (reach + diameter * std::max(0.0f, 1.0f - distance / maxDistance[k])) / (1.0f - ratio);
+    const float sinPiece = y / distance;
+    const float cosPiece = std::sqrt(std::max(0.0f, (1.0f - sinPiece) * (1.0f + sinPiece)));
+    const float dot = px * ax[k] + py * ay[k] + pz * az[k];
+    const bool closes = (ratio < 1.0f) & (y < distance);
+    const bool overlap = dot >= cosPiece * cosHalf[k] - sinPiece * sinHalf[k] - kConeSlack;
+    out[k] = ((maxDistance[k] > 0.0f) & (!closes | overlap)) ? 1u : 0u;
+  }
+}
+
+// A shadow ray as the per-ray loop reads it.
+struct RayQuery {
+  float ox, oy, oz, vx, vy, vz;
+  float bScale;  //!< b = bScale t0: D / A, or D for a directional light
+  float tLimit;  //!< A: capsules at or beyond the light's centre do not shadow
+};
+
+// The entries of the light buffer, as restrict pointers so the block loop vectorizes.
+struct EntryView {
+  const float* __restrict p0x;
+  const float* __restrict p0y;
+  const float* __restrict p0z;
+  const float* __restrict ex;
+  const float* __restrict ey;
+  const float* __restrict ez;
+  const float* __restrict radius;
+};
+
+// The entries from `first` on (whole pointers, so that a block's loads are contiguous vectors).
+[[gnu::always_inline]] inline EntryView entriesFrom(const EntryView& e, uint32_t first) {
+  return {e.p0x + first, e.p0y + first, e.p0z + first, e.ex + first, e.ey + first, e.ez + first, e.radius + first};
+}
+
+// tau of capsule j for the ray (kNoTau where the capsule does not shadow). The closest points of
+// the ray's line and the capsule's segment, computed on the parts perpendicular to the ray
+// (vectors, not differences of squares, which cancel when the ray passes close to a far point).
+// Every operation runs whatever the capsule and the result is selected, so that a loop over
+// capsules has no branch and vectorizes.
+[[gnu::always_inline]] inline float capsuleTau(const EntryView& entries, uint32_t j, const RayQuery& r) {
+  const float wx = entries.p0x[j] - r.ox, wy = entries.p0y[j] - r.oy, wz = entries.p0z[j] - r.oz;
+  const float ex = entries.ex[j], ey = entries.ey[j], ez = entries.ez[j];
+  const float wv = wx * r.vx + wy * r.vy + wz * r.vz;
+  const float ev = ex * r.vx + ey * r.vy + ez * r.vz;
+  const float wpx = wx - wv * r.vx, wpy = wy - wv * r.vy, wpz = wz - wv * r.vz;
+  const float epx = ex - ev * r.vx, epy = ey - ev * r.vy, epz = ez - ev * r.vz;
+  const float ee = epx * epx + epy * epy + epz * epz;
+  const float we = wpx * epx + wpy * epy + wpz * epz;
+  const float u = std::min(1.0f, std::max(0.0f, -we / std::max(ee, 1e-30f)));
+  const float t0 = wv + u * ev;
+  const float rx = wpx + u * epx, ry = wpy + u * epy, rz = wpz + u * epz;
+  const float d = std::sqrt(rx * rx + ry * ry + rz * rz);
+  const float q = (d - entries.radius[j]) / (r.bScale * t0);
+  return ((t0 > 0.0f) & (t0 < r.tLimit)) ? q : kNoTau;
+}
+
+// tau of the kBlock capsules from `first`.
+[[gnu::always_inline]] inline void blockTau(const EntryView& entries, uint32_t first, const RayQuery& r, float* __restrict tau) {
+  const EntryView block = entriesFrom(entries, first);
+  for (uint32_t j = 0; j < OuterObjects::kBlock; ++j) tau[j] = capsuleTau(block, j, r);
+}
+
+// The smallest tau over the blocks [begin, end). One running minimum per lane, std::min(lane, tau)
+// written as the select that vectorizes (a compare and a blend); min is exact, so the result is
+// the minimum over the list in any order.
+[[gnu::always_inline]] inline float minTauOver(const EntryView& entries, uint32_t begin, uint32_t end, const RayQuery& ray) {
+  alignas(32) float lanes[OuterObjects::kBlock];
+  std::fill(lanes, lanes + OuterObjects::kBlock, kNoTau);
+  for (uint32_t first = begin; first < end; first += OuterObjects::kBlock) {
+    const EntryView block = entriesFrom(entries, first);
+    for (uint32_t j = 0; j < OuterObjects::kBlock; ++j) {
+      const float tau = capsuleTau(block, j, ray);
+      lanes[j] = tau < lanes[j] ? tau : lanes[j];
+    }
+  }
+  static_assert(OuterObjects::kBlock == 8);  // a reduction tree of three levels
+  float half[4];
+  for (int k = 0; k < 4; ++k) half[k] = std::min(lanes[k], lanes[k + 4]);
+  return std::min(std::min(half[0], half[2]), std::min(half[1], half[3]));
+}
+
+// What the per-ray code reads of the light buffer, gathered once per batch of rays.
+struct LightBufferView {
+  bool directional;
+  Vec3 frameX, frameY;  //!< directional: the grid plane's axes
+  Vec2 gridLower;       //!< directional: grid origin in (x, y)
+  float cellSize;       //!< directional: world units per cell
+  int resolution;
+  uint32_t catchAll;    //!< the cell that lists every capsule
+  const uint32_t* cellStart;
+  const uint32_t* cellCount;
+  EntryView entries;
+  float diameter;
+};
+
+// The cell of the ray from `origin` along `direction`: for a local light, the cube-map cell of the
+// direction in which it leaves the light's centre; for a directional light, the grid cell of the
+// origin's projection. The catch-all cell outside the grid.
+[[gnu::always_inline]] inline uint32_t cellOf(const LightBufferView& view, const Vec3& origin, const Vec3& direction) {
+  const int n = view.resolution;
+  if (view.directional) {
+    const float fx = std::floor((glm::dot(origin, view.frameX) - view.gridLower.x) / view.cellSize);
+    const float fy = std::floor((glm::dot(origin, view.frameY) - view.gridLower.y) / view.cellSize);
+    if (!(fx >= 0.0f && fx < static_cast<float>(n) && fy >= 0.0f && fy < static_cast<float>(n))) return view.catchAll;
+    return static_cast<uint32_t>(static_cast<int>(fy) * n + static_cast<int>(fx));
+  }
+  const Vec3 w = -direction;
+  const Vec3 a = glm::abs(w);
+  const int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+  if (!(a[axis] > 0.0f)) return view.catchAll;
+  const int face = 2 * axis + (w[axis] < 0.0f ? 1 : 0);
+  const float u = w[(axis + 1) % 3] / a[axis], v = w[(axis + 2) % 3] / a[axis];
+  const int x = std::clamp(static_cast<int>((u + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
+  const int y = std::clamp(static_cast<int>((v + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
+  return static_cast<uint32_t>((face * n + y) * n + x);
+}
+
+// b = D t0 / A (Appendix); A -> infinity with D per unit distance for a directional light.
+[[gnu::always_inline]] inline RayQuery rayQuery(const LightBufferView& view, const Ray& ray, float distanceToLight) {
+  return {ray.origin.x,
+          ray.origin.y,
+          ray.origin.z,
+          ray.direction.x,
+          ray.direction.y,
+          ray.direction.z,
+          view.directional ? view.diameter : view.diameter / distanceToLight,
+          view.directional ? kInfinity : distanceToLight};
+}
+
+// s of each ray under the min combination: the falloff of the smallest tau in its cell's list.
+// The cells first, then the capsule loops of the rays whose cell lists anything, one after the
+// other: independent work that the CPU overlaps, with no branch on empty cells between them.
+[[gnu::always_inline]] inline void minAttenuationsOver(const LightBufferView& view, const Ray* rays, const float* distanceToLight,
+                                                       int count, OuterFalloff falloff, float* s) {
+  constexpr int kBatch = 16;
+  for (int first = 0; first < count; first += kBatch) {
+    const int batch = std::min(kBatch, count - first);
+    int listed[kBatch];
+    uint32_t cells[kBatch];
+    int busy = 0;
+    for (int i = first; i < first + batch; ++i) {
+      const uint32_t cell = cellOf(view, rays[i].origin, rays[i].direction);
+      s[i] = 1.0f;
+      listed[busy] = i;
+      cells[busy] = cell;
+      busy += view.cellCount[cell] != 0;
+    }
+    for (int k = 0; k < busy; ++k) {
+      const int i = listed[k];
+      const float minTau = minTauOver(view.entries, view.cellStart[cells[k]], view.cellStart[cells[k] + 1],
+                                      rayQuery(view, rays[i], distanceToLight[i]));
+      s[i] = minTau <= 0.0f ? 0.0f : outerFalloff(minTau, falloff);  // <= 0: inside an analytic sphere's inner object
+    }
+  }
+}
+
+void minAttenuations(const LightBufferView& view, const Ray* rays, const float* distanceToLight, int count,
+                     OuterFalloff falloff, float* s) {
+  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
+}
+
+#if PENUMBRA_OUTER_AVX2
+// The same compiled for 8-wide vectors, where the CPU has them: the same operations per lane (no
+// multiply-add: CMakeLists.txt builds this file with -ffp-contract=off), so the same values.
+[[gnu::target("avx2")]] void minAttenuationsAvx2(const LightBufferView& view, const Ray* rays, const float* distanceToLight,
+                                                 int count, OuterFalloff falloff, float* s) {
+  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
+}
+#endif
+
+// s of one ray under the product or sum combination: per object, the smallest tau over its
+// capsules (an object's capsules are adjacent in every list), then the objects' s_i combined.
+float combinedAttenuation(const LightBufferView& view, const int32_t* entryObject, const Ray& ray, float distanceToLight,
+                          OuterFalloff falloff, OuterCombine combine) {
+  const uint32_t cell = cellOf(view, ray.origin, ray.direction);
+  const uint32_t count = view.cellCount[cell];
+  if (count == 0) return 1.0f;
+  const uint32_t begin = view.cellStart[cell], end = view.cellStart[cell + 1];
+  const RayQuery query = rayQuery(view, ray, distanceToLight);
+  float s = 1.0f;         // combined over finished objects
+  int32_t object = -1;    // the object whose capsules are being read
+  float objectTau = kNoTau;
+  const auto finishObject = [&] {
+    if (object < 0) return;
+    const float si = outerFalloff(objectTau, falloff);
+    s = combine == OuterCombine::Product ? s * si : s - (1.0f - si);
+  };
+  alignas(32) float tau[OuterObjects::kBlock];
+  for (uint32_t block = begin; block < end; block += OuterObjects::kBlock) {
+    blockTau(view.entries, block, query, tau);
+    const uint32_t listed = std::min(OuterObjects::kBlock, begin + count - block);  // the padding is not read
+    for (uint32_t j = 0; j < listed; ++j) {
+      if (tau[j] <= 0.0f) return 0.0f;
+      const int32_t o = entryObject[block + j];
+      if (o != object) {
+        finishObject();
+        object = o;
+        objectTau = kNoTau;
+      }
+      objectTau = std::min(objectTau, tau[j]);
+    }
+  }
+  finishObject();
+  return std::max(0.0f, s);
 }
 
 }  // namespace
@@ -95,6 +339,9 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   diameter_ = options.lightDiameter;
   resolution_ = options.gridResolution;
   faceCount_ = directional_ ? 1 : 6;
+#if PENUMBRA_OUTER_AVX2
+  avx2_ = __builtin_cpu_supports("avx2");
+#endif
 
   const Bounds3 bounds = scene.bounds();
   const float sceneRadius = bounds.empty() ? 1.0f : std::max(bounds.radius(), 1e-6f);
@@ -124,36 +371,6 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   } else {
     for (const Vec3& c : corners) maxReceiverDistance_ = std::max(maxReceiverDistance_, glm::length(c - lightCenter_));
     maxReceiverDistance_ += margin;
-    // A point of the scene's box in direction w at distance r from the light has
-    // r w_k <= upper_k - l_k (w_k > 0) or r (-w_k) <= l_k - lower_k (w_k < 0): over a cone whose
-    // directions all lie on one side of an axis, |w_k| >= cos(angle(axis, +-e_k) + halfAngle).
-    const auto maxDistance = [&](const Vec3& axis, float halfAngle) {
-      float r = maxReceiverDistance_;
-      if (bounds.empty()) return r;
-      for (int k = 0; k < 3; ++k)
-        for (const float sign : {1.0f, -1.0f}) {
-          const float angle = std::acos(std::clamp(sign * axis[k], -1.0f, 1.0f)) + halfAngle;
-          if (angle >= 0.5f * kPi) continue;
-          const float room = sign > 0.0f ? bounds.upper[k] - lightCenter_[k] : lightCenter_[k] - bounds.lower[k];
-          r = std::min(r, std::max(0.0f, room + margin) / std::cos(angle));
-        }
-      return r;
-    };
-    const int n = resolution_, tilesPerSide = (n + kTile - 1) / kTile;
-    const float step = 2.0f / static_cast<float>(n);
-    const auto add = [&](Cones& cones, int face, int x0, int x1, int y0, int y1) {
-      const DirectionCone cone = rectangleCone(face, -1.0f + step * x0, -1.0f + step * x1, -1.0f + step * y0, -1.0f + step * y1);
-      cones.axis.push_back(cone.axis);
-      cones.halfAngle.push_back(cone.halfAngle);
-      cones.maxDistance.push_back(maxDistance(cone.axis, cone.halfAngle));
-    };
-    for (int face = 0; face < 6; ++face) {
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) add(cells_, face, x, x + 1, y, y + 1);
-      for (int ty = 0; ty < tilesPerSide; ++ty)
-        for (int tx = 0; tx < tilesPerSide; ++tx)
-          add(tiles_, face, tx * kTile, std::min(n, (tx + 1) * kTile), ty * kTile, std::min(n, (ty + 1) * kTile));
-    }
   }
 
   // Capsules: analytic spheres, then every mesh's silhouette edges.
@@ -167,7 +384,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
     const Object& object = scene.objects[objectIndex];
     const int32_t index = static_cast<int32_t>(objectIndex);
-    if (options.analyticSpheres && object.sphere) {
+    if (usesAnalyticSphere(object, options)) {
       capsules_.add(object.sphere->center, Vec3(0.0f), object.sphere->radius, index);
       analytic_[objectIndex] = true;
       ++analyticCount_;
@@ -219,201 +436,235 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     }
   }
 
-  // The light buffer: (cell, capsule) pairs from every piece's footprint, then compressed rows.
-  const int cells = faceCount_ * resolution_ * resolution_;
+  // Pieces of at most sceneRadius / 64 along each capsule, in capsule order.
   const float pieceLength = sceneRadius / 64.0f;
-  std::vector<std::pair<int, int>> pairs;
+  std::vector<Piece> pieces;
   for (size_t c = 0; c < capsules_.size(); ++c) {
     const Vec3 p0(capsules_.p0x[c], capsules_.p0y[c], capsules_.p0z[c]);
     const Vec3 e(capsules_.ex[c], capsules_.ey[c], capsules_.ez[c]);
     const float length = glm::length(e);
-    const int pieces = std::max(1, static_cast<int>(std::ceil(std::min(length / pieceLength, 1e6f))));
-    const float rp = 0.5f * length / static_cast<float>(pieces);
-    for (int k = 0; k < pieces; ++k) {
-      const Vec3 m = p0 + e * ((static_cast<float>(k) + 0.5f) / static_cast<float>(pieces));
-      insert(static_cast<int>(c), m, rp + capsules_.radius[c], pairs);
-    }
+    const int count = std::max(1, static_cast<int>(std::ceil(std::min(length / pieceLength, 1e6f))));
+    const float rp = 0.5f * length / static_cast<float>(count);
+    for (int k = 0; k < count; ++k)
+      pieces.push_back({p0 + e * ((static_cast<float>(k) + 0.5f) / static_cast<float>(count)), rp + capsules_.radius[c],
+                        static_cast<int>(c)});
   }
+
+  // The light buffer: (cell, capsule) pairs from every piece's footprint, then compressed rows.
+  const int cells = faceCount_ * resolution_ * resolution_;
+  std::vector<std::pair<int, int>> pairs;
+  if (directional_)
+    for (const Piece& piece : pieces) insertDirectional(piece, pairs);
+  else
+    insertLocal(bounds, margin, pieces, pairs);
   for (size_t c = 0; c < capsules_.size(); ++c) pairs.emplace_back(cells, static_cast<int>(c));  // the catch-all cell
   // Sorted by cell, then object, then capsule: per-object runs in each cell, duplicates adjacent.
-  // Capsules were added object by object and the pairs in capsule order, so a stable counting sort
-  // by cell gives that order in linear time (a comparison sort took seconds at 10^6 triangles).
-  cellStart_.assign(static_cast<size_t>(cells) + 2, 0);
-  for (const auto& [cell, capsule] : pairs) ++cellStart_[static_cast<size_t>(cell) + 1];
-  for (size_t i = 1; i < cellStart_.size(); ++i) cellStart_[i] += cellStart_[i - 1];
+  // Every cell's pairs arrive in capsule order (capsules were added object by object), so a stable
+  // counting sort by cell gives that order in linear time (a comparison sort took seconds at 10^6
+  // triangles).
+  const size_t cellTotal = static_cast<size_t>(cells) + 1;
   {
+    std::vector<uint32_t> start(cellTotal + 1, 0);
+    for (const auto& [cell, capsule] : pairs) ++start[static_cast<size_t>(cell) + 1];
+    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
     std::vector<std::pair<int, int>> sorted(pairs.size());
-    std::vector<uint32_t> next(cellStart_.begin(), cellStart_.end() - 1);
-    for (const auto& pair : pairs) sorted[next[static_cast<size_t>(pair.first)]++] = pair;
+    for (const auto& pair : pairs) sorted[start[static_cast<size_t>(pair.first)]++] = pair;
     pairs.swap(sorted);
   }
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  cellStart_.assign(static_cast<size_t>(cells) + 2, 0);
-  for (const auto& [cell, capsule] : pairs) ++cellStart_[static_cast<size_t>(cell) + 1];
-  for (size_t i = 1; i < cellStart_.size(); ++i) cellStart_[i] += cellStart_[i - 1];
-  const auto copy = [&](const std::vector<float>& from, std::vector<float>& to) {
-    to.resize(pairs.size());
-    for (size_t i = 0; i < pairs.size(); ++i) to[i] = from[pairs[i].second];
-  };
-  copy(capsules_.p0x, entryP0x_);
-  copy(capsules_.p0y, entryP0y_);
-  copy(capsules_.p0z, entryP0z_);
-  copy(capsules_.ex, entryEx_);
-  copy(capsules_.ey, entryEy_);
-  copy(capsules_.ez, entryEz_);
-  copy(capsules_.radius, entryRadius_);
-  entryObject_.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) entryObject_[i] = capsules_.object[pairs[i].second];
+  entryCount_ = pairs.size();
+  cellCount_.assign(cellTotal, 0);
+  for (const auto& [cell, capsule] : pairs) ++cellCount_[static_cast<size_t>(cell)];
+  cellStart_.assign(cellTotal + 1, 0);
+  for (size_t c = 0; c < cellTotal; ++c)
+    cellStart_[c + 1] = cellStart_[c] + (cellCount_[c] + kBlock - 1) / kBlock * kBlock;
+  // Padding: a point capsule of radius -infinity, whose tau is +infinity (or kNoTau) for every ray.
+  const size_t padded = cellStart_.back();
+  entryP0x_.assign(padded, 0.0f);
+  entryP0y_.assign(padded, 0.0f);
+  entryP0z_.assign(padded, 0.0f);
+  entryEx_.assign(padded, 0.0f);
+  entryEy_.assign(padded, 0.0f);
+  entryEz_.assign(padded, 0.0f);
+  entryRadius_.assign(padded, -kInfinity);
+  entryObject_.assign(padded, -1);
+  std::vector<uint32_t> next(cellStart_.begin(), cellStart_.end() - 1);
+  for (const auto& [cell, capsule] : pairs) {
+    const uint32_t i = next[static_cast<size_t>(cell)]++;
+    const size_t c = static_cast<size_t>(capsule);
+    entryP0x_[i] = capsules_.p0x[c];
+    entryP0y_[i] = capsules_.p0y[c];
+    entryP0z_[i] = capsules_.p0z[c];
+    entryEx_[i] = capsules_.ex[c];
+    entryEy_[i] = capsules_.ey[c];
+    entryEz_[i] = capsules_.ez[c];
+    entryRadius_[i] = capsules_.radius[c];
+    entryObject_[i] = capsules_.object[c];
+  }
 }
 
-float OuterObjects::footprint(float reach, float distance, float maxDistance) const {
-  // y <= (rp + R + D max(0, 1 - |m - l| / A_max)) / (1 - D / A_max), see the top of the file.
-  const float ratio = diameter_ / maxDistance;
-  if (!(ratio < 1.0f)) return kInfinity;
-  return (reach + diameter_ * std::max(0.0f, 1.0f - distance / maxDistance)) / (1.0f - ratio);
-}
-
-void OuterObjects::insert(int capsule, const Vec3& center, float reach, std::vector<std::pair<int, int>>& pairs) const {
+void OuterObjects::insertDirectional(const Piece& piece, std::vector<std::pair<int, int>>& pairs) const {
   const int n = resolution_;
-  if (directional_) {
-    const float depth = glm::dot(center, frame_.z) - minReceiverDepth_;
-    const float footprint = diameter_ < 1.0f ? (reach + diameter_ * std::max(0.0f, depth)) / (1.0f - diameter_) : kInfinity;
-    const Vec3 local = frame_.toLocal(center);
-    const bool everywhere = !std::isfinite(footprint);
-    const auto cellRange = [&](float c, float lower) {
-      if (everywhere) return std::pair<int, int>(0, n - 1);
-      const float lo = std::floor((c - footprint - lower) / cellSize_), hi = std::floor((c + footprint - lower) / cellSize_);
-      return std::pair<int, int>(static_cast<int>(std::clamp(lo, 0.0f, static_cast<float>(n - 1))),
-                                 static_cast<int>(std::clamp(hi, 0.0f, static_cast<float>(n - 1))));
-    };
-    const auto [x0, x1] = cellRange(local.x, gridLower_.x);
-    const auto [y0, y1] = cellRange(local.y, gridLower_.y);
-    if (!everywhere && (local.x + footprint < gridLower_.x || local.y + footprint < gridLower_.y ||
-                        local.x - footprint > gridLower_.x + n * cellSize_ || local.y - footprint > gridLower_.y + n * cellSize_))
-      return;  // no receiver's ray comes near it
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) pairs.emplace_back(y * n + x, capsule);
+  const float depth = glm::dot(piece.center, frame_.z) - minReceiverDepth_;
+  const float footprint = diameter_ < 1.0f ? (piece.reach + diameter_ * std::max(0.0f, depth)) / (1.0f - diameter_) : kInfinity;
+  const Vec3 local = frame_.toLocal(piece.center);
+  const bool everywhere = !std::isfinite(footprint);
+  const auto cellRange = [&](float c, float lower) {
+    if (everywhere) return std::pair<int, int>(0, n - 1);
+    const float lo = std::floor((c - footprint - lower) / cellSize_), hi = std::floor((c + footprint - lower) / cellSize_);
+    return std::pair<int, int>(static_cast<int>(std::clamp(lo, 0.0f, static_cast<float>(n - 1))),
+                               static_cast<int>(std::clamp(hi, 0.0f, static_cast<float>(n - 1))));
+  };
+  const auto [x0, x1] = cellRange(local.x, gridLower_.x);
+  const auto [y0, y1] = cellRange(local.y, gridLower_.y);
+  if (!everywhere && (local.x + footprint < gridLower_.x || local.y + footprint < gridLower_.y ||
+                      local.x - footprint > gridLower_.x + n * cellSize_ || local.y - footprint > gridLower_.y + n * cellSize_))
+    return;  // no receiver's ray comes near it
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) pairs.emplace_back(y * n + x, piece.capsule);
+}
+
+void OuterObjects::insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces,
+                               std::vector<std::pair<int, int>>& pairs) const {
+  const int n = resolution_, tilesPerSide = (n + kTile - 1) / kTile, side = n + 1;
+  const float step = 2.0f / static_cast<float>(n);
+  // A point of the scene's box in direction w at distance r from the light has
+  // r w_k <= upper_k - l_k (w_k > 0) or r (-w_k) <= l_k - lower_k (w_k < 0): over a cone whose
+  // directions all lie on one side of an axis, |w_k| >= cos(angle(axis, +-e_k) + halfAngle), the
+  // cosine of a sum expanded; the cosine is lowered by its rounding so that r stays an upper bound.
+  const auto maxDistance = [&](const Vec3& axis, float cosHalf, float sinHalf) {
+    float r = maxReceiverDistance_;
+    if (bounds.empty()) return r;
+    for (int k = 0; k < 3; ++k)
+      for (const float sign : {1.0f, -1.0f}) {
+        const float x = std::clamp(sign * axis[k], -1.0f, 1.0f);
+        const float cosAngle = x * cosHalf - std::sqrt((1.0f - x) * (1.0f + x)) * sinHalf - kConeSlack;
+        if (!(cosAngle > 0.0f)) continue;  // the cone reaches the plane w_k = 0: no bound from axis k
+        const float room = sign > 0.0f ? bounds.upper[k] - lightCenter_[k] : lightCenter_[k] - bounds.lower[k];
+        r = std::min(r, std::max(0.0f, room + margin) / cosAngle);
+      }
+    return r;
+  };
+  // Directions of the grid's vertices (normalized): the corners of cells and tiles. Every face's
+  // are those of the +x face with their components permuted and signed.
+  std::vector<Vec3> vertex(static_cast<size_t>(side * side));
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x)
+      vertex[static_cast<size_t>(y * side + x)] =
+          glm::normalize(faceDirection(0, -1.0f + step * static_cast<float>(x), -1.0f + step * static_cast<float>(y)));
+  const auto vertexDirection = [&](int face, int x, int y) {
+    const Vec3& w = vertex[static_cast<size_t>(y * side + x)];
+    const int axis = face / 2;
+    Vec3 d;
+    d[axis] = (face % 2 == 0) ? w.x : -w.x;
+    d[(axis + 1) % 3] = w.y;
+    d[(axis + 2) % 3] = w.z;
+    return d;
+  };
+  // The cone of the face rectangle of cells [x0, x1) x [y0, y1), into `cones` at `index`: its
+  // corners are the farthest directions from its centre's.
+  const auto rectangleCone = [&](int face, int x0, int x1, int y0, int y1, ConeArrays& cones, size_t index) {
+    const Vec3 axis = glm::normalize(faceDirection(face, -1.0f + 0.5f * step * static_cast<float>(x0 + x1),
+                                                   -1.0f + 0.5f * step * static_cast<float>(y0 + y1)));
+    float minCos = 1.0f;
+    for (const int y : {y0, y1})
+      for (const int x : {x0, x1})
+        minCos = std::min(minCos, glm::dot(axis, vertexDirection(face, x, y)));
+    const float cosHalf = std::clamp(minCos, 0.0f, 1.0f);
+    const float sinHalf = std::sqrt((1.0f - cosHalf) * (1.0f + cosHalf));
+    cones.set(index, axis, cosHalf, sinHalf, maxDistance(axis, cosHalf, sinHalf));
+  };
+
+  std::vector<PieceView> views(pieces.size());
+  for (size_t p = 0; p < pieces.size(); ++p) {
+    const Vec3 toPiece = pieces[p].center - lightCenter_;
+    const float distance = glm::length(toPiece);
+    views[p] = {distance > 0.0f ? toPiece / distance : Vec3(0.0f, 0.0f, 1.0f), distance, pieces[p].reach};
+  }
+  // Faces, then tiles: the (tile, piece) candidates in piece order.
+  const size_t tilesPerFace = static_cast<size_t>(tilesPerSide * tilesPerSide);
+  ConeArrays faces(6), tiles(6 * tilesPerFace);
+  for (int face = 0; face < 6; ++face) {
+    Vec3 axis(0.0f);
+    axis[face / 2] = (face % 2 == 0) ? 1.0f : -1.0f;
+    faces.set(static_cast<size_t>(face), axis, kFaceCosHalf, kFaceSinHalf, maxReceiverDistance_);
+    for (int ty = 0; ty < tilesPerSide; ++ty)
+      for (int tx = 0; tx < tilesPerSide; ++tx)
+        rectangleCone(face, tx * kTile, std::min(n, (tx + 1) * kTile), ty * kTile, std::min(n, (ty + 1) * kTile), tiles,
+                      static_cast<size_t>(face) * tilesPerFace + static_cast<size_t>(ty * tilesPerSide + tx));
+  }
+  std::vector<uint32_t> reached(std::max<size_t>(tilesPerFace, kTile * kTile));
+  std::vector<std::pair<int, int>> candidates;
+  for (size_t p = 0; p < pieces.size(); ++p) {
+    uint32_t faceReached[6];
+    reachMask(views[p], diameter_, faces, 0, 6, faceReached);
+    for (int face = 0; face < 6; ++face) {
+      if (!faceReached[face]) continue;
+      const size_t first = static_cast<size_t>(face) * tilesPerFace;
+      reachMask(views[p], diameter_, tiles, first, tilesPerFace, reached.data());
+      for (size_t t = 0; t < tilesPerFace; ++t)
+        if (reached[t]) candidates.emplace_back(static_cast<int>(first + t), static_cast<int>(p));
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  // Cells, only in the tiles some piece reaches; per tile, each cell's pairs in piece order. Cells
+  // of a tile cut by the face's edge keep maxDistance 0: never reached.
+  ConeArrays cells(kTile * kTile);
+  for (size_t i = 0; i < candidates.size();) {
+    const int tile = candidates[i].first;
+    size_t j = i;
+    while (j < candidates.size() && candidates[j].first == tile) ++j;
+    const int face = tile / static_cast<int>(tilesPerFace), inFace = tile % static_cast<int>(tilesPerFace);
+    const int x0 = (inFace % tilesPerSide) * kTile, y0 = (inFace / tilesPerSide) * kTile;
+    const int x1 = std::min(n, x0 + kTile), y1 = std::min(n, y0 + kTile);
+    std::fill(cells.maxDistance.begin(), cells.maxDistance.end(), 0.0f);
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) rectangleCone(face, x, x + 1, y, y + 1, cells, static_cast<size_t>((y - y0) * kTile + (x - x0)));
+    for (; i < j; ++i) {
+      const size_t p = static_cast<size_t>(candidates[i].second);
+      reachMask(views[p], diameter_, cells, 0, kTile * kTile, reached.data());
+      for (int k = 0; k < kTile * kTile; ++k)
+        if (reached[static_cast<size_t>(k)]) pairs.emplace_back((face * n + y0 + k / kTile) * n + x0 + k % kTile, pieces[p].capsule);
+    }
+  }
+}
+
+void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
+                                OuterCombine combine, float* s) const {
+  LightBufferView view;
+  view.directional = directional_;
+  view.frameX = frame_.x;
+  view.frameY = frame_.y;
+  view.gridLower = gridLower_;
+  view.cellSize = cellSize_;
+  view.resolution = resolution_;
+  view.catchAll = static_cast<uint32_t>(faceCount_ * resolution_ * resolution_);
+  view.cellStart = cellStart_.data();
+  view.cellCount = cellCount_.data();
+  view.entries = {entryP0x_.data(), entryP0y_.data(), entryP0z_.data(), entryEx_.data(),
+                  entryEy_.data(),  entryEz_.data(),  entryRadius_.data()};
+  view.diameter = diameter_;
+  if (combine == OuterCombine::Min) {
+#if PENUMBRA_OUTER_AVX2
+    if (avx2_) {
+      minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s);
+      return;
+    }
+#endif
+    minAttenuations(view, rays, distanceToLight, count, falloff, s);
     return;
   }
-  const Vec3 toPiece = center - lightCenter_;
-  const float distance = glm::length(toPiece);
-  const Vec3 axis = distance > 0.0f ? toPiece / distance : Vec3(0.0f, 0.0f, 1.0f);
-  // The piece's cone of reachable directions for receivers no farther than maxDistance.
-  const auto reaches = [&](const Vec3& coneAxis, float coneHalfAngle, float maxDistance) {
-    if (!(maxDistance > 0.0f)) return false;  // no scene point in these directions: no receiver
-    const float y = footprint(reach, distance, maxDistance);
-    if (!(y < distance)) return true;
-    return conesOverlap(axis, std::asin(y / distance), coneAxis, coneHalfAngle);
-  };
-  const int tilesPerSide = (n + kTile - 1) / kTile;
-  for (int face = 0; face < 6; ++face) {
-    const int axisIndex = face / 2;
-    Vec3 faceAxis(0.0f);
-    faceAxis[axisIndex] = (face % 2 == 0) ? 1.0f : -1.0f;
-    if (!reaches(faceAxis, kFaceHalfAngle, maxReceiverDistance_)) continue;
-    for (int ty = 0; ty < tilesPerSide; ++ty)
-      for (int tx = 0; tx < tilesPerSide; ++tx) {
-        const size_t tile = (static_cast<size_t>(face) * tilesPerSide + ty) * tilesPerSide + tx;
-        if (!reaches(tiles_.axis[tile], tiles_.halfAngle[tile], tiles_.maxDistance[tile])) continue;
-        for (int y = ty * kTile; y < std::min(n, (ty + 1) * kTile); ++y)
-          for (int x = tx * kTile; x < std::min(n, (tx + 1) * kTile); ++x) {
-            const int cell = (face * n + y) * n + x;
-            if (reaches(cells_.axis[cell], cells_.halfAngle[cell], cells_.maxDistance[cell])) pairs.emplace_back(cell, capsule);
-          }
-      }
-  }
-}
-
-int OuterObjects::cellOf(const Vec3& origin, const Vec3& direction) const {
-  const int n = resolution_;
-  if (directional_) {
-    const float fx = std::floor((glm::dot(origin, frame_.x) - gridLower_.x) / cellSize_);
-    const float fy = std::floor((glm::dot(origin, frame_.y) - gridLower_.y) / cellSize_);
-    if (!(fx >= 0.0f && fx < static_cast<float>(n) && fy >= 0.0f && fy < static_cast<float>(n))) return -1;
-    return static_cast<int>(fy) * n + static_cast<int>(fx);
-  }
-  // The direction in which the ray leaves the light: from the light's centre towards the receiver.
-  const Vec3 w = -direction;
-  const Vec3 a = glm::abs(w);
-  const int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
-  if (!(a[axis] > 0.0f)) return -1;
-  const int face = 2 * axis + (w[axis] < 0.0f ? 1 : 0);
-  const float u = w[(axis + 1) % 3] / a[axis], v = w[(axis + 2) % 3] / a[axis];
-  const int x = std::clamp(static_cast<int>((u + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
-  const int y = std::clamp(static_cast<int>((v + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
-  return (face * n + y) * n + x;
+  for (int i = 0; i < count; ++i) s[i] = combinedAttenuation(view, entryObject_.data(), rays[i], distanceToLight[i], falloff, combine);
 }
 
 float OuterObjects::attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,
                                 OuterCombine combine) const {
-  int cell = cellOf(origin, direction);
-  if (cell < 0) cell = faceCount_ * resolution_ * resolution_;
-  const uint32_t begin = cellStart_[static_cast<size_t>(cell)], end = cellStart_[static_cast<size_t>(cell) + 1];
-  if (begin == end) return 1.0f;
-
-  // b = D t0 / A (Appendix); A -> infinity with D per unit distance for a directional light.
-  const float bScale = directional_ ? diameter_ : diameter_ / distanceToLight;
-  const float tLimit = directional_ ? kInfinity : distanceToLight;
-  const float ox = origin.x, oy = origin.y, oz = origin.z;
-  const float vx = direction.x, vy = direction.y, vz = direction.z;
-
-  constexpr uint32_t kChunk = 64;
-  alignas(64) float tau[kChunk];
-  float s = 1.0f;              // combined over finished objects
-  float minTau = kNoTau;       // min: over every capsule
-  int32_t object = -1;         // product / sum: the object whose capsules are being read
-  float objectTau = kNoTau;
-  const auto finishObject = [&] {
-    if (object < 0) return;
-    const float si = outerFalloff(objectTau, falloff);
-    s = combine == OuterCombine::Product ? s * si : s - (1.0f - si);
-  };
-  for (uint32_t chunk = begin; chunk < end; chunk += kChunk) {
-    const uint32_t count = std::min(kChunk, end - chunk);
-    const float* __restrict p0x = entryP0x_.data() + chunk;
-    const float* __restrict p0y = entryP0y_.data() + chunk;
-    const float* __restrict p0z = entryP0z_.data() + chunk;
-    const float* __restrict ex = entryEx_.data() + chunk;
-    const float* __restrict ey = entryEy_.data() + chunk;
-    const float* __restrict ez = entryEz_.data() + chunk;
-    const float* __restrict radius = entryRadius_.data() + chunk;
-    // The closest points of the ray's line and each capsule's segment, computed on the parts
-    // perpendicular to the ray (vectors, not differences of squares, which cancel when the ray
-    // passes close to a far point). Branch-free so that the loop vectorizes.
-    for (uint32_t j = 0; j < count; ++j) {
-      const float wx = p0x[j] - ox, wy = p0y[j] - oy, wz = p0z[j] - oz;
-      const float wv = wx * vx + wy * vy + wz * vz;
-      const float ev = ex[j] * vx + ey[j] * vy + ez[j] * vz;
-      const float wpx = wx - wv * vx, wpy = wy - wv * vy, wpz = wz - wv * vz;
-      const float epx = ex[j] - ev * vx, epy = ey[j] - ev * vy, epz = ez[j] - ev * vz;
-      const float ee = epx * epx + epy * epy + epz * epz;
-      const float we = wpx * epx + wpy * epy + wpz * epz;
-      const float u = std::min(1.0f, std::max(0.0f, -we / std::max(ee, 1e-30f)));
-      const float t0 = wv + u * ev;
-      const float rx = wpx + u * epx, ry = wpy + u * epy, rz = wpz + u * epz;
-      const float d = std::sqrt(rx * rx + ry * ry + rz * rz);
-      const bool valid = t0 > 0.0f && t0 < tLimit;
-      tau[j] = valid ? (d - radius[j]) / (bScale * t0) : kNoTau;
-    }
-    if (combine == OuterCombine::Min) {
-      for (uint32_t j = 0; j < count; ++j) minTau = std::min(minTau, tau[j]);
-      if (minTau <= 0.0f) return 0.0f;  // inside an analytic sphere's inner object
-      continue;
-    }
-    for (uint32_t j = 0; j < count; ++j) {
-      if (tau[j] <= 0.0f) return 0.0f;
-      const int32_t o = entryObject_[chunk + j];
-      if (o != object) {
-        finishObject();
-        object = o;
-        objectTau = kNoTau;
-      }
-      objectTau = std::min(objectTau, tau[j]);
-    }
-  }
-  if (combine == OuterCombine::Min) return outerFalloff(minTau, falloff);
-  finishObject();
-  return std::max(0.0f, s);
+  Ray ray;
+  ray.origin = origin;
+  ray.direction = direction;
+  float s = 1.0f;
+  attenuations(&ray, &distanceToLight, 1, falloff, combine, &s);
+  return s;
 }
 
 }  // namespace penumbra::rt
