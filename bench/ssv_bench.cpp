@@ -3,7 +3,9 @@
 // triangles (96 x 64 segments) under the same square light: the prepare pass (ssv: facet
 // classification, double silhouette, rings and edge shadows; wedges: silhouette from the centre;
 // raytraced-hard: the BVH) and the visibility pass (per pixel), in milliseconds of wall-clock time.
-// Counters: facets, silhouette edges (the thesis assumes about f^0.8, Section 3.4.1) and rings.
+// wedges' prepare also builds the BVH of its hard-shadow rays (silhouettes cut at a receiver's
+// depth, wedges.cpp). Counters: facets, silhouette edges (penumbra + umbra for ssv; the thesis
+// assumes about f^0.8 of them, Section 3.4.1) and rings.
 // Each iteration times the technique and raytraced-hard interleaved and reports the ratio of
 // their totals (`over_raytraced_hard`): compare ratios from one run only, the machines are shared.
 #include <benchmark/benchmark.h>

@@ -1,68 +1,90 @@
 // `ssv`: soft shadow volumes for convex polygonal lights with a double silhouette (Rouf 2007,
 // "Real time soft shadow generation for arbitrary planar lights", Chapters 3 and 4). Software
-// implementation, per camera pixel, of the two phases of Section 3.2.1:
+// implementation, per camera pixel, of the two phases of Section 3.2.1.
 //
 // Phase 1 (prepare): every facet of every occluder is classified against every light vertex as
 // fully lit / partially lit / in shadow (Section 3.2.2); the penumbra silhouette (boundary of the
 // fully lit facets) and the umbra silhouette (boundary of the facets in shadow) are split into
-// rings (3.2.3.2) from the edge adjacency built once per mesh (src/core/mesh_topology.cpp). For
-// every silhouette edge its edge shadow is set up: the direction of the edge shadow, seen from the
+// rings (3.2.3.2) from the edge adjacency built once per mesh (src/core/mesh_topology.cpp). Every
+// silhouette edge gets the fixed part of its edge shadow: its direction, the edge projected from the
 // light's centre and quantized to the nearest of the four axis directions of the light (3.2.3.1),
-// the corner type at both ends (convex / concave; a straight corner, two equal quantized
-// directions, takes the type of the true bend; 3.2.3.4-6) and the edge's box in the light-space
-// binning grid (ssv.h). Edges at reflex (concave) mesh edges are kept in their ring for the umbra
-// test but give no edge-shadow contribution (end of 3.2.3.2).
+// and its box in the light-space binning grid.
 //
-// Phase 2 (visibility, per pixel p):
-//  - Edge shadow: the edge is projected from p onto the light's plane. The front plane is where
-//    the projected line touches the light on its visible side (all of the light visible past the
-//    edge), the back plane where it touches it on the hidden side; between them the visible
-//    fraction t is interpolated linearly in the line's offset across the light (the linear shading
-//    assumption of 3.3). Front and back planes are found by walking the light's vertices (O(L),
-//    3.4.1). The mid region is where the projected segment spans the whole light along its own
-//    direction; in the corner regions (an end of the segment projects inside the light's extent)
-//    t is blended linearly, across the corner, towards the value that makes the edge neutral for
-//    its neighbour: 0 ("black") at a convex corner, where neighbours are AND-ed, and 1 ("white")
-//    at a concave corner, where they are OR-ed (our reading of the outline colouring of 3.2.3.4-5;
-//    the figures are missing). This keeps V continuous where an edge shadow ends.
-//  - Each contribution is a half-plane of the light mapped to the unit square: the hidden part is
-//    the side of a line perpendicular to the edge shadow's quantized direction, at the fraction t
-//    (the "rectangular shape intersection problem" of 3.2.3.1; exact for a rect light and edges
-//    parallel to its sides, approximate otherwise — the thin-light artifact of Fig. 4-9 comes from
-//    here and is not hidden).
-//  - Collaborative combination within a ring (3.2.4.1, 3.2.4.3): the contributing edges, in ring
-//    order, are folded into the ring's visibility curve: the next edge is AND-ed (its hidden part
-//    intersected) when it lies on the hidden side of the previous one (a convex turn), OR-ed
-//    otherwise (concave). Competitive combination across rings (3.2.4.2, 3.2.4.4): the hidden
-//    parts of the rings are united (visibility AND-ed).
-//  - The visible fraction of the combined curves by slicing (3.2.4.4, Fig. 4-8): cut the unit
-//    square at every distinct coordinate of the curves (two coordinates within `merge_tolerance`,
-//    0.01 in the thesis, count as one) and test one point per cell, weighted by its area; or by
-//    fixed 8x8 / 16x16 sampling (`integration`).
-//  - Hard shadow (3.2.5): p is in the umbra of an umbra ring when it lies behind all its edges'
-//    back planes: the back planes are cut by the plane z = z_p, consecutive lines are intersected
-//    and p is tested inside the resulting polygon by its winding (angle sweep); a polygon wound
-//    the other way (no umbra exists) contains nothing. Umbra pixels get V = 0.
+// Phase 2 (visibility, per pixel p): the light is mapped to the unit "light square" (its bounding
+// rectangle in light space; x along the polygon's first edge, so a rect light is the square
+// itself). Each ring gives one visibility curve (3.2.4.3, Figs. 3-20, 3-21):
+//  - an edge of the ring, projected from p, is replaced by its approximant: the line of the light
+//    square perpendicular to the edge's quantized direction that leaves the edge shadow's visible
+//    fraction t of the square visible. t is interpolated linearly between the front plane (t = 1)
+//    and the back plane (t = 0), the planes through the edge that touch the light on either side,
+//    found by walking the light's vertices (O(L), 3.2.3.3, 3.4.1; the linear shading assumption of
+//    3.3);
+//  - consecutive approximants are joined where they meet, which realizes the corner rules: at a
+//    convex corner the hidden parts are AND-ed (visibilities OR-ed, 3.2.4.1, Fig. 3-7: two edges
+//    each leaving 50 % leave 75 %), at a concave corner OR-ed, and at a straight corner (two equal
+//    quantized directions, 3.2.3.6) the two are joined by a step at the projected shared vertex:
+//    the cut line both edge shadows agree on;
+//  - only the edges whose edge shadows contain p (their projection meets the light square) are
+//    drawn as approximants, in chains of consecutive edges; the curve is closed through the
+//    projections of the other edges, which lie outside the square and only say which side of the
+//    chains is hidden. A point of the square is hidden by the ring when the curve winds around it;
+//  - in a corner region (the projected edge ends inside the square) the approximant moves from the
+//    ramp's position towards the position of the edge's part inside the square as that part
+//    shrinks, so an edge shadow starts where its neighbour's chain left the square and V stays
+//    continuous (the role of the corner colouring of 3.2.3.3-5).
+// The rings that bound one facet set (one silhouette of one object; an object with a hole has two)
+// are one curve: their windings add. Silhouettes compete (3.2.4.2, 3.2.4.4): a point is hidden
+// when any of them hides it (visibilities AND-ed).
+// The visible fraction is measured by slicing (3.2.4.4, Fig. 3-22): the square is cut at every
+// distinct coordinate of the curves (two within `merge_tolerance`, 0.01 in the thesis, count as
+// one, Section 4.2.6) and one point per cell is tested, weighted by its area; or by fixed 8x8 /
+// 16x16 sampling (`integration`, Fig. 4-8). The hard shadow (3.2.5): a ring none of whose edge
+// shadows contains p (p behind all its back planes or in front of some front plane) hides the
+// whole light when p lies in its shadow, tested in 2D by the angle sweep (winding) of p's
+// direction from the light's centre around the ring's projection, which works for concave and
+// self-intersecting rings alike (Fig. 3-23).
 //
-// Other choices and approximations:
-//  - Occluder edges are clipped to z < z_p (1 - 1e-4): the part of an edge at or beyond p's depth
-//    cannot lie between p and the light; and to the light's plane. Receivers behind the light's
-//    plane are handled in the light space of its other face (planar lights emit from both).
-//  - An edge seen (nearly) end-on from the light's centre has no direction of its own: it gives no
-//    contribution and its corner is classified between its neighbours.
-//  - Option edge_visibility=area replaces the linear ramp by the exact fraction of the light past
-//    the edge's infinite line (clipping the light polygon, O(L)); the thesis' ramp is the default.
-//  - Binning: a light-space grid over directions from the light's centre (ssv.h, which says why).
+// Choices where the text leaves them open (kept so V stays continuous and exact where the
+// thesis' assumptions hold: a rect light and occluder edges parallel to its sides):
+//  - The corner areas of Sections 3.2.3.3-6 are not coloured and interpolated separately: joining
+//    the approximants of consecutive edges gives the same values on their outlines (black inside
+//    the neighbour at a convex corner, white at a concave one) and is exact in the case above.
+//  - The umbra test is made only where no edge shadow of the ring contains p, where it is exact;
+//    the polygon of intersected back lines is not used, because at a concave corner the umbra is
+//    bounded by the corner's own shadow rather than by the meeting point of the two back lines,
+//    and for a ring that is not planar the back lines' polygon can wind around points outside
+//    the umbra. Elsewhere the curves decide (they give V = 0 where they enclose the square).
+//  - Edges at reflex (concave) mesh edges stay in their ring's curve: leaving them out (end of
+//    3.2.3.2) would open it.
+//  - An object without fully lit facets (a large light close to it) has no penumbra silhouette in
+//    the sense of 3.2.2, and its umbra silhouette alone would shrink its shadow to the facets in
+//    shadow: the boundary of the facets facing the light's centre ("potentially fully lit", 3.2.2)
+//    stands for it. An object without facets in shadow has one silhouette, as has one whose two
+//    silhouettes coincide (a plate lit by the whole light).
+//  - Rings are clipped as closed polygons to zNear <= z <= z_p (1 - 1e-4) (only occluder parts
+//    nearer to the light than p can occlude it), closed along the cut. Where a silhouette's facet
+//    set reaches beyond p (p on or beside its object), the closing segments project far outside
+//    the light and could pass around it either way; which side of its curves is hidden is then
+//    fixed by one ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h; what
+//    the hard shadow of a shadow-volume pass gives): the silhouette hides the centre when the
+//    first thing the ray meets is its object. Elsewhere no ray is traced: the curves and the
+//    angle sweep agree with the projection to the last bit, a ray would not.
+//  - Receivers behind the light's plane are handled in the light space of its other face (planar
+//    lights emit from both). An edge seen (nearly) end-on from the centre has no direction: its
+//    curve piece is dropped and its neighbours meet at its projection.
+//  - Binning: a light-space grid over directions from the light's centre (ssv.h, which says why)
+//    holds the edges' regions of influence and the rings' hard-shadow boxes; a pixel combines the
+//    rings with an edge or a hard-shadow box in its cell.
 //  - A two-sided planar sheet (an open planar mesh, e.g. the ground; mesh_topology.h) does not
 //    shadow its own pixels.
-//  - The silhouettes are computed from the facets only: intermediate edges between the penumbra
-//    and umbra silhouettes are ignored (3.3, "the object looks like a prism").
 //
-// Known weaknesses, measured in tests/techniques/ssv_test.cpp: a convex occluder very close to a
-// large light can have every facet partially lit, and then it has no silhouette and casts no
-// shadow here; the corner interpolation bends shadow contours (the contour of a tilted cube is not
-// convex, Fig. 4-10 is not reproduced); walls of an occluder that face the light can be found in
-// its umbra.
+// Approximations (Section 3.3), measured in tests/techniques/ssv_test.cpp: linear shading across
+// an edge shadow and quantized directions (exact for rect lights and axis-parallel edges; for
+// tilted edges and other polygons the hidden parts are axis-parallel stand-ins whose area follows
+// the ramp, and a thin light shows the artifacts of Fig. 4-9); only the two silhouettes are used, so the
+// object looks like a prism between them and the hidden part is the union of the two rings'
+// projections, not their hull. Option edge_visibility=area replaces the linear ramp by the exact
+// fraction of the light past the edge's line (clipping the light polygon, O(L)).
 //
 // Parameters: integration ("slicing" | "8x8" | "16x16"), merge_tolerance (fraction of the light's
 // side, [0, 0.25], default 0.01), grid (cells per side of the light-space binning grid, default 64),
@@ -78,8 +100,10 @@
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
+#include "rt/shadow_ray.h"
 
 namespace penumbra {
 namespace silhouette {
@@ -242,54 +266,78 @@ enum class Integration { Slicing, Fixed8, Fixed16 };
 
 struct SsvOptions {
   Integration integration = Integration::Slicing;
-  float mergeTolerance = 0.01f;  //!< slicing: cuts closer than this (fraction of the light's side) merge
-  int grid = 64;                 //!< cells per side of the light-space binning grid
+  float mergeTolerance = 0.01f;     //!< slicing: cuts closer than this (fraction of the light's side) merge
+  int grid = 64;                    //!< cells per side of the light-space binning grid
   bool areaEdgeVisibility = false;  //!< per edge, the exact light area past its line instead of the linear ramp
 };
 
-// One silhouette edge and its edge shadow (light space).
+constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping plane (no silhouette edge)
+
+// One silhouette edge and the fixed part of its edge shadow (light space).
 struct Edge {
-  Vec3 a, b;            //!< endpoints, clipped to z >= zNear
-  Vec3 ringA;           //!< unclipped start (for the umbra polygon)
-  Vec2 uMid;            //!< u-space midpoint
-  Vec2 uA, uB;          //!< u-space ends
-  Vec2 nHidden;         //!< u-space unit normal towards the hidden side (the occluder's side)
-  uint8_t axis = 0;     //!< quantized direction of the edge shadow: axis 0 = x, 1 = y ...
-  int8_t sign = 1;      //!< ... and sign: the hidden part of the light lies towards +sign
-  bool convexA = true, convexB = true;  //!< corner type at a and at b
-  bool contributes = true;  //!< false for reflex mesh edges and edges behind the light (umbra polygon only)
+  Vec3 a, b;             //!< endpoints, light space (b is the next edge's a)
+  Vec2 uA, uB;           //!< directions from the light's centre
+  uint8_t axis = 0;      //!< quantized direction (3.2.3.1): the light-square axis (0: x, 1: y) nearest to its normal
+  bool degenerate = false;   //!< seen end-on from the centre: no direction of its own
+  bool inFront = true;       //!< some part lies in front of the light's plane
   uint32_t ring = 0;
-  uint32_t index = 0;   //!< position in the ring
 };
 
 struct Ring {
   uint32_t first = 0, count = 0;  //!< edges [first, first + count)
   bool umbra = false;
   bool sheet = false;
-  bool crossesLightPlane = false;  //!< some vertex is not in front of the light: no umbra test
+  bool crossesLightPlane = false;  //!< some vertex is not in front of the light
   int32_t objectId = 0;
-  float orientation = 1.0f;  //!< sign of the ring's area in u-space
-  Vec2 uLower{kInfinity}, uUpper{-kInfinity};
-  float zMax = 0.0f;
+  uint32_t group = 0;  //!< index into Side::groups
+  Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring (its hard shadow from the centre lies inside)
+  float zMin = kInfinity, zMax = 0.0f;
 };
 
-// One edge shadow's statement at a pixel: the hidden part of the unit light square is
-// {s[axis] > cut} (sign > 0) or {s[axis] < cut} (sign < 0).
-struct Contribution {
-  uint32_t ring, edge;
+// The rings that bound one facet set (one silhouette of one object, e.g. the outline and the hole
+// of a ring-shaped object): their windings add.
+struct Group {
+  int32_t objectId = 0;
+  bool sheet = false;
+  bool crossesLightPlane = false;
+  float zMin = kInfinity, zMax = 0.0f;
+};
+
+// A piece of a visibility curve in light-square coordinates, directed a -> b.
+struct Piece {
+  Vec2 a, b;
+  uint32_t group;  //!< the ring's group
+};
+
+// One edge's approximant in a visibility curve: the line s[axis] = cut of the light square, and the
+// projected edge it stands for.
+struct Approximant {
   uint8_t axis;
-  int8_t sign;
   float cut;
-  bool andWithPrevious;
+  Vec2 start, end;   //!< the projected edge
+  bool contributes;  //!< its edge shadow contains p: the projected edge meets the square
+};
+
+// Per-thread buffers of the per-pixel pass.
+struct Scratch {
+  std::vector<Vec3> loop, tmp;
+  std::vector<int32_t> loopEdge, tmpEdge;
+  std::vector<Approximant> approximants;
+  std::vector<Vec2> curve;
+  std::vector<Piece> pieces;
+  std::vector<uint32_t> rings;
+  std::vector<float> xs, ys;
 };
 
 // Everything about one face of the light: its light space, silhouettes and edge shadows.
 struct Side {
   LightPlane plane;
+  Vec2 squareScale{1.0f};  //!< light plane (x, y) -> light square [0, 1]^2: (q - plane.lower) * squareScale
   std::vector<Edge> edges;
   std::vector<Ring> rings;
-  UGrid grid;
-  std::vector<uint32_t> gridEdge;  //!< grid item -> edge
+  std::vector<Group> groups;
+  UGrid edgeGrid, ringGrid;
+  std::vector<uint32_t> gridEdge;  //!< edgeGrid item -> edge
   bool binned = false;
 };
 
@@ -308,11 +356,16 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
     const std::vector<Occluder> occluders = makeOccluders(scene, "ssv");
+    rays_ = std::make_unique<RayScene>(scene);
+    light_ = light;
+    epsilon_ = shadowRayEpsilon(bounds);
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
     facets_ = 0;
     for (const Occluder& o : occluders) facets_ += o.sheet ? o.topology.triangleCount() / 2 : o.topology.triangleCount();
-    for (Side& side : sides_)
+    for (Side& side : sides_) {
+      side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
       for (const Occluder& o : occluders) buildRings(side, toLightSpace(o, side.plane));
+    }
     timings_.add("silhouettes+edge shadows", timer.elapsedMs());
     prepared_ = true;
   }
@@ -329,8 +382,7 @@ class SsvTechnique final : public ShadowTechnique {
     timings_.add("binning", timer.elapsedMs());
     Timer pixelTimer;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
-      std::vector<Contribution> contributions;
-      std::vector<float> xs, ys;
+      Scratch scratch;
       for (int y = range.begin(); y < range.end(); ++y)
         for (int x = 0; x < width; ++x) {
           if (!gbuffer.hit(x, y)) continue;
@@ -339,7 +391,19 @@ class SsvTechnique final : public ShadowTechnique {
           const Vec3 front = sides_[0].plane.toLight(wsP);
           const Side& side = sides_[front.z > 0.0f ? 0 : 1];
           const Vec3 p = front.z > 0.0f ? front : side.plane.toLight(wsP);
-          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), contributions, xs, ys);
+          // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
+          std::optional<int32_t> centreBlocker;
+          auto blocker = [&]() {
+            if (!centreBlocker) {
+              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(*light_, wsP, wsNg), epsilon_);
+              const std::optional<RayHit> hit = rays_->intersect(
+                  rt::shadowRay(wsP, wsOrigin, light_->directionToCenter(wsP), light_->distanceToCenter(wsP), epsilon_));
+              centreBlocker = hit ? hit->objectId : kNoObject;
+            }
+            return *centreBlocker;
+          };
+          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blocker);
         }
     });
     timings_.add("visibility", pixelTimer.elapsedMs());
@@ -348,12 +412,15 @@ class SsvTechnique final : public ShadowTechnique {
   PassTimings timings() const override { return timings_; }
 
   std::vector<std::pair<std::string, double>> stats() const override {
-    size_t contributing = 0, umbraRings = 0;
-    for (const Edge& e : sides_[0].edges) contributing += e.contributes;
-    for (const Ring& r : sides_[0].rings) umbraRings += r.umbra;
+    size_t umbraRings = 0, umbraEdges = 0;
+    for (const Ring& r : sides_[0].rings) {
+      umbraRings += r.umbra;
+      umbraEdges += r.umbra ? r.count : 0;
+    }
     return {{"facets", double(facets_)},
             {"silhouette_edges", double(sides_[0].edges.size())},
-            {"contributing_edges", double(contributing)},
+            {"penumbra_silhouette_edges", double(sides_[0].edges.size() - umbraEdges)},
+            {"umbra_silhouette_edges", double(umbraEdges)},
             {"rings", double(sides_[0].rings.size())},
             {"umbra_rings", double(umbraRings)}};
   }
@@ -362,33 +429,57 @@ class SsvTechnique final : public ShadowTechnique {
   void bin(Side& side, const GBuffer& gbuffer) const {
     side.binned = false;
     Vec2 lower, upper;
-    if (side.edges.empty() || !receiverRange(gbuffer, side.plane, zNear_, lower, upper)) return;
+    if (side.rings.empty() || !receiverRange(gbuffer, side.plane, zNear_, lower, upper)) return;
     std::vector<Vec2> lo, hi;
     side.gridEdge.clear();
     for (uint32_t i = 0; i < side.edges.size(); ++i) {
       const Edge& e = side.edges[i];
-      if (!e.contributes) continue;
-      const float grow = side.plane.extent / std::min(e.a.z, e.b.z);
+      if (!e.inFront) continue;
+      const float grow = side.plane.extent / std::max(std::min(e.a.z, e.b.z), zNear_);
       lo.push_back(glm::min(e.uA, e.uB) - grow);
       hi.push_back(glm::max(e.uA, e.uB) + grow);
       side.gridEdge.push_back(i);
     }
-    side.grid.build(lower, upper, options_.grid, lo, hi);
+    side.edgeGrid.build(lower, upper, options_.grid, lo, hi);
+    lo.clear();
+    hi.clear();
+    for (const Ring& r : side.rings) {
+      lo.push_back(r.uLower);
+      hi.push_back(r.uUpper);
+    }
+    side.ringGrid.build(lower, upper, options_.grid, lo, hi);
     side.binned = true;
   }
 
   void buildRings(Side& side, const Occluder& o) const {
     const MeshTopology& m = o.topology;
     const size_t n = m.triangles.size();
-    // Section 3.2.2: fully lit (every light vertex in front of the facet), in shadow (none in
-    // front), partially lit otherwise.
-    std::vector<uint8_t> lit(n), notShadow(n);
+    // Section 3.2.2: fully lit (every light vertex in front of the facet's plane), in shadow (none
+    // in front), partially lit otherwise. The penumbra silhouette bounds the fully lit facets, the
+    // umbra silhouette the facets in shadow (= the boundary of those not in shadow).
+    std::vector<uint8_t> lit(n), notShadow(n), facing(n);
+    size_t litCount = 0, notShadowCount = 0;
     for (size_t t = 0; t < n; ++t) {
       const Vec3 p0 = m.positions[m.triangles[t].x];
       int front = 0;
       for (const Vec2& l : side.plane.vertices) front += glm::dot(m.faceNormals[t], Vec3(l, 0.0f) - p0) > 0.0f;
       lit[t] = front == static_cast<int>(side.plane.vertices.size());
       notShadow[t] = front > 0;
+      facing[t] = glm::dot(m.faceNormals[t], -p0) > 0.0f;
+      litCount += lit[t];
+      notShadowCount += notShadow[t];
+    }
+    // A side of an object with no fully lit facet (a large light close to it) has no penumbra
+    // silhouette in the sense of Section 3.2.2, and the umbra silhouette alone would shrink its
+    // shadow to the facets in shadow. The facets facing the light's centre, "potentially fully lit"
+    // in the words of 3.2.2 (and the fully lit ones whenever the light is small), bound it instead.
+    if (litCount == 0) lit = facing;
+    const bool noUmbra = notShadowCount == n;
+    if (lit == notShadow || noUmbra) {
+      // One silhouette is both (e.g. a sheet, or a thin plate seen by the whole light), or there is
+      // no facet in shadow (an object against the light): one set of rings.
+      addRings(side, o, silhouetteRings(m, boundaryEdges(m, lit)), true);
+      return;
     }
     addRings(side, o, silhouetteRings(m, boundaryEdges(m, lit)), false);
     addRings(side, o, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
@@ -400,123 +491,55 @@ class SsvTechnique final : public ShadowTechnique {
       const float z = std::max(p.z, zNear_);
       return Vec2(p.x / z, p.y / z);
     };
+    const auto group = static_cast<uint32_t>(side.groups.size());
+    Group g;
+    g.objectId = o.objectId;
+    g.sheet = o.sheet;
     for (const auto& ringEdges : rings) {
       Ring ring;
+      ring.group = group;
       ring.first = static_cast<uint32_t>(side.edges.size());
       ring.count = static_cast<uint32_t>(ringEdges.size());
       ring.umbra = umbra;
       ring.sheet = o.sheet;
       ring.objectId = o.objectId;
       const auto ringId = static_cast<uint32_t>(side.rings.size());
-      float area2 = 0.0f;
-      for (uint32_t i = 0; i < ringEdges.size(); ++i) {
-        const SilhouetteEdge& s = ringEdges[i];
+      for (const SilhouetteEdge& s : ringEdges) {
         Edge e;
-        e.ringA = m.positions[s.a];
         e.a = m.positions[s.a];
         e.b = m.positions[s.b];
-        ring.crossesLightPlane = ring.crossesLightPlane || e.a.z < zNear_;
-        // Only the part in front of the light's plane can occlude a receiver in front of it.
-        const bool inFront = clipToSlab(e.a, e.b, zNear_, kInfinity);
         e.ring = ringId;
-        e.index = i;
-        e.contributes = inFront && m.convexEdge(s.inner, s.k);
+        ring.crossesLightPlane = ring.crossesLightPlane || e.a.z < zNear_;
+        Vec3 ca = e.a, cb = e.b;
+        e.inFront = clipToSlab(ca, cb, zNear_, kInfinity);
         e.uA = uOf(e.a);
         e.uB = uOf(e.b);
-        e.uMid = 0.5f * (e.uA + e.uB);
-        // The hidden side: where the solid lies next to the edge, seen from the centre. A point
-        // just inside a convex edge: the midpoint pushed against both faces' normals.
-        const Vec3 mid = 0.5f * (e.a + e.b);
-        const float len = glm::length(e.b - e.a);
-        const Vec3 inside = mid - 1e-3f * len * (m.faceNormals[s.inner] + m.faceNormals[s.outer]);
+        // Section 3.2.3.1: the direction of the edge shadow is the edge's projection from the
+        // light's centre, quantized to the nearest multiple of 90 degrees (light-square axes): its
+        // approximants cut the axis its normal is nearest to. (Which side it hides follows from
+        // the curve it is part of.)
         const Vec2 d = e.uB - e.uA;
-        Vec2 nrm(-d.y, d.x);
-        const float nl = glm::length(nrm);
-        nrm = nl > 0.0f ? nrm / nl : Vec2(1.0f, 0.0f);
-        if (glm::dot(uOf(inside) - e.uA, nrm) < 0.0f) nrm = -nrm;
-        e.nHidden = nrm;
-        e.axis = std::abs(nrm.x) >= std::abs(nrm.y) ? 0 : 1;  // Section 3.2.3.1: nearest multiple of 90 degrees
-        e.sign = nrm[e.axis] >= 0.0f ? 1 : -1;
-        area2 += e.uA.x * e.uB.y - e.uA.y * e.uB.x;
+        e.axis = std::abs(d.y) >= std::abs(d.x) ? 0 : 1;
         ring.uLower = glm::min(ring.uLower, glm::min(e.uA, e.uB));
         ring.uUpper = glm::max(ring.uUpper, glm::max(e.uA, e.uB));
+        ring.zMin = std::min({ring.zMin, e.a.z, e.b.z});
         ring.zMax = std::max({ring.zMax, e.a.z, e.b.z});
         side.edges.push_back(e);
       }
-      ring.orientation = area2 >= 0.0f ? 1.0f : -1.0f;
       // An edge seen (nearly) end-on from the centre, e.g. a vertical edge of a box under the
-      // light, has no direction of its own: it gives no contribution and the corner it sits in is
-      // classified between its neighbours.
+      // light, has no direction of its own: its curve piece is dropped and its neighbours meet
+      // at its projection.
       const float uDiagonal = glm::length(ring.uUpper - ring.uLower);
-      auto degenerate = [&](const Edge& e) { return !(glm::length(e.uB - e.uA) > 1e-3f * uDiagonal); };
       for (uint32_t i = 0; i < ring.count; ++i) {
         Edge& e = side.edges[ring.first + i];
-        if (degenerate(e)) e.contributes = false;
+        e.degenerate = !(glm::length(e.uB - e.uA) > 1e-3f * uDiagonal);
       }
-      // Corner types (Sections 3.2.3.4-6): convex when the neighbour lies on the hidden side.
-      for (uint32_t i = 0; i < ring.count; ++i) {
-        Edge& e = side.edges[ring.first + i];
-        uint32_t next = (i + 1) % ring.count, prev = (i + ring.count - 1) % ring.count;
-        for (uint32_t k = 0; k < ring.count && degenerate(side.edges[ring.first + next]); ++k) next = (next + 1) % ring.count;
-        for (uint32_t k = 0; k < ring.count && degenerate(side.edges[ring.first + prev]); ++k) prev = (prev + ring.count - 1) % ring.count;
-        e.convexB = glm::dot(side.edges[ring.first + next].uMid - e.uA, e.nHidden) > 0.0f;
-        e.convexA = glm::dot(side.edges[ring.first + prev].uMid - e.uA, e.nHidden) > 0.0f;
-      }
+      g.crossesLightPlane = g.crossesLightPlane || ring.crossesLightPlane;
+      g.zMin = std::min(g.zMin, ring.zMin);
+      g.zMax = std::max(g.zMax, ring.zMax);
       side.rings.push_back(ring);
     }
-  }
-
-  // Section 3.2.5: p behind every back plane of umbra ring r (winding of p around the polygon of
-  // consecutive back-line intersections in the plane z = z_p).
-  static bool inUmbra(const Side& side, const Ring& r, const Vec3& p) {
-    if (r.crossesLightPlane || p.z <= r.zMax * (1.0f + 1e-4f)) return false;
-    const Vec2 u(p.x / p.z, p.y / p.z);
-    if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return false;
-    // Back line of each edge in the slice: the edge projected from the light vertex that is the
-    // last one it hides, found by walking the light's vertices (O(L), Section 3.4.1).
-    auto backLine = [&](uint32_t i, Vec2& s0, Vec2& s1) {
-      const Edge& e = side.edges[r.first + i];
-      const Vec3 b3 = side.edges[r.first + (i + 1) % r.count].ringA;
-      const Vec2 a = projectFrom(p, e.ringA), b = projectFrom(p, b3);
-      Vec2 m(-(b - a).y, (b - a).x);
-      if (glm::dot(m, e.nHidden) < 0.0f) m = -m;
-      Vec2 best = side.plane.vertices[0];
-      for (const Vec2& l : side.plane.vertices)
-        if (glm::dot(l, m) < glm::dot(best, m)) best = l;
-      const Vec3 l3(best, 0.0f);
-      s0 = Vec2(l3 + (e.ringA - l3) * (p.z / e.ringA.z));
-      s1 = Vec2(l3 + (b3 - l3) * (p.z / b3.z));
-    };
-    int winding = 0;
-    Vec2 firstVertex(0.0f), prevVertex(0.0f);
-    Vec2 p0, p1, q0, q1;
-    backLine(0, p0, p1);
-    const Vec2 start0 = p0, start1 = p1;
-    const Vec2 q(p);
-    for (uint32_t i = 0; i < r.count; ++i) {
-      if (i + 1 < r.count) {
-        backLine(i + 1, q0, q1);
-      } else {
-        q0 = start0;
-        q1 = start1;
-      }
-      const Vec2 d1 = p1 - p0, d2 = q1 - q0;
-      const float den = d1.x * d2.y - d1.y * d2.x;
-      Vec2 vtx;
-      if (std::abs(den) > 1e-6f * glm::length(d1) * glm::length(d2)) {
-        const Vec2 w = q0 - p0;
-        vtx = p0 + d1 * ((w.x * d2.y - w.y * d2.x) / den);
-      } else {
-        vtx = 0.5f * (p1 + q0);
-      }
-      if (i == 0) firstVertex = vtx;
-      else winding += crossing(prevVertex, vtx, q);
-      prevVertex = vtx;
-      p0 = q0;
-      p1 = q1;
-    }
-    winding += crossing(prevVertex, firstVertex, q);
-    return winding != 0 && (winding > 0) == (r.orientation > 0.0f);
+    if (!rings.empty()) side.groups.push_back(g);
   }
 
   // Signed crossing of edge a-b with the ray from q towards +x (winding number, Sunday 2001).
@@ -526,107 +549,322 @@ class SsvTechnique final : public ShadowTechnique {
     return (b.y <= q.y && side < 0.0f) ? -1 : 0;
   }
 
-  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Contribution>& cs, std::vector<float>& xs,
-                     std::vector<float>& ys) const {
-    if (!side.binned || !(p.z > zNear_)) return 1.0f;
-    for (const Ring& r : side.rings)
-      if (r.umbra && !(r.sheet && r.objectId == objectId) && inUmbra(side, r, p)) return 0.0f;
-    const Vec2 u(p.x / p.z, p.y / p.z);
-    const auto [begin, end] = side.grid.cell(u);
-    cs.clear();
+  // The position of an edge shadow's approximant (Sections 3.2.3.1, 3.2.3.3): the projected edge
+  // q0-q1 leaves the fraction t of the light visible, linear between the front plane (t = 1, the
+  // line touches the light on its hidden side) and the back plane (t = 0); the approximant is the
+  // line of the light square across `axis` that leaves the same fraction: s[axis] = t measured
+  // from the side the edge's normal (taken towards +axis) points away from (which side is hidden
+  // does not change the line: t and 1 - t measured from opposite sides).
+  float approximantCut(const Side& side, const Vec2& q0, const Vec2& q1, uint8_t axis) const {
+    const Vec2 d = q1 - q0;
+    Vec2 m(-d.y, d.x);
+    const float len = glm::length(m);
+    if (!(len > 0.0f)) {
+      // A point: the approximant passes through it.
+      return (q0[axis] - side.plane.lower[axis]) * side.squareScale[axis];
+    }
+    m /= len;
+    if (m[axis] < 0.0f) m = -m;
+    float hLo, hHi;
+    side.plane.support(m, hLo, hHi);
+    const float offset = glm::dot(q0, m);
+    if (options_.areaEdgeVisibility && offset > hLo && offset < hHi) return visibleBeyondLine(side.plane, m, offset);
+    return (offset - hLo) / (hHi - hLo);
+  }
+
+  // Liang-Barsky: the part [t0, t1] of segment a-b inside the light square [0, 1]^2; false if none.
+  static bool clipToSquare(const Vec2& a, const Vec2& b, float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = 1.0f;
+    const Vec2 d = b - a;
+    for (int k = 0; k < 2; ++k) {
+      for (const float bound : {0.0f, 1.0f}) {
+        const float num = bound == 0.0f ? a[k] : 1.0f - a[k];  // distance inside this side
+        const float den = bound == 0.0f ? -d[k] : d[k];         // rate of leaving through it
+        if (den == 0.0f) {
+          if (num < 0.0f) return false;
+        } else {
+          const float t = num / den;
+          if (den > 0.0f) t1 = std::min(t1, t);
+          else t0 = std::max(t0, t);
+        }
+      }
+    }
+    return t0 <= t1;
+  }
+
+  // A loop around the light square adds `winding` to every winding inside it; only its right side
+  // can cross a ray towards +x.
+  static void loopAround(Scratch& s, int winding, uint32_t group) {
+    for (int i = 0; i < std::abs(winding); ++i)
+      s.pieces.push_back({Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group});
+  }
+
+  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
+  // winding of the ring's projection around the light's centre.
+  //
+  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
+  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
+  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
+  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
+  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
+  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
+  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
+  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
+  // entered and left on its first and last approximants at the position of the projected edges'
+  // outer ends, clamped to the square, and the curve is closed through the projections of the
+  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
+  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
+  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
+  // direction from the light's centre lies inside the ring or not (an angle sweep).
+  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
+    const Ring& r = side.rings[ringId];
     const float zMax = p.z * (1.0f - 1e-4f);
-    for (const uint32_t* it = begin; it != end; ++it) {
-      const uint32_t id = side.gridEdge[*it];
-      const Edge& e = side.edges[id];
-      const Ring& r = side.rings[e.ring];
-      if (r.sheet && r.objectId == objectId) continue;
-      Vec3 a = e.a, b = e.b;
-      if (!clipToSlab(a, b, zNear_, zMax)) continue;
-      const Vec2 pa = projectFrom(p, a), pb = projectFrom(p, b);
-      const Vec2 d = pb - pa;
-      const float len = glm::length(d);
-      if (!(len > 1e-12f)) continue;
-      const Vec2 dir = d / len;
-      Vec2 m(-dir.y, dir.x);
-      if (glm::dot(m, e.nHidden) < 0.0f) m = -m;
-      float hLo, hHi, sLo, sHi;
-      side.plane.support(m, hLo, hHi);
-      side.plane.support(dir, sLo, sHi);
-      // Lateral: the projected segment must overlap the light along its own direction.
-      const float sa = glm::dot(pa, dir), sb = glm::dot(pb, dir);
-      if (sb <= sLo || sa >= sHi) continue;
-      // Front plane: the line at hHi (nothing hidden, t = 1); back plane: at hLo (all hidden, t = 0).
-      float t = std::clamp((glm::dot(pa, m) - hLo) / (hHi - hLo), 0.0f, 1.0f);
-      if (options_.areaEdgeVisibility && t > 0.0f && t < 1.0f) t = visibleBeyondLine(side.plane, m, glm::dot(pa, m));
-      // Corner regions: w, the fraction of the light's extent along the edge that the projected
-      // segment covers, is 1 in the mid region and falls to 0 where the segment leaves the light.
-      // Towards w = 0 the value goes to the one neutral for the neighbour at the end that lies
-      // inside (3.2.3.4-5): at a convex corner (neighbours AND-ed) black, except on the front
-      // outline, which stays white; at a concave corner (OR-ed) white, except on the back outline,
-      // which stays black. te = t w / (1 - t (1 - w)) has exactly these edges: te(t, 1) = t,
-      // te(1, w) = 1, te(t < 1, 0) = 0; the concave case is its mirror in t. An edge with both ends
-      // inside and corners of both kinds blends linearly to 1/2. A short edge (seen nearly end-on
-      // from the centre) covers little and so says little.
-      const float w = std::clamp((std::min(sb, sHi) - std::max(sa, sLo)) / (sHi - sLo), 0.0f, 1.0f);
-      const bool insideA = sa > sLo, insideB = sb < sHi;
-      const bool convexEnds = (!insideA || e.convexA) && (!insideB || e.convexB);
-      const bool concaveEnds = (!insideA || !e.convexA) && (!insideB || !e.convexB);
-      float te = t;
-      if (!insideA && !insideB) te = t;
-      else if (convexEnds) te = t * w / std::max(1.0f - t * (1.0f - w), 1e-12f);
-      else if (concaveEnds) te = 1.0f - (1.0f - t) * w / std::max(1.0f - (1.0f - t) * (1.0f - w), 1e-12f);
-      else te = w * t + (1.0f - w) * 0.5f;
-      te = std::clamp(te, 0.0f, 1.0f);
-      cs.push_back({e.ring, id, e.axis, e.sign, e.sign > 0 ? te : 1.0f - te, false});
+    s.loop.clear();
+    s.loopEdge.clear();
+    for (uint32_t i = 0; i < r.count; ++i) {
+      s.loop.push_back(side.edges[r.first + i].a);
+      s.loopEdge.push_back(static_cast<int32_t>(r.first + i));
     }
-    if (cs.empty()) return 1.0f;
-    // Within a ring: ring order starting after a gap, and the AND / OR of each neighbour pair.
-    std::sort(cs.begin(), cs.end(), [](const Contribution& x, const Contribution& y) {
-      return x.ring != y.ring ? x.ring < y.ring : x.edge < y.edge;
-    });
-    for (size_t i = 0; i < cs.size();) {
-      size_t j = i;
-      while (j < cs.size() && cs[j].ring == cs[i].ring) ++j;
-      const Ring& r = side.rings[cs[i].ring];
-      // Rotate so the fold starts at an edge whose predecessor in the ring does not contribute.
-      size_t startAt = i;
-      for (size_t k = i; k < j && j - i > 1; ++k) {
-        const uint32_t prevIdx = (side.edges[cs[k].edge].index + r.count - 1) % r.count;
-        const size_t pk = k == i ? j - 1 : k - 1;
-        if (side.edges[cs[pk].edge].index != prevIdx) {
-          startAt = k;
-          break;
+    // Sutherland-Hodgman against both depth bounds; each vertex keeps the edge that leaves it.
+    bool cut = false;
+    for (const float bound : {zNear_, zMax}) {
+      const bool low = bound == zNear_;
+      bool allIn = true;
+      for (const Vec3& q : s.loop) allIn = allIn && (low ? q.z >= bound : q.z <= bound);
+      if (allIn) continue;
+      cut = true;
+      s.tmp.clear();
+      s.tmpEdge.clear();
+      const size_t n = s.loop.size();
+      for (size_t i = 0; i < n; ++i) {
+        const Vec3 &a = s.loop[i], &b = s.loop[(i + 1) % n];
+        const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
+        if (inA) {
+          s.tmp.push_back(a);
+          s.tmpEdge.push_back(s.loopEdge[i]);
+        }
+        if (inA != inB) {
+          const Vec3 c = a + (b - a) * ((bound - a.z) / (b.z - a.z));
+          s.tmp.push_back(Vec3(c.x, c.y, bound));
+          s.tmpEdge.push_back(inA ? kClosure : s.loopEdge[i]);
         }
       }
-      std::rotate(cs.begin() + i, cs.begin() + startAt, cs.begin() + j);
-      for (size_t k = i + 1; k < j; ++k) {
-        const Edge& prev = side.edges[cs[k - 1].edge];
-        const Edge& cur = side.edges[cs[k].edge];
-        cs[k].andWithPrevious = glm::dot(cur.uMid - prev.uA, prev.nHidden) > 0.0f;
-      }
-      i = j;
+      s.loop.swap(s.tmp);
+      s.loopEdge.swap(s.tmpEdge);
     }
-    // Hidden: the union over rings (competitive) of each ring's folded curve (collaborative).
+    const size_t n = s.loop.size();
+    if (n < 3) return 0;
+    auto toSquare = [&](const Vec3& q) { return (projectFrom(p, q) - side.plane.lower) * side.squareScale; };
+    s.approximants.clear();
+    bool anyContribution = false;
+    const Vec2 first = toSquare(s.loop[0]);
+    Vec2 a = first;
+    for (size_t i = 0; i < n; ++i) {
+      const Vec2 b = i + 1 < n ? toSquare(s.loop[i + 1]) : first;
+      const int32_t id = s.loopEdge[i];
+      if (id == kClosure) {
+        // Along the clipping plane: its points are at p's depth and project far outside the
+        // light; it never contributes, it only separates chains.
+        s.approximants.push_back({0, 0.0f, a, b, false});
+      } else if (!side.edges[id].degenerate) {
+        const Edge& e = side.edges[id];
+        float t0, t1;
+        const bool contributes = clipToSquare(a, b, t0, t1);
+        anyContribution = anyContribution || contributes;
+        float cut = 0.0f;  // only a contributing edge is drawn as its approximant
+        if (contributes) {
+          // The cut from the light-plane points (the square is an axis-wise affine image of the
+          // light plane, so the ramp measured in either is the same).
+          const Vec2 qa = side.plane.lower + a / side.squareScale, qb = side.plane.lower + b / side.squareScale;
+          cut = approximantCut(side, qa, qb, e.axis);
+          // Corner regions (3.2.3.3-5): where the projected edge ends inside the square it covers
+          // only the fraction w of the square along its approximant, and the cut moves from the
+          // ramp's value (mid region, w = 1) to the position of the edge's part inside the square
+          // (w -> 0). So an edge whose end enters the square starts on the square's edge, where
+          // its neighbour's chain left it, and V stays continuous as edge shadows begin and end.
+          const Vec2 p0 = a + (b - a) * t0, p1 = a + (b - a) * t1;
+          const float w = std::min(std::abs(p1[1 - e.axis] - p0[1 - e.axis]), 1.0f);
+          cut = w * std::clamp(cut, 0.0f, 1.0f) + (1.0f - w) * 0.5f * (p0[e.axis] + p1[e.axis]);
+        }
+        s.approximants.push_back({e.axis, cut, a, b, contributes});
+      }
+      a = b;
+    }
+    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
+    // the cut, and that closing segment, projected from p, runs far outside the light and could
+    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
+    // the light's centre from p (one ray, what a shadow-volume pass gives).
+    // The winding of the ring's projection around the light's centre.
+    int centreWinding = 0;
+    if (cut || anyContribution) {
+      const Vec2 centre = -side.plane.lower * side.squareScale;
+      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
+    }
+    if (!anyContribution) {
+      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
+      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
+      // direction from the centre around the ring.
+      if (!cut) {
+        const Vec2 u(p.x / p.z, p.y / p.z);
+        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
+        for (uint32_t i = 0; i < r.count; ++i) {
+          const Edge& e = side.edges[r.first + i];
+          centreWinding += crossing(e.uA, e.uB, u);
+        }
+      }
+      loopAround(s, centreWinding, r.group);
+      return centreWinding;
+    }
+    const size_t k = s.approximants.size();
+    // The join of approximant e with the next one, f.
+    auto join = [&](const Approximant& e, const Approximant& f) {
+      Vec2 w;
+      if (e.axis != f.axis) {
+        w[e.axis] = e.cut;
+        w[f.axis] = f.cut;
+        s.curve.push_back(w);
+      } else {
+        const int other = 1 - e.axis;
+        w[other] = f.start[other];
+        w[e.axis] = e.cut;
+        s.curve.push_back(w);
+        w[e.axis] = f.cut;
+        s.curve.push_back(w);
+      }
+    };
+    size_t gap = k;
+    for (size_t i = 0; i < k; ++i)
+      if (!s.approximants[i].contributes) {
+        gap = i;
+        break;
+      }
+    s.curve.clear();
+    if (gap == k) {
+      // Every edge shadow contains p: one closed curve of approximants.
+      for (size_t i = 0; i < k; ++i) join(s.approximants[i], s.approximants[(i + 1) % k]);
+    } else {
+      // Once around the ring from a gap: the projected edges outside the square as they are, each
+      // chain of contributing edges as its approximants, entered and left on the approximant at
+      // the position (along it) of the projected edge's outer end, clamped to the square.
+      for (size_t step = 1; step <= k; ++step) {
+        const size_t i = (gap + step) % k;
+        const Approximant& e = s.approximants[i];
+        if (!e.contributes) {
+          s.curve.push_back(e.start);
+          s.curve.push_back(e.end);
+          continue;
+        }
+        const int other = 1 - e.axis;
+        if (!s.approximants[(i + k - 1) % k].contributes) {
+          s.curve.push_back(e.start);
+          Vec2 entry;
+          entry[e.axis] = e.cut;
+          entry[other] = std::clamp(e.start[other], 0.0f, 1.0f);
+          s.curve.push_back(entry);
+        }
+        const Approximant& next = s.approximants[(i + 1) % k];
+        if (next.contributes) {
+          join(e, next);
+        } else {
+          Vec2 exit;
+          exit[e.axis] = e.cut;
+          exit[other] = std::clamp(e.end[other], 0.0f, 1.0f);
+          s.curve.push_back(exit);
+          s.curve.push_back(e.end);
+        }
+      }
+    }
+    // The pieces that can cross a ray from a point of the square towards +x.
+    const size_t c = s.curve.size();
+    for (size_t i = 0; i < c; ++i) {
+      const Vec2 &u = s.curve[i], &v = s.curve[(i + 1) % c];
+      if (u.y == v.y || std::max(u.x, v.x) <= 0.0f || std::max(u.y, v.y) <= 0.0f || std::min(u.y, v.y) >= 1.0f) continue;
+      s.pieces.push_back({u, v, r.group});
+    }
+    return centreWinding;
+  }
+
+  template <typename Blocker>
+  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, Scratch& s, Blocker& blocker) const {
+    if (!side.binned || !(p.z > zNear_)) return 1.0f;
+    const Vec2 u(p.x / p.z, p.y / p.z);
+    // The rings to combine: those with an edge shadow that may contain p (the edge grid), and
+    // those whose hard shadow may (the ring grid; their edge shadows may all miss p while the ring
+    // hides the whole light).
+    s.rings.clear();
+    {
+      const auto [begin, end] = side.edgeGrid.cell(u);
+      for (const uint32_t* it = begin; it != end; ++it) s.rings.push_back(side.edges[side.gridEdge[*it]].ring);
+      const auto [rBegin, rEnd] = side.ringGrid.cell(u);
+      for (const uint32_t* it = rBegin; it != rEnd; ++it) {
+        const Ring& r = side.rings[*it];
+        if (u.x >= r.uLower.x && u.y >= r.uLower.y && u.x <= r.uUpper.x && u.y <= r.uUpper.y) s.rings.push_back(*it);
+      }
+    }
+    if (s.rings.empty()) return 1.0f;
+    std::sort(s.rings.begin(), s.rings.end());
+    s.rings.erase(std::unique(s.rings.begin(), s.rings.end()), s.rings.end());
+    s.pieces.clear();
+    const float zMax = p.z * (1.0f - 1e-4f);
+    for (size_t i = 0; i < s.rings.size();) {
+      // The rings of one group bound one facet set: their windings add.
+      const uint32_t group = side.rings[s.rings[i]].group;
+      const Group& g = side.groups[group];
+      const size_t firstPiece = s.pieces.size();
+      int centreWinding = 0;
+      for (; i < s.rings.size() && side.rings[s.rings[i]].group == group; ++i) {
+        const Ring& r = side.rings[s.rings[i]];
+        if ((r.sheet && r.objectId == objectId) || !(r.zMin < p.z)) continue;
+        centreWinding += appendCurve(side, s.rings[i], p, s);
+      }
+      if (g.sheet && g.objectId == objectId) continue;
+      // A facet set reaching beyond p (p on or beside its object) or behind the light's plane is
+      // cut there, and closed along the cut: the closing segments project far outside the light
+      // and could pass around it either way. Which side of the curves is hidden is then fixed by
+      // whether the object hides the light's centre from p: one ray, what the hard shadow of a
+      // shadow-volume pass gives.
+      if ((g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z) {
+        const bool hidesCentre = blocker() == g.objectId;
+        if ((centreWinding != 0) != hidesCentre) {
+          loopAround(s, hidesCentre ? 1 : -centreWinding, group);
+          centreWinding = hidesCentre ? (centreWinding == 0 ? 1 : centreWinding) : 0;
+        }
+      }
+      // A silhouette none of whose edge shadows contains p and that winds around the square hides
+      // all of the light (the umbra): nothing else can change V.
+      bool onlyLoops = true;
+      for (size_t k = firstPiece; k < s.pieces.size() && onlyLoops; ++k) onlyLoops = s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f;
+      if (onlyLoops && centreWinding != 0 && s.pieces.size() > firstPiece) return 0.0f;
+    }
+    if (s.pieces.empty()) return 1.0f;
+    // Competitive combination (3.2.4.2, 3.2.4.4): a point of the light square is hidden when any
+    // ring's curve winds around it (the visibilities AND-ed).
     auto hiddenAt = [&](float sx, float sy) {
-      for (size_t i = 0; i < cs.size();) {
-        bool h = false;
-        size_t j = i;
-        for (; j < cs.size() && cs[j].ring == cs[i].ring; ++j) {
-          const Contribution& c = cs[j];
-          const float s = c.axis == 0 ? sx : sy;
-          const bool hj = c.sign > 0 ? s > c.cut : s < c.cut;
-          h = j == i ? hj : (c.andWithPrevious ? (h && hj) : (h || hj));
+      const Vec2 q(sx, sy);
+      uint32_t group = s.pieces.front().group;
+      int winding = 0;
+      for (const Piece& piece : s.pieces) {
+        if (piece.group != group) {
+          if (winding != 0) return true;
+          group = piece.group;
+          winding = 0;
         }
-        if (h) return true;
-        i = j;
+        winding += crossing(piece.a, piece.b, q);
       }
-      return false;
+      return winding != 0;
     };
     double visible = 0.0;
     if (options_.integration == Integration::Slicing) {
-      xs.assign({0.0f, 1.0f});
-      ys.assign({0.0f, 1.0f});
-      for (const Contribution& c : cs) (c.axis == 0 ? xs : ys).push_back(std::clamp(c.cut, 0.0f, 1.0f));
+      // Slicing (3.2.4.4, Fig. 3-22): the light square cut at every distinct coordinate of the
+      // curves, one test per cell, weighted by its area.
+      s.xs.assign({0.0f, 1.0f});
+      s.ys.assign({0.0f, 1.0f});
+      for (const Piece& piece : s.pieces)
+        for (const Vec2& q : {piece.a, piece.b}) {
+          if (q.x > 0.0f && q.x < 1.0f) s.xs.push_back(q.x);
+          if (q.y > 0.0f && q.y < 1.0f) s.ys.push_back(q.y);
+        }
       const float tolerance = options_.mergeTolerance;
       auto merge = [tolerance](std::vector<float>& cuts) {
         std::sort(cuts.begin(), cuts.end());
@@ -639,12 +877,12 @@ class SsvTechnique final : public ShadowTechnique {
           else cuts.push_back(1.0f);
         }
       };
-      merge(xs);
-      merge(ys);
-      for (size_t iy = 0; iy + 1 < ys.size(); ++iy)
-        for (size_t ix = 0; ix + 1 < xs.size(); ++ix) {
-          const float w = (xs[ix + 1] - xs[ix]) * (ys[iy + 1] - ys[iy]);
-          if (w > 0.0f && !hiddenAt(0.5f * (xs[ix] + xs[ix + 1]), 0.5f * (ys[iy] + ys[iy + 1]))) visible += w;
+      merge(s.xs);
+      merge(s.ys);
+      for (size_t iy = 0; iy + 1 < s.ys.size(); ++iy)
+        for (size_t ix = 0; ix + 1 < s.xs.size(); ++ix) {
+          const float w = (s.xs[ix + 1] - s.xs[ix]) * (s.ys[iy + 1] - s.ys[iy]);
+          if (w > 0.0f && !hiddenAt(0.5f * (s.xs[ix] + s.xs[ix + 1]), 0.5f * (s.ys[iy] + s.ys[iy + 1]))) visible += w;
         }
     } else {
       const int n = options_.integration == Integration::Fixed8 ? 8 : 16;
@@ -670,6 +908,9 @@ class SsvTechnique final : public ShadowTechnique {
   }
 
   SsvOptions options_;
+  std::unique_ptr<RayScene> rays_;  //!< the light's centre seen from receivers beside an occluder
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
   Side sides_[2];  //!< [0]: the face towards the scene's centre; [1]: the other face
   float zNear_ = 0.0f;
   size_t facets_ = 0;

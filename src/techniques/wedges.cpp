@@ -19,8 +19,15 @@
 // light, Fig. 2-15 / 4-10) and the overlap approximation (Fig. 2-12 / 4-13).
 //
 // Other choices: each ring is clipped as a closed polygon to z < z_p (1 - 1e-4) (only occluder parts
-// nearer to the light than p can occlude it; the cut is closed along that plane so the winding stays
-// defined for receivers on or beside an occluder) and to the light's plane; a two-sided planar
+// nearer to the light than p can occlude it) and to the light's plane. Where the ring passes beyond
+// p (p on or beside an occluder) or behind the light's plane, the cut is closed along that plane;
+// the closing segment projects far outside the light and could pass around it either way, which
+// changes the ring's winding around the centre by one but not its wedge corrections. For such a
+// ring the hard-shadow part comes from the paper's shadow-volume pass instead, done here as one
+// ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h): the ring hides the
+// centre when the first thing the ray meets is the ring's object. (For whole rings the winding is
+// kept: the ray and the winding could disagree in the last bit where the centre lies on a
+// projected edge, and V would jump there.) a two-sided planar
 // sheet (mesh_topology.h) does not shadow its own pixels; receivers behind the light's plane are
 // handled in the light space of its other face; rings are binned in the light-space grid of ssv.h
 // by their u-space boxes grown by R / z_min.
@@ -28,13 +35,16 @@
 // Parameters: grid (cells per side of the binning grid).
 #include <algorithm>
 #include <memory>
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
+#include "rt/shadow_ray.h"
 #include "techniques/ssv.h"
 
 namespace penumbra {
@@ -74,6 +84,9 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
     }
     const std::vector<Occluder> occluders = makeOccluders(scene, "wedges");
+    rays_ = std::make_unique<RayScene>(scene);
+    light_ = light;
+    epsilon_ = shadowRayEpsilon(bounds);
     for (int back = 0; back < 2; ++back) {
       Side& side = sides_[back];
       for (const Occluder& world : occluders) {
@@ -140,7 +153,19 @@ class WedgesTechnique final : public ShadowTechnique {
           const Vec3 front = sides_[0].plane.toLight(wsP);
           const Side& side = sides_[front.z > 0.0f ? 0 : 1];
           const Vec3 p = front.z > 0.0f ? front : side.plane.toLight(wsP);
-          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), clipped, tmp);
+          // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
+          std::optional<int32_t> centreBlocker;
+          auto blocker = [&]() {
+            if (!centreBlocker) {
+              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(*light_, wsP, wsNg), epsilon_);
+              const std::optional<RayHit> hit = rays_->intersect(
+                  rt::shadowRay(wsP, wsOrigin, light_->directionToCenter(wsP), light_->distanceToCenter(wsP), epsilon_));
+              centreBlocker = hit ? hit->objectId : kNoObject;
+            }
+            return *centreBlocker;
+          };
+          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), clipped, tmp, blocker);
         }
     });
     timings_.add("visibility", timer.elapsedMs());
@@ -152,11 +177,13 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
  private:
-  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped, std::vector<Vec3>& tmp) const {
+  template <typename Blocker>
+  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped, std::vector<Vec3>& tmp,
+                     Blocker& blocker) const {
     if (!side.binned || !(p.z > zNear_)) return 1.0f;
     const auto [begin, end] = side.grid.cell(Vec2(p.x / p.z, p.y / p.z));
     const float zMax = p.z * (1.0f - 1e-4f);
-    float covered = 0.0f;
+    float total = 0.0f;
     for (const uint32_t* it = begin; it != end; ++it) {
       const WedgeRing& r = side.rings[*it];
       if (r.sheet && r.objectId == objectId) continue;
@@ -166,6 +193,7 @@ class WedgesTechnique final : public ShadowTechnique {
       // the loop "at infinity" seen from p would; clipping edge by edge would leave the loop open
       // and its winding undefined.
       clipped.assign(r.vertices.begin(), r.vertices.end());
+      bool cut = false;
       for (const float bound : {zNear_, zMax}) {
         const bool low = bound == zNear_;
         tmp.clear();
@@ -177,19 +205,36 @@ class WedgesTechnique final : public ShadowTechnique {
           if (inA != inB) {
             const Vec3 c = a + (b - a) * ((bound - a.z) / (b.z - a.z));
             tmp.push_back(Vec3(c.x, c.y, bound));
+            cut = true;
           }
         }
         clipped.swap(tmp);
       }
       const size_t n = clipped.size();
-      for (size_t i = 0; i < n; ++i)
+      if (n < 3) continue;
+      float covered = 0.0f;
+      int winding = 0;  // around the light's centre, the origin of the light plane
+      Vec2 a = projectFrom(p, clipped[0]);
+      const Vec2 first = a;
+      for (size_t i = 0; i < n; ++i) {
+        const Vec2 b = i + 1 < n ? projectFrom(p, clipped[i + 1]) : first;
         // Rings run counter-clockwise seen from the centre, clockwise in (x, y): negate.
-        covered -= clippedFanArea(side.plane.vertices, projectFrom(p, clipped[i]), projectFrom(p, clipped[(i + 1) % n]));
+        covered -= clippedFanArea(side.plane.vertices, a, b);
+        if (a.y <= 0.0f) winding += (b.y > 0.0f && a.x * b.y - a.y * b.x > 0.0f) ? 1 : 0;
+        else winding -= (b.y <= 0.0f && a.x * b.y - a.y * b.x < 0.0f) ? 1 : 0;
+        a = b;
+      }
+      // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
+      if (cut) covered += side.plane.area * (static_cast<float>(winding) + (blocker() == r.objectId ? 1.0f : 0.0f));
+      total += covered;
     }
-    return 1.0f - std::clamp(covered / side.plane.area, 0.0f, 1.0f);
+    return 1.0f - std::clamp(total / side.plane.area, 0.0f, 1.0f);
   }
 
   int grid_;
+  std::unique_ptr<RayScene> rays_;  //!< the hard shadow of the light's centre
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
   Side sides_[2];  //!< [0]: the face towards the scene's centre; [1]: the other face
   size_t edges_ = 0;
   float zNear_ = 0.0f;

@@ -1,16 +1,25 @@
 // Tests of the `ssv` technique (src/techniques/ssv.cpp, Rouf 2007):
 //  - a thin plate under a rect light, across the middle of a side: the linear interpolation
 //    between front and back planes is exact there (closed form), and the shadow is soft, not hard;
+//  - where the thesis' assumptions hold (a rect light, occluder edges parallel to its sides) ssv
+//    matches the reference to its Monte Carlo noise, for the concave U slab (convex and concave
+//    corners, penumbra and umbra silhouettes that differ);
 //  - the single-silhouette case (Fig. 4-10): a tilted cube close to a large light; the thesis says
-//    ssv's contour is convex and wedges' is not. Measured here it is the other way round, and the
-//    test records what we measure (see the comment in the test);
-//  - overlap (Fig. 4-13): two overlapping occluders, RMSE8 of both against the reference (the
-//    thesis' "ssv below wedges" is not reproduced either; recorded);
+//    ssv's contour is convex and wedges' is not. Not reproduced here, and the test records what we
+//    measure (see the comment in the test);
+//  - overlap (Fig. 4-13): two overlapping occluders; ssv's RMSE8 against the reference is far below
+//    wedges', whose contributions are added (the thesis' claim, reproduced);
+//  - a cube so close under a large light that no facet is fully lit or in shadow still casts its
+//    shadow;
+//  - the hole of a ring-shaped occluder (two rings per silhouette, whose windings add) lets the
+//    light through;
 //  - `slit` (Figs. 4-5, 4-6): the thin part of the light seen through the gap gives a grey slit
 //    between the slabs' umbrae, as in the reference;
 //  - `concave` far and near (Fig. 4-4) and triangle, square, hexagon and thin-rect lights: RMSE8
 //    and penumbra RMSE8 against the reference (printed; the thin light's artifacts of Fig. 4-9 are
-//    measured, not hidden), each below a threshold and below the hard shadow's error;
+//    measured, not hidden), each below a threshold; with the slab turned against the light's sides
+//    wedges is closer to the reference than ssv (recorded: the thesis' linear shading across
+//    tilted edges);
 //  - fixed 8x8 sampling gives at most 65 shades, slicing many more (Section 3.2.4.4);
 //  - determinism, refused light shapes and broken meshes.
 #include <gtest/gtest.h>
@@ -148,6 +157,75 @@ TEST(Ssv, ThinPlateAcrossASideMatchesTheClosedForm) {
   EXPECT_GT(soft, 60);       // measured 104  // two penumbrae of 1.6 * (4 - 1.5) / 1.5 = 2.7 world units each, less the edges: ~ 70 of 301
 }
 
+TEST(Ssv, AxisParallelConcaveSlabMatchesTheReference) {
+  // The `concave` U slab turned back by its 20 degrees, so its edges are parallel to the square
+  // light's sides: the thesis' linear shading and quantized directions are exact there, its notch
+  // gives concave corners, its walls make the penumbra silhouette (top outline) and the umbra
+  // silhouette (outer top edges and the notch's bottom) differ, and the slab's own walls and top
+  // are receivers too. What is left is the reference's noise.
+  Scene scene = loadScene("concave");
+  Object& slab = scene.objects.at(1);
+  transformMesh(slab.mesh, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.2f, 0.0f)) * glm::rotate(Mat4(1.0f), radians(-20.0f), Vec3(0.0f, 1.0f, 0.0f)) *
+                               glm::translate(Mat4(1.0f), Vec3(0.0f, -1.2f, 0.0f)));
+  const GBuffer g = renderGBuffer(scene, 128, 128);
+  const Image<uint8_t> mask = errorMask(g, scene.lights.at(0));
+  const Image<float> vr = reference(scene, g, 1024);
+  const Image<float> vs = run("ssv", scene, g);
+  const ErrorStats ssv = compareVisibility(vs, vr, mask);
+  const ErrorStats wedges = compareVisibility(run("wedges", scene, g), vr, mask);
+  // The largest differences (0.167) are at pixels of the notch's walls a few millimetres below the
+  // top edge, where ssv gives the geometric 5/6 (the part of the light behind the wall's plane is
+  // hidden) and the reference's offset rays escape through the edge; on the ground:
+  double groundMax = 0.0;
+  for (size_t i = 0; i < vs.size(); ++i)
+    if (mask[i] && g.objectId(static_cast<int>(i % g.width()), static_cast<int>(i / g.width())) == 0)
+      groundMax = std::max(groundMax, double(std::abs(vs[i] - vr[i])));
+  std::printf("[ measured ] axis-parallel U slab RMSE8 / penumbra RMSE8 / max on the ground: ssv %.2f / %.2f / %.3f, wedges %.2f / %.2f\n",
+              ssv.rmse8, ssv.penumbraRmse8, groundMax, wedges.rmse8, wedges.penumbraRmse8);
+  EXPECT_LT(ssv.rmse8, 1.2);          // measured 0.91 (the reference's standard error is about 0.003, 0.8 in RMSE8)
+  EXPECT_LT(ssv.penumbraRmse8, 2.4);  // measured 1.77
+  EXPECT_LT(groundMax, 0.05);         // measured 0.037
+}
+
+TEST(Ssv, ACubeWithNoFacetFullyLitOrInShadowStillCastsItsShadow) {
+  // A 0.3 cube standing on a vertex 0.2 below a 2.4 x 2.4 light: every facet sees part of the light,
+  // so neither silhouette of Section 3.2.2 exists; the silhouette from the light's centre stands for
+  // both (a faint soft shadow without umbra, as the reference's).
+  const Light light = Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
+  Mat4 m = glm::translate(Mat4(1.0f), Vec3(0.0f, 3.14f, 0.0f));
+  m = glm::rotate(m, radians(35.26f), Vec3(0.0f, 0.0f, 1.0f));
+  m = glm::rotate(m, radians(45.0f), Vec3(1.0f, 0.0f, 0.0f));
+  const Scene scene = groundScene(light, {box(1, m, Vec3(0.3f))});
+  const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 64);
+  const Image<float> vs = run("ssv", scene, g), vr = reference(scene, g, 1024);
+  const auto ssvMin = *std::min_element(vs.begin(), vs.end()), refMin = *std::min_element(vr.begin(), vr.end());
+  std::printf("[ measured ] cube with every facet partially lit: min V ssv %.4f, reference %.4f; RMSE8 %.2f, none %.2f\n", ssvMin, refMin,
+              rmse8(vs, vr), rmse8(Image<float>(64, 64, 1.0f), vr));
+  EXPECT_LT(ssvMin, 0.98f);         // measured 0.964 (reference 0.943)
+  EXPECT_LT(rmse8(vs, vr), 2.5);    // measured 1.77; no shadow at all (V = 1) measures 9.69
+}
+
+TEST(Ssv, TheHoleOfARingShapedOccluderLetsTheLightThrough) {
+  // A square ring (a torus of 4 x 4 segments turned so its sides are parallel to the light's): its
+  // silhouettes have two rings each, the outer outline and the hole's, whose windings add (the
+  // facets between them are one set); competing, the hole's ring alone would hide the hole.
+  const Light light = Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.9f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.9f));
+  Object ring;
+  ring.id = 1;
+  ring.name = "square ring";
+  ring.mesh = makeTorus(0.8f, 0.15f, 4, 4);
+  transformMesh(ring.mesh, glm::rotate(glm::translate(Mat4(1.0f), Vec3(0.0f, 1.5f, 0.0f)), radians(45.0f), Vec3(0.0f, 1.0f, 0.0f)));
+  const Scene scene = groundScene(light, {ring});
+  const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 64);
+  const Image<float> vs = run("ssv", scene, g), vr = reference(scene, g, 1024);
+  std::printf("[ measured ] square ring: V under the hole's centre ssv %.3f, reference %.3f; RMSE8 ssv %.2f, wedges %.2f\n", vs(32, 32), vr(32, 32),
+              rmse8(vs, vr), rmse8(run("wedges", scene, g), vr));
+  // The whole light is seen through the hole from below its centre; were the hole's ring to
+  // compete with the outline's, V would be 0 there.
+  EXPECT_GT(vs(32, 32), 0.95f);   // measured 1.000 (reference 1.000)
+  EXPECT_LT(rmse8(vs, vr), 0.6);  // measured 0.30 (wedges 0.18)
+}
+
 TEST(Ssv, TiltedCubeCloseToALargeLightContourConvexity) {
   // Rouf Fig. 4-10: a tilted cube close under a large square light.
   const Light light = Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
@@ -161,15 +239,19 @@ TEST(Ssv, TiltedCubeCloseToALargeLightContourConvexity) {
     std::printf("[ measured ] tilted cube, contour V < %.2f: convexity deficiency ssv %.4f, wedges %.4f, reference %.4f\n", level,
                 convexityDeficiency(vs, level), convexityDeficiency(vw, level), convexityDeficiency(vr, level));
   }
-  // What we measure contradicts the thesis here, and the test records it: wedges' contour is as
-  // convex as the reference's (measured deficiency 0.021 and 0.052 at V < 0.9; the reference's
-  // includes its Monte Carlo noise), while ssv's is clearly not (0.38): its per-edge linear
-  // interpolation with axis-quantized directions bends the contour at the cube's corners far more
-  // than the single silhouette does.
-  EXPECT_LT(convexityDeficiency(vw, 0.9f), 0.04);
-  EXPECT_LT(convexityDeficiency(vr, 0.9f), 0.08);
-  EXPECT_GT(convexityDeficiency(vs, 0.9f), 0.25);
+  // What we measure does not reproduce the thesis here, and the test records it. Wedges' contour is
+  // as convex as the reference's (measured deficiency at V < 0.9: wedges 0.021, reference 0.052 with
+  // its Monte Carlo noise; 0.029 at 1024 spp), so the single-silhouette artifact is too small to see
+  // at this resolution. The cube stands on a vertex: no facet is fully lit, so ssv's penumbra
+  // silhouette is the zigzag that bounds the facets facing the light's centre, as wedges' is, and
+  // its quantized directions bend the contour a little more (0.0297; the sharp angles of Figs. 4-2
+  // and 4-3). Other orientations (tilts of 15-35 degrees, with a face fully lit) gave the same order.
+  EXPECT_LT(convexityDeficiency(vw, 0.9f), 0.03);   // measured 0.0214
+  EXPECT_LT(convexityDeficiency(vr, 0.9f), 0.08);   // measured 0.0524 (256 spp)
+  EXPECT_LT(convexityDeficiency(vs, 0.9f), 0.045);  // measured 0.0297
+  EXPECT_GT(convexityDeficiency(vs, 0.9f), convexityDeficiency(vw, 0.9f));  // the thesis' claim does not hold here
 }
+
 
 TEST(Ssv, OverlappingOccludersAgainstTheReference) {
   // Rouf Fig. 4-13: two plates at different heights whose shadows overlap.
@@ -178,12 +260,19 @@ TEST(Ssv, OverlappingOccludersAgainstTheReference) {
                                           box(2, glm::translate(Mat4(1.0f), Vec3(0.35f, 1.4f, 0.3f)), Vec3(0.9f, 0.05f, 0.9f))});
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 96);
   const Image<float> vr = reference(scene, g, 1024);
-  const double ssv = rmse8(run("ssv", scene, g), vr), wedges = rmse8(run("wedges", scene, g), vr);
-  std::printf("[ measured ] overlapping plates RMSE8: ssv %.2f, wedges %.2f\n", ssv, wedges);
-  // Measured: ssv 18.3, wedges 6.5 — the thesis' claim (Fig. 4-13) is not reproduced: wedges'
-  // additive overlap error is smaller here than ssv's interpolation error over the whole shadow.
-  EXPECT_LT(ssv, 21.0);
-  EXPECT_LT(wedges, 8.0);
+  const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g);
+  const double ssv = rmse8(vs, vr), wedges = rmse8(vw, vr);
+  double ssvMax = 0.0;
+  for (size_t i = 0; i < vs.size(); ++i) ssvMax = std::max(ssvMax, double(std::abs(vs[i] - vr[i])));
+  std::printf("[ measured ] overlapping plates RMSE8: ssv %.2f (max |V - reference| %.3f), wedges %.2f\n", ssv, ssvMax, wedges);
+  // The thesis' claim holds: the rings compete (their hidden parts are united), so where both
+  // plates hide the same part of the light it is counted once, while wedges adds the two
+  // contributions. The plates' edges are parallel to the light's sides, where ssv is exact: what
+  // is left is the reference's noise (1024 spp).
+  EXPECT_LT(ssv, 0.6);     // measured 0.37
+  EXPECT_LT(ssvMax, 0.03);  // measured 0.015
+  EXPECT_LT(wedges, 8.0);  // measured 6.48
+  EXPECT_LT(3.0 * ssv, wedges);
 }
 
 TEST(Ssv, SlitShowsTheThinVisiblePartOfTheLight) {
@@ -226,38 +315,53 @@ TEST(Ssv, ConcaveUnderEveryLightShapeAgainstTheReference) {
     return Light::polygon(v);
   };
   const std::vector<LightCase> cases = {
-      {"concave far (square 1.2 at 4)", Light::polygon({Vec3(-0.6f, 4, -0.6f), Vec3(0.6f, 4, -0.6f), Vec3(0.6f, 4, 0.6f), Vec3(-0.6f, 4, 0.6f)}), 46.5, 68, 28, 52.5},
-      {"concave near (square 1.2 at 2)", Light::polygon({Vec3(-0.6f, 2, -0.6f), Vec3(0.6f, 2, -0.6f), Vec3(0.6f, 2, 0.6f), Vec3(-0.6f, 2, 0.6f)}), 50.5, 52.5, 28.5, 29.5},
-      {"triangle (circumradius 0.7)", regular(3, 0.7f, 4.0f), 40, 74, 30, 64.5},
-      {"square rect 1.2", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.6f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f)), 46.5, 68.5, 28, 52.5},
-      {"hexagon (circumradius 0.7)", regular(6, 0.7f, 4.0f), 37.5, 62, 28.5, 56.5},
-      {"thin rect 1.8 x 0.12", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.9f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.06f)), 39.5, 52, 28.5, 33.5},
+      {"concave far (square 1.2 at 4)", Light::polygon({Vec3(-0.6f, 4, -0.6f), Vec3(0.6f, 4, -0.6f), Vec3(0.6f, 4, 0.6f), Vec3(-0.6f, 4, 0.6f)}), 9, 16, 4.5, 8.5},
+      {"concave near (square 1.2 at 2)", Light::polygon({Vec3(-0.6f, 2, -0.6f), Vec3(0.6f, 2, -0.6f), Vec3(0.6f, 2, 0.6f), Vec3(-0.6f, 2, 0.6f)}), 20.5, 21.5, 8.2, 8.6},
+      {"triangle (circumradius 0.7)", regular(3, 0.7f, 4.0f), 16, 28.5, 2.3, 5},
+      {"square rect 1.2", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.6f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f)), 9, 16, 4.5, 8.5},
+      {"hexagon (circumradius 0.7)", regular(6, 0.7f, 4.0f), 8, 14.5, 4, 8},
+      {"thin rect 1.8 x 0.12", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.9f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.06f)), 9.5, 18, 6, 11.7},
   };
   // Thresholds: about 1.1 x the measured values, which are (ssv RMSE8 / penumbra RMSE8, wedges
-  // RMSE8 / penumbra RMSE8): far 42.2 / 62.0, 25.5 / 47.9; near 45.9 / 47.9, 25.7 / 26.8; triangle
-  // 36.4 / 67.5, 27.4 / 58.7; square 42.2 / 62.1, 25.5 / 47.8; hexagon 33.9 / 56.2, 26.0 / 51.2; thin
-  // rect 35.7 / 47.3, 26.1 / 30.2 (raytraced-hard: 35.1 / 66.7, 64.6 / 67.7, 28.6 / 62.4, 35.1 / 66.8,
-  // 33.6 / 67.3, 38.3 / 74.1). ssv's errors come from its linear shading across each edge shadow
-  // (Section 3.3; edge_visibility=area, printed, removes part of it) and from walls of the slab that
-  // face the light, where it finds them in umbra.
+  // RMSE8 / penumbra RMSE8): far 8.05 / 14.61, 4.04 / 7.66; near 18.45 / 19.25, 7.40 / 7.74; triangle
+  // 14.26 / 26.00, 2.05 / 4.44; square 8.04 / 14.58, 4.04 / 7.66; hexagon 7.15 / 13.20, 3.58 / 7.15;
+  // thin rect 8.57 / 16.37, 5.46 / 10.57 (raytraced-hard: 35.1 / 66.7, 64.6 / 67.7, 28.6 / 62.4,
+  // 35.1 / 66.8, 33.6 / 67.3, 38.3 / 74.1; ssv edge_visibility=area: 2.28 / 4.15, 5.51 / 5.75,
+  // 9.82 / 17.91, 2.25 / 4.09, 2.17 / 4.00, 8.30 / 15.95). The slab is turned 20 degrees against the
+  // light's sides, and wedges, whose per-edge coverage of the light is exact, is closer to the
+  // reference than ssv: what ssv adds is the thesis' linear shading across a tilted edge shadow
+  // (Section 3.3, Fig. 3-24; edge_visibility=area removes most of it and then beats wedges for the
+  // square and hexagon lights) and, for the triangle and the thin rect, the light square standing
+  // in for the light (the thin light's artifacts of Fig. 4-9). On the ground alone (printed; the
+  // rest is the slab's own walls) wedges measures 1.06 / 1.95 far, 6.26 / 6.27 near, 0.63 / 1.32
+  // triangle, 1.01 / 1.84 square, 1.12 / 2.18 hexagon, 2.02 / 3.77 thin rect, ssv 7.80 / 13.77,
+  // 19.16 / 19.16, 14.47 / 25.68, 7.79 / 13.75, 6.92 / 12.45, 8.96 / 16.49. With edges parallel to
+  // the light's sides ssv is the closer one (AxisParallelConcaveSlabMatchesTheReference).
   Scene scene = loadScene("concave");
   for (const LightCase& c : cases) {
     scene.lights = {c.light};
     const GBuffer g = renderGBuffer(scene, 256, 256);
     const Image<uint8_t> mask = errorMask(g, c.light);
     const Image<float> vr = reference(scene, g, 256);
-    const Image<float> vs = run("ssv", scene, g);
+    const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g);
     const ErrorStats ssv = compareVisibility(vs, vr, mask);
-    const ErrorStats wedges = compareVisibility(run("wedges", scene, g), vr, mask);
+    const ErrorStats wedges = compareVisibility(vw, vr, mask);
     const ErrorStats area = compareVisibility(run("ssv", scene, g, {"edge_visibility=area"}), vr, mask);
     const ErrorStats hard = compareVisibility(run("raytraced-hard", scene, g), vr, mask);
-    std::printf("[ measured ] %-32s RMSE8 / penumbra RMSE8: ssv %5.2f / %5.2f, ssv edge_visibility=area %5.2f / %5.2f, wedges %5.2f / %5.2f, raytraced-hard %5.2f / %5.2f\n",
+    Image<uint8_t> groundMask = mask;
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) groundMask(x, y) = mask(x, y) && g.objectId(x, y) == 0;
+    const ErrorStats ssvGround = compareVisibility(vs, vr, groundMask), wedgesGround = compareVisibility(vw, vr, groundMask);
+    std::printf("[ measured ] %-32s RMSE8 / penumbra RMSE8: ssv %5.2f / %5.2f, ssv edge_visibility=area %5.2f / %5.2f, wedges %5.2f / %5.2f, raytraced-hard %5.2f / %5.2f; on the ground only: ssv %5.2f / %5.2f, wedges %5.2f / %5.2f\n",
                 c.name, ssv.rmse8, ssv.penumbraRmse8, area.rmse8, area.penumbraRmse8, wedges.rmse8, wedges.penumbraRmse8, hard.rmse8,
-                hard.penumbraRmse8);
+                hard.penumbraRmse8, ssvGround.rmse8, ssvGround.penumbraRmse8, wedgesGround.rmse8, wedgesGround.penumbraRmse8);
     EXPECT_LT(ssv.rmse8, c.ssvRmse8) << c.name;
     EXPECT_LT(ssv.penumbraRmse8, c.ssvPenumbraRmse8) << c.name;
     EXPECT_LT(wedges.rmse8, c.wedgesRmse8) << c.name;
     EXPECT_LT(wedges.penumbraRmse8, c.wedgesPenumbraRmse8) << c.name;
+    // Recorded (see above): with the slab turned, wedges is closer to the reference than ssv.
+    EXPECT_LT(wedges.rmse8, ssv.rmse8) << c.name;
+    EXPECT_LT(wedgesGround.rmse8, ssvGround.rmse8) << c.name;
     size_t soft = 0;
     for (size_t i = 0; i < vs.size(); ++i) soft += mask[i] && vs[i] > 0.05f && vs[i] < 0.95f;
     EXPECT_GT(soft, 2000u) << c.name << ": a soft shadow, not a hard one";
