@@ -52,7 +52,7 @@ const char* kSceneHead = R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0,
 TEST(MalformedFiles, NonFiniteMeshVerticesAreRefusedThroughTheSceneFile) {
   const ScratchDir dir;
   // The third vertex of the second object's file is not finite: NaN, +inf, and a number past float range.
-  for (const std::string& bad : {"nan", "inf", "-inf", "1e39"}) {
+  for (const std::string bad : {"nan", "inf", "-inf", "1e39"}) {
     dir.write("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     dir.write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 " + bad + " 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
     const auto scene = dir.write("scene.json", std::string(kSceneHead) +
