@@ -50,4 +50,13 @@ inline Ray shadowRay(const Vec3& wsP, const Vec3& wsOrigin, const Vec3& wsDirect
   return ray;
 }
 
+// Puts a just-built ray into a packet slot field by field: a whole-struct copy of it stalls on
+// store forwarding (the struct is still in flight in the store buffer as separate fields).
+inline void storeRay(Ray& slot, const Ray& ray) {
+  slot.origin = ray.origin;
+  slot.direction = ray.direction;
+  slot.tMin = ray.tMin;
+  slot.tMax = ray.tMax;
+}
+
 }  // namespace penumbra::rt

@@ -178,12 +178,7 @@ class ParkerTechnique final : public ShadowTechnique {
           }
           const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, facing >= 0.0f ? 1.0f : -1.0f, epsilon_);
           const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
-          // Field by field: a whole-struct copy of the just-built ray stalls on store forwarding.
-          Ray& slot = packet[count];
-          slot.origin = ray.origin;
-          slot.direction = ray.direction;
-          slot.tMin = ray.tMin;
-          slot.tMax = ray.tMax;
+          rt::storeRay(packet[count], ray);
           xs[count++] = x;
           if (count == 16) flush();
         }

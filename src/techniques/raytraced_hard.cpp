@@ -55,8 +55,13 @@ class RaytracedHardTechnique final : public ShadowTechnique {
           if (!gbuffer.hit(x, y)) continue;
           const Vec3 wsP = gbuffer.wsPosition(x, y);
           const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon_);
-          packet[count] = rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon_);
+          // One direction to the light's centre serves the offset's side (rt::lightSide's dot
+          // product, computed here once) and the ray.
+          const Vec3 wsToLight = light.directionToCenter(wsP);
+          const float side = glm::dot(wsNg, wsToLight) >= 0.0f ? 1.0f : -1.0f;
+          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, side, epsilon_);
+          const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
+          rt::storeRay(packet[count], ray);
           xs[count++] = x;
           if (count == 16) flush();
         }
