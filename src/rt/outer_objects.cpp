@@ -353,6 +353,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     corners[i] = bounds.empty() ? lightCenter_
                                 : Vec3((i & 1) ? bounds.upper.x : bounds.lower.x, (i & 2) ? bounds.upper.y : bounds.lower.y,
                                        (i & 4) ? bounds.upper.z : bounds.lower.z);
+  float gridExtent = 0.0f;  // directional: side of the square the planar grid covers
   if (directional_) {
     frame_ = Frame::fromZ(light.direction());
     Vec2 lower(kInfinity), upper(-kInfinity);
@@ -367,7 +368,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     upper += Vec2(margin);
     minReceiverDepth_ -= margin;
     gridLower_ = lower;
-    cellSize_ = std::max(upper.x - lower.x, upper.y - lower.y) / static_cast<float>(resolution_);
+    gridExtent = std::max(upper.x - lower.x, upper.y - lower.y);
   } else {
     for (const Vec3& c : corners) maxReceiverDistance_ = std::max(maxReceiverDistance_, glm::length(c - lightCenter_));
     maxReceiverDistance_ += margin;
@@ -450,13 +451,29 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
                         static_cast<int>(c)});
   }
 
-  // The light buffer: (cell, capsule) pairs from every piece's footprint, then compressed rows.
-  const int cells = faceCount_ * resolution_ * resolution_;
+  // The light buffer: (cell, capsule) pairs from every piece's footprint (at the finest grid, up to
+  // gridResolution, that keeps them within maxGridEntries), then compressed rows.
   std::vector<std::pair<int, int>> pairs;
-  if (directional_)
-    for (const Piece& piece : pieces) insertDirectional(piece, pairs);
-  else
-    insertLocal(bounds, margin, pieces, pairs);
+  for (;;) {
+    const size_t limit = resolution_ > 1 ? options.maxGridEntries : std::numeric_limits<size_t>::max();
+    pairs.clear();
+    bool within = true;
+    if (directional_) {
+      cellSize_ = gridExtent / static_cast<float>(resolution_);
+      for (const Piece& piece : pieces) {
+        insertDirectional(piece, pairs);
+        if (pairs.size() > limit) {
+          within = false;
+          break;
+        }
+      }
+    } else {
+      within = insertLocal(bounds, margin, pieces, limit, pairs);
+    }
+    if (within) break;
+    resolution_ /= 2;
+  }
+  const int cells = faceCount_ * resolution_ * resolution_;
   for (size_t c = 0; c < capsules_.size(); ++c) pairs.emplace_back(cells, static_cast<int>(c));  // the catch-all cell
   // Sorted by cell, then object, then capsule: per-object runs in each cell, duplicates adjacent.
   // Every cell's pairs arrive in capsule order (capsules were added object by object), so a stable
@@ -524,7 +541,7 @@ void OuterObjects::insertDirectional(const Piece& piece, std::vector<std::pair<i
     for (int x = x0; x <= x1; ++x) pairs.emplace_back(y * n + x, piece.capsule);
 }
 
-void OuterObjects::insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces,
+bool OuterObjects::insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces, size_t limit,
                                std::vector<std::pair<int, int>>& pairs) const {
   const int n = resolution_, tilesPerSide = (n + kTile - 1) / kTile, side = n + 1;
   const float step = 2.0f / static_cast<float>(n);
@@ -625,8 +642,10 @@ void OuterObjects::insertLocal(const Bounds3& bounds, float margin, const std::v
       reachMask(views[p], diameter_, cells, 0, kTile * kTile, reached.data());
       for (int k = 0; k < kTile * kTile; ++k)
         if (reached[static_cast<size_t>(k)]) pairs.emplace_back((face * n + y0 + k / kTile) * n + x0 + k % kTile, pieces[p].capsule);
+      if (pairs.size() > limit) return false;
     }
   }
+  return true;
 }
 
 void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,

@@ -56,7 +56,15 @@ enum class OuterCombine { Min, Product, Sum };
 struct OuterObjectOptions {
   float lightDiameter = 1.0f;  //!< D: world units; for a directional light, per unit distance
   bool analyticSpheres = true; //!< objects that remember a true sphere use it instead of their mesh
-  int gridResolution = 64;     //!< cells per side of each cube-map face (or of the planar grid)
+  // Cells per side of each cube-map face (or of the planar grid), at most: halved while the light
+  // buffer would list more than maxGridEntries (cell, capsule) pairs.
+  int gridResolution = 64;
+  // The light buffer's size limit. Each capsule is listed in every cell its footprint reaches,
+  // about (footprint / cell)^2 of them: 10^6 separate tiny triangles (3 x 10^6 open edges, each
+  // reaching ~10^2 cells at 64 x 64 a face) would list 1.7 x 10^8 pairs, 8 GB and a minute of
+  // page faults. Halving the grid divides that by up to 4 and leaves V unchanged (the lists stay
+  // conservative); 2^24 entries are 0.5 GB. A grid of one cell a face is never refused.
+  size_t maxGridEntries = size_t{1} << 24;
 };
 
 // The attenuation of the Section 3 falloff at tau (s = 0 at tau <= 0, 1 at tau >= 1).
@@ -94,6 +102,7 @@ class OuterObjects {
   size_t analyticSphereCount() const { return analyticCount_; }
   size_t silhouetteEdgeCount() const { return edgeCount_; }
   size_t gridEntryCount() const { return entryCount_; }
+  int gridResolution() const { return resolution_; }
 
   // Capsules a cell's list holds in one pass of the per-ray loop; lists are padded to a multiple.
   static constexpr uint32_t kBlock = 8;
@@ -115,7 +124,8 @@ class OuterObjects {
 
   // The (cell, capsule) pairs of the cube map (local light) or of the planar grid (directional)
   // for every piece, by the footprint bound of outer_objects.cpp; per cell in capsule order.
-  void insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces,
+  // insertLocal stops, returning false, once `pairs` holds more than `limit`.
+  bool insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces, size_t limit,
                    std::vector<std::pair<int, int>>& pairs) const;
   void insertDirectional(const Piece& piece, std::vector<std::pair<int, int>>& pairs) const;
 

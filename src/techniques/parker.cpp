@@ -27,7 +27,8 @@
 //
 // Parameters: falloff (bernstein | sinusoid), combine (min | product | sum), analytic_spheres
 // (bool), light_diameter (world units; directional: per unit distance; auto = as above),
-// grid_resolution (cells per side of each face of the light buffer's cube map).
+// grid_resolution (cells per side of each face of the light buffer's cube map; lowered where the
+// buffer would exceed rt::OuterObjectOptions::maxGridEntries, 2^24).
 //
 // Cost (the paper: "approximately 20% slower" than hard ray-traced shadows). prepare builds the
 // outer objects' light buffer and the inner objects' BVH at once; visibility traces raytraced-
@@ -200,6 +201,7 @@ class ParkerTechnique final : public ShadowTechnique {
     return {{"analytic_spheres", static_cast<double>(outer_->analyticSphereCount())},
             {"silhouette_edges", static_cast<double>(outer_->silhouetteEdgeCount())},
             {"light_buffer_entries", static_cast<double>(outer_->gridEntryCount())},
+            {"light_buffer_resolution", static_cast<double>(outer_->gridResolution())},
             {"rays", rayCount_}};
   }
 
@@ -242,7 +244,8 @@ TechniqueInfo parkerTechniqueInfo() {
       ParamSpec{.name = "grid_resolution", .type = ParamType::Int, .defaultValue = int64_t{64}, .min = 1.0, .max = 1024.0,
                 .choices = {}, .unit = "cells",
                 .help = "cells per side of each cube-map face of the light buffer that lists the outer objects each "
-                        "shadow ray can touch (speed only: the result does not depend on it)"},
+                        "shadow ray can touch, at most: halved while the buffer would exceed 2^24 entries (speed "
+                        "and memory only: the result does not depend on it)"},
   };
   info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
     ParkerOptions o;

@@ -4,7 +4,8 @@
 // triangle's edges (all of them are boundary edges, so the outline needs no silhouette test) are
 // evaluated for every ray, and combined by min, product or sum. A light buffer that left out a
 // capsule a ray can reach would show as an error of the order of the penumbra's depth; grid
-// resolutions from 1 to 64 cells must give the same bits; the batch call must equal the single ray.
+// resolutions from 1 to 64 cells must give the same bits, as must a grid coarsened to keep the
+// buffer within its entry limit; the batch call must equal the single ray.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -193,6 +194,35 @@ TEST(OuterObjects, DirectionalLightMatchesTheAppendixOracleAtEveryGridResolution
   const Light light = Light::directional(Vec3(0.2f, 1.0f, 0.1f), radians(10.0f));
   const float diameter = 2.0f * std::tan(radians(5.0f));
   expectOracle(light, diameter, static_cast<double>(diameter), 450, 80);
+}
+
+// Over its entry limit the light buffer is built on a coarser grid: fewer entries, the same bits.
+void expectEntryLimitKeepsTheResult(const Light& light, float diameter) {
+  const OracleScene o = makeOracleScene();
+  const TestRays t = groundRays(light, 3000);
+  rt::OuterObjectOptions options;
+  options.lightDiameter = diameter;
+  const rt::OuterObjects full(o.scene, light, options);
+  ASSERT_EQ(full.gridResolution(), 64);
+  const size_t fullEntries = full.gridEntryCount();
+  for (const size_t limit : {fullEntries / 2, size_t{1}}) {
+    SCOPED_TRACE("limit " + std::to_string(limit));
+    options.maxGridEntries = limit;
+    const rt::OuterObjects limited(o.scene, light, options);
+    EXPECT_LT(limited.gridResolution(), 64);
+    if (limit > 1) EXPECT_LE(limited.gridEntryCount(), limit);
+    else EXPECT_EQ(limited.gridResolution(), 1) << "one cell a face is never refused";
+    for (const rt::OuterCombine combine : {rt::OuterCombine::Min, rt::OuterCombine::Product, rt::OuterCombine::Sum}) {
+      SCOPED_TRACE(name(combine));
+      EXPECT_EQ(attenuations(limited, t, combine), attenuations(full, t, combine));
+    }
+  }
+}
+
+TEST(OuterObjects, OverItsEntryLimitTheLightBufferIsCoarserAndTheResultTheSame) {
+  expectEntryLimitKeepsTheResult(Light::sphere(Vec3(0.5f, 7.0f, -0.3f), 0.8f), 1.6f);
+  expectEntryLimitKeepsTheResult(Light::directional(Vec3(0.2f, 1.0f, 0.1f), radians(10.0f)),
+                                 2.0f * std::tan(radians(5.0f)));
 }
 
 TEST(OuterObjects, RejectsABadDiameterOrGrid) {
