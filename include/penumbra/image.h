@@ -2,6 +2,7 @@
 // [x, x+1) x [y, y+1) and is sampled at its centre (x + 0.5, y + 0.5).
 #pragma once
 
+#include <algorithm>
 #include <cassert>
 #include <cstddef>
 #include <vector>
@@ -37,6 +38,13 @@ class Image {
   const T* row(int y) const { return data_.data() + static_cast<size_t>(y) * width_; }
 
   void fill(const T& value) { std::fill(data_.begin(), data_.end(), value); }
+  // Becomes a width x height image of `value`, keeping its storage where it is large enough: a
+  // technique's output refilled every frame costs a pass over memory, not fresh pages.
+  void reset(int width, int height, const T& value) {
+    width_ = width;
+    height_ = height;
+    data_.assign(static_cast<size_t>(width) * height, value);
+  }
   auto begin() { return data_.begin(); }
   auto end() { return data_.end(); }
   auto begin() const { return data_.begin(); }

@@ -510,7 +510,7 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   if (!light_) fail("brabec: visibility() called before prepare(); call prepare(scene, light) first");
   Timer timer;
   const int width = gbuffer.width(), height = gbuffer.height();
-  v = Image<float>(width, height, 1.0f);
+  v.reset(width, height, 1.0f);
   searches_ = 0.0;
   hitPixels_ = 0.0;
   if (width == 0 || height == 0) {
@@ -538,8 +538,12 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
     // The hard test and the interpolation id of every pixel, kept compact (5 bytes a pixel); the
     // few pixels that are searched are classified again in full.
     const size_t count = static_cast<size_t>(width) * height;
-    std::vector<uint8_t> cls(count), known(count, 0);
-    std::vector<int32_t> key(count);
+    scratchClass_.resize(count);
+    scratchKey_.resize(count);
+    scratchKnown_.assign(count, 0);
+    std::vector<uint8_t>& cls = scratchClass_;
+    std::vector<uint8_t>& known = scratchKnown_;
+    std::vector<int32_t>& key = scratchKey_;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t hitCount = 0;
       for (int y = rows.begin(); y < rows.end(); ++y)
@@ -555,7 +559,8 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
     auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };
     // Per known pixel: the direction to its texel as two snorm8 components (0, 0: none), 2 bytes a
     // pixel; written before it is read (a pixel is known once solved or interpolated).
-    const auto direction = std::make_unique_for_overwrite<int8_t[]>(2 * count);
+    scratchDirection_.resize(2 * count);
+    int8_t* const direction = scratchDirection_.data();
     auto storeDirection = [&](size_t k, const Vec2& d) {
       direction[2 * k] = static_cast<int8_t>(std::lround(d.x * 127.0f));
       direction[2 * k + 1] = static_cast<int8_t>(std::lround(d.y * 127.0f));

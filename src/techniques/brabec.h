@@ -209,6 +209,11 @@ class BrabecTechnique final : public ShadowTechnique {
   PassTimings timings_;
   double searches_ = 0.0;
   double hitPixels_ = 0.0;
+  // The interpolation's per-pixel scratch (brabec.cpp), kept between frames so that a frame does not
+  // fault in 8 MB of fresh pages at 1024 x 1024.
+  std::vector<uint8_t> scratchClass_, scratchKnown_;
+  std::vector<int32_t> scratchKey_;
+  std::vector<int8_t> scratchDirection_;
 };
 
 TechniqueInfo brabecTechniqueInfo();

@@ -22,7 +22,7 @@ class NoneTechnique final : public ShadowTechnique {
 
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     Timer timer;
-    v = Image<float>(gbuffer.width(), gbuffer.height(), 1.0f);
+    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
                                          [](const auto& p) { return p.first == "visibility"; }),
                           timings_.passes.end());

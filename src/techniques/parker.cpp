@@ -126,7 +126,7 @@ class ParkerTechnique final : public ShadowTechnique {
     if (!rays_ || !outer_ || !light_) fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
-    v = Image<float>(width, height, 1.0f);
+    v.reset(width, height, 1.0f);
     const Light& light = *light_;
     const rt::OuterObjects& outer = *outer_;
     const rt::OuterFalloff falloff = options_.falloff;

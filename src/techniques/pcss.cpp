@@ -92,7 +92,7 @@ class PcssTechnique final : public ShadowTechnique {
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
     Timer timer;
-    v = Image<float>(gbuffer.width(), gbuffer.height(), 1.0f);
+    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
     std::array<std::atomic<int64_t>, kPathCount> counts{};
     // As forEachReceiverPixel, with per-range counts of the paths the pixels took.
     tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {

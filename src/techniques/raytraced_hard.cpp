@@ -37,7 +37,7 @@ class RaytracedHardTechnique final : public ShadowTechnique {
     if (!rays_ || !light_) fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
-    v = Image<float>(width, height, 1.0f);
+    v.reset(width, height, 1.0f);
     const Light& light = *light_;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       Ray packet[16];

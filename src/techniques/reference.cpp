@@ -51,7 +51,7 @@ void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   if (!rays_ || !light_) fail("reference: visibility() called before prepare(); call prepare(scene, light) first");
   Timer timer;
   const int width = gbuffer.width(), height = gbuffer.height();
-  v = Image<float>(width, height, 1.0f);
+  v.reset(width, height, 1.0f);
   stdError_ = Image<float>(width, height, 0.0f);
   const Light& light = *light_;
   const RayScene& rays = *rays_;

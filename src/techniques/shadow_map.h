@@ -206,7 +206,7 @@ NearestBlocker findNearestBlocker(const LightMap& map, const ShadowReceiver& r, 
 // V = 1 where the pixel sees nothing. Deterministic: every pixel is computed on its own.
 template <class F>
 void forEachReceiverPixel(const GBuffer& gbuffer, Image<float>& v, F&& f) {
-  v = Image<float>(gbuffer.width(), gbuffer.height(), 1.0f);
+  v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
   tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
       float* out = v.row(y);

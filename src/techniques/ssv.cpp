@@ -377,7 +377,7 @@ class SsvTechnique final : public ShadowTechnique {
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
-    v = Image<float>(width, height, 1.0f);
+    v.reset(width, height, 1.0f);
     for (Side& side : sides_) bin(side, gbuffer);
     timings_.add("binning", timer.elapsedMs());
     Timer pixelTimer;

@@ -131,7 +131,7 @@ class WedgesTechnique final : public ShadowTechnique {
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
-    v = Image<float>(width, height, 1.0f);
+    v.reset(width, height, 1.0f);
     for (Side& side : sides_) {
       Vec2 lower, upper;
       side.binned = !side.rings.empty() && receiverRange(gbuffer, side.plane, zNear_, lower, upper);
