@@ -6,11 +6,10 @@
 // Both techniques run in every iteration, interleaved, so that they see the same machine load; the
 // counters are the mean milliseconds of each pass and the ratios parker / raytraced-hard of each
 // pass and of their total (visibility_over_raytraced_hard is the per-frame ray work).
-// Measured (2-core development machine, medians of 5 repetitions): visibility 1.05x on spheres and
-// 1.31x on torus, prepare + visibility 1.01x and 1.33x. Part of that is setup: parker computes the
-// direction to the light once per pixel and fills its packet field by field, raytraced-hard
-// computes it twice and copies whole rays; with raytraced-hard's setup written the same way the
-// ratios measured 1.16x and 1.46x (visibility), 1.11x and 1.48x (total).
+// Measured (2-core development machine, medians of 3 repetitions): visibility 1.16x on spheres and
+// 1.47x on torus, prepare + visibility 1.10x and 1.48x. Both build their rays the same way (one
+// direction to the light per pixel, rt::storeRay); before raytraced-hard did, the ratios read
+// 1.05x and 1.31x, a fifth of parker's apparent lead being raytraced-hard's slower set-up.
 #include "bench_common.h"
 
 namespace penumbra {

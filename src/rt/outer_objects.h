@@ -34,7 +34,7 @@
 // shadow ray that misses every inner object: one cell lookup and, where the cell lists anything
 // (`torus` at 1024 x 1024: 4 rays in 10, 14 capsules on average), one pass over the list in
 // 8-capsule blocks that the compiler vectorizes (8 lanes where the CPU has AVX2, else 4). In all,
-// parker's visibility pass costs 1.31x raytraced-hard's on `torus` and 1.05x on `spheres`
+// parker's visibility pass costs 1.48x raytraced-hard's on `torus` and 1.16x on `spheres`
 // (bench/parker_bench.cpp).
 #pragma once
 

@@ -33,8 +33,8 @@
 // Cost (the paper: "approximately 20% slower" than hard ray-traced shadows). prepare builds the
 // outer objects' light buffer and the inner objects' BVH at once; visibility traces raytraced-
 // hard's rays in packets of 16 and hands the rays that miss every inner object to the outer
-// objects in one batch. At 1024 x 1024 (bench/parker_bench.cpp, one run): visibility 1.05x
-// raytraced-hard on `spheres` and 1.31x on `torus`, prepare + visibility 1.01x and 1.33x.
+// objects in one batch. At 1024 x 1024 (bench/parker_bench.cpp, one run): visibility 1.16x
+// raytraced-hard on `spheres` and 1.48x on `torus`, prepare + visibility 1.10x and 1.50x.
 #include <algorithm>
 #include <atomic>
 #include <exception>
