@@ -256,6 +256,15 @@ bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, 
   return lower.x <= upper.x;
 }
 
+int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
+  const Vec3 wsP = gbuffer.wsPosition(x, y);
+  const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+  const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+  const std::optional<RayHit> hit =
+      rays.intersect(rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon));
+  return hit ? hit->objectId : kNoObject;
+}
+
 }  // namespace silhouette
 
 namespace {
@@ -394,13 +403,7 @@ class SsvTechnique final : public ShadowTechnique {
           // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
           std::optional<int32_t> centreBlocker;
           auto blocker = [&]() {
-            if (!centreBlocker) {
-              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(*light_, wsP, wsNg), epsilon_);
-              const std::optional<RayHit> hit = rays_->intersect(
-                  rt::shadowRay(wsP, wsOrigin, light_->directionToCenter(wsP), light_->distanceToCenter(wsP), epsilon_));
-              centreBlocker = hit ? hit->objectId : kNoObject;
-            }
+            if (!centreBlocker) centreBlocker = silhouette::centreBlockerAt(*rays_, *light_, gbuffer, x, y, epsilon_);
             return *centreBlocker;
           };
           v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blocker);

@@ -26,6 +26,10 @@
 #include "penumbra/mesh_topology.h"
 #include "penumbra/scene.h"
 
+namespace penumbra {
+class RayScene;
+}
+
 namespace penumbra::silhouette {
 
 inline constexpr int kMaxLightVertices = 32;
@@ -121,5 +125,10 @@ class UGrid {
 
 // The u-space rectangle of the G-buffer's hit points in front of the light (z > zMin).
 bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper);
+
+// The object that hides the light's centre from G-buffer pixel (x, y) (kNoObject: none): one ray,
+// offset and clipped as raytraced-hard's. ssv and wedges trace it only where their silhouettes
+// cannot tell which side of their curves is hidden.
+int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon);
 
 }  // namespace penumbra::silhouette

@@ -156,13 +156,7 @@ class WedgesTechnique final : public ShadowTechnique {
           // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
           std::optional<int32_t> centreBlocker;
           auto blocker = [&]() {
-            if (!centreBlocker) {
-              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(*light_, wsP, wsNg), epsilon_);
-              const std::optional<RayHit> hit = rays_->intersect(
-                  rt::shadowRay(wsP, wsOrigin, light_->directionToCenter(wsP), light_->distanceToCenter(wsP), epsilon_));
-              centreBlocker = hit ? hit->objectId : kNoObject;
-            }
+            if (!centreBlocker) centreBlocker = silhouette::centreBlockerAt(*rays_, *light_, gbuffer, x, y, epsilon_);
             return *centreBlocker;
           };
           v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), clipped, tmp, blocker);
