@@ -3,32 +3,21 @@
 #include "penumbra/mesh_topology.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <tuple>
-#include <unordered_map>
 
 #include "penumbra/error.h"
 
 namespace penumbra {
 namespace {
 
-struct PositionKey {
-  uint32_t x, y, z;
-  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct PositionKeyHash {
-  size_t operator()(const PositionKey& k) const {
-    return (size_t(k.x) * 73856093u) ^ (size_t(k.y) * 19349663u) ^ (size_t(k.z) * 83492791u);
-  }
-};
-PositionKey keyOf(const Vec3& p) {
-  // +0.0 and -0.0 are the same point.
+// Exact float bits of a position; +0.0 and -0.0 are the same point.
+std::array<uint32_t, 3> positionBits(const Vec3& p) {
   const Vec3 q = p + Vec3(0.0f);
-  PositionKey k;
-  std::memcpy(&k.x, &q.x, 4);
-  std::memcpy(&k.y, &q.y, 4);
-  std::memcpy(&k.z, &q.z, 4);
-  return k;
+  std::array<uint32_t, 3> bits;
+  std::memcpy(bits.data(), &q, sizeof(bits));
+  return bits;
 }
 
 // One half-edge: triangle t, edge k, running from -> to.
@@ -95,15 +84,35 @@ bool MeshTopology::convexEdge(uint32_t t, int k) const {
   return glm::dot(faceNormals[t], positions[far] - positions[a]) <= 0.0f;
 }
 
+std::vector<uint32_t> firstVertexAtSamePosition(const std::vector<Vec3>& positions) {
+  const size_t n = positions.size();
+  std::vector<std::pair<std::array<uint32_t, 3>, uint32_t>> sorted(n);
+  for (uint32_t i = 0; i < n; ++i) sorted[i] = {positionBits(positions[i]), i};
+  std::sort(sorted.begin(), sorted.end());  // by position, then index: each run starts at its first vertex
+  std::vector<uint32_t> first(n);
+  for (size_t r = 0; r < n; ++r)
+    first[sorted[r].second] = (r > 0 && sorted[r].first == sorted[r - 1].first) ? first[sorted[r - 1].second] : sorted[r].second;
+  return first;
+}
+
+std::vector<uint32_t> weldVertices(const std::vector<Vec3>& positions, std::vector<Vec3>& welded) {
+  const std::vector<uint32_t> first = firstVertexAtSamePosition(positions);
+  std::vector<uint32_t> id(positions.size());
+  welded.clear();
+  for (size_t i = 0; i < positions.size(); ++i) {
+    if (first[i] == i) {
+      id[i] = static_cast<uint32_t>(welded.size());
+      welded.push_back(positions[i]);
+    } else {
+      id[i] = id[first[i]];  // first[i] < i: already numbered
+    }
+  }
+  return id;
+}
+
 MeshTopology buildMeshTopology(const Mesh& mesh) {
   MeshTopology m;
-  std::unordered_map<PositionKey, uint32_t, PositionKeyHash> index;
-  std::vector<uint32_t> remap(mesh.positions.size());
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    auto [it, inserted] = index.emplace(keyOf(mesh.positions[i]), static_cast<uint32_t>(m.positions.size()));
-    if (inserted) m.positions.push_back(mesh.positions[i]);
-    remap[i] = it->second;
-  }
+  const std::vector<uint32_t> remap = weldVertices(mesh.positions, m.positions);
   const Bounds3 bounds = mesh.bounds();
   const float scale = bounds.empty() ? 1.0f : std::max(glm::length(bounds.diagonal()), 1e-30f);
   for (const glm::uvec3& tri : mesh.triangles) {

@@ -32,6 +32,7 @@
 #include <limits>
 
 #include "penumbra/error.h"
+#include "penumbra/mesh_topology.h"
 
 // An 8-wide build of the per-ray loop beside the baseline's 4-wide one, chosen at run time, where
 // the baseline has no AVX2 of its own.
@@ -68,16 +69,6 @@ struct PieceView {
   Vec3 axis;
   float distance, reach;
 };
-
-// Exact float bits of a position, so welding merges only vertices at the same place.
-std::array<uint32_t, 3> positionBits(const Vec3& p) {
-  std::array<uint32_t, 3> bits;
-  for (int k = 0; k < 3; ++k) {
-    const float f = p[k] == 0.0f ? 0.0f : p[k];  // -0 and +0 are the same place
-    std::memcpy(&bits[k], &f, sizeof(float));
-  }
-  return bits;
-}
 
 // Cones of directions in structure-of-arrays form: unit axis, cos and sin of the half-angle (at
 // most pi/2), and the largest distance from the light's centre to a scene point inside the cone
@@ -394,12 +385,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     const Mesh& mesh = object.mesh;
     // Weld vertices at the same position (split normals or UV seams make duplicates), so that an
     // edge between two faces is found even when each face has its own copy of the vertices.
-    std::vector<uint32_t> order(mesh.positions.size());
-    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return positionBits(mesh.positions[x]) < positionBits(mesh.positions[y]); });
-    std::vector<uint32_t> weld(mesh.positions.size());
-    for (size_t i = 0; i < order.size(); ++i)
-      weld[order[i]] = (i > 0 && positionBits(mesh.positions[order[i]]) == positionBits(mesh.positions[order[i - 1]])) ? weld[order[i - 1]] : order[i];
+    const std::vector<uint32_t> weld = firstVertexAtSamePosition(mesh.positions);
 
     edges.clear();
     edges.reserve(3 * mesh.triangles.size());

@@ -51,13 +51,13 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include <unordered_map>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
+#include "penumbra/mesh_topology.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
@@ -118,13 +118,12 @@ uint64_t edgeKey(uint32_t a, uint32_t b) {
   return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
 }
 
-struct PositionHash {
-  size_t operator()(const Vec3& p) const {
-    uint32_t bits[3];
-    std::memcpy(bits, &p, sizeof bits);
-    return (static_cast<size_t>(bits[0]) * 0x9E3779B1u) ^ (static_cast<size_t>(bits[1]) * 0x85EBCA77u) ^
-           (static_cast<size_t>(bits[2]) * 0xC2B2AE3Du);
-  }
+// One triangle's use of one edge, in triangle order (`use` increases with it).
+struct EdgeRecord {
+  uint64_t key;
+  uint32_t use;
+  uint32_t opposite;  //!< the triangle's third (welded) vertex
+  bool front;
 };
 
 }  // namespace
@@ -136,16 +135,10 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
     std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
     const Mesh& mesh = object.mesh;
     // Weld by exact position: primitives repeat vertices where normals differ (a box's corners).
-    std::unordered_map<Vec3, uint32_t, PositionHash> weld;
-    std::vector<uint32_t> canonical(mesh.positions.size());
     std::vector<Vec3> positions;
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-      auto [it, inserted] = weld.try_emplace(mesh.positions[i], static_cast<uint32_t>(positions.size()));
-      if (inserted) positions.push_back(mesh.positions[i]);
-      canonical[i] = it->second;
-    }
-    std::unordered_map<uint64_t, EdgeUse> uses;
-    std::vector<uint64_t> order;  // edges in first-use order: deterministic output
+    const std::vector<uint32_t> canonical = weldVertices(mesh.positions, positions);
+    std::vector<EdgeRecord> records;
+    records.reserve(3 * mesh.triangles.size());
     for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
       const glm::uvec3& tri = mesh.triangles[ti];
       const uint32_t v[3] = {canonical[tri.x], canonical[tri.y], canonical[tri.z]};
@@ -155,21 +148,35 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
       const Vec3 centroid = (positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f;
       const Vec3 toLight = light.isDirectional() ? light.direction() : light.center() - centroid;
       const bool front = glm::dot(n, toLight) > 0.0f;
-      for (int k = 0; k < 3; ++k) {
-        const uint64_t key = edgeKey(v[k], v[(k + 1) % 3]);
-        auto [it, inserted] = uses.try_emplace(key);
-        if (inserted) order.push_back(key);
-        EdgeUse& use = it->second;
+      for (int k = 0; k < 3; ++k)
+        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)),
+                           v[(k + 2) % 3], front});
+    }
+    // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
+    std::stable_sort(records.begin(), records.end(), [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key; });
+    struct EdgeUses {
+      uint32_t firstUse;
+      uint64_t key;
+      EdgeUse use;
+    };
+    std::vector<EdgeUses> uses;
+    for (size_t i = 0; i < records.size();) {
+      EdgeUses e{records[i].use, records[i].key, {}};
+      for (; i < records.size() && records[i].key == e.key; ++i) {
+        EdgeUse& use = e.use;
         const int slot = use.front + use.back;
         if (slot < 2) {
-          use.opposite[slot] = v[(k + 2) % 3];
-          if (front && use.firstFront < 0) use.firstFront = slot;
+          use.opposite[slot] = records[i].opposite;
+          if (records[i].front && use.firstFront < 0) use.firstFront = slot;
         }
-        (front ? use.front : use.back) += 1;
+        (records[i].front ? use.front : use.back) += 1;
       }
+      uses.push_back(e);
     }
-    for (uint64_t key : order) {
-      const EdgeUse& use = uses[key];
+    std::sort(uses.begin(), uses.end(), [](const EdgeUses& x, const EdgeUses& y) { return x.firstUse < y.firstUse; });
+    for (const EdgeUses& edgeUses : uses) {
+      const uint64_t key = edgeUses.key;
+      const EdgeUse& use = edgeUses.use;
       const int count = use.front + use.back;
       if (!(count == 1 || (use.front > 0 && use.back > 0))) continue;
       const Vec3& pa = positions[static_cast<uint32_t>(key >> 32)];
@@ -205,15 +212,22 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
     }
     // Corners: where exactly two silhouette edges of the object meet, the corner is convex when the
     // other edge leaves towards this edge's inner side.
-    std::unordered_map<uint32_t, std::vector<uint32_t>> atVertex;  // vertex -> 2 * edge + (0: a, 1: b)
+    // (vertex, 2 * edge + (0: a, 1: b)), grouped by vertex.
+    std::vector<std::pair<uint32_t, uint32_t>> atVertex;
+    atVertex.reserve(2 * ends.size());
     for (uint32_t k = 0; k < ends.size(); ++k) {
-      atVertex[ends[k].first].push_back(2 * k);
-      atVertex[ends[k].second].push_back(2 * k + 1);
+      atVertex.emplace_back(ends[k].first, 2 * k);
+      atVertex.emplace_back(ends[k].second, 2 * k + 1);
     }
-    for (const auto& [vertex, uses] : atVertex) {
-      if (uses.size() != 2) continue;
-      for (int self = 0; self < 2; ++self) {
-        const uint32_t mine = uses[static_cast<size_t>(self)], other = uses[static_cast<size_t>(1 - self)];
+    std::sort(atVertex.begin(), atVertex.end());
+    for (size_t i = 0; i < atVertex.size();) {
+      size_t j = i + 1;
+      while (j < atVertex.size() && atVertex[j].first == atVertex[i].first) ++j;
+      const size_t group = i, groupSize = j - i;
+      i = j;
+      if (groupSize != 2) continue;
+      for (size_t self = 0; self < 2; ++self) {
+        const uint32_t mine = atVertex[group + self].second, other = atVertex[group + 1 - self].second;
         Edge& e = edges[firstEdge + mine / 2];
         const Edge& o = edges[firstEdge + other / 2];
         const Vec2 corner = (mine & 1) ? e.b : e.a;

@@ -427,9 +427,9 @@ TEST(HostileGeometry, AMillionTinyTriangles) {
     scene.lights[0] = light;
     return scene;
   };
-  // One light per technique (the first it accepts). Measured on 2 cores: about a minute in all,
-  // most of it in the silhouette passes of plm, smoothies and kirsch (8-12 s each: every edge is
-  // open) and parker's light buffer (12 s, coarsened to stay within its entry limit: 8 GB without).
+  // One light per technique (the first it accepts). Measured on 2 cores: about 50 s in all, most of
+  // it in the silhouette passes of plm, smoothies and kirsch (5-6 s each: every edge is open) and
+  // parker's light buffer (12 s, coarsened to stay within its entry limit: 8 GB without).
   const std::vector<TechniqueRun> runs =
       runEveryTechnique(make, lights, gbuffer, "with 10^6 tiny triangles", Refusals::LightShapeOrOpenMesh, false);
   // Under the screen, the reference sees about half of the light through it.
