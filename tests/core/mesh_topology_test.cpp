@@ -1,4 +1,5 @@
-// Tests of the mesh topology module (src/core/mesh_topology.cpp): welding and adjacency of closed
+// Tests of the mesh topology module (src/core/mesh_topology.cpp): welding by exact position, and
+// welding and adjacency of closed
 // meshes (every edge has a neighbour, Euler's formula), reflex-edge detection on the concave U slab
 // of `concave`, silhouettes as rings with counts known in closed form (a box seen from above and
 // from a corner direction, a torus seen along its axis), planar open meshes as two-sided sheets,
@@ -7,6 +8,8 @@
 #include "penumbra/mesh_topology.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "penumbra/error.h"
 #include "penumbra/primitives.h"
@@ -33,6 +36,20 @@ std::string errorOf(const Mesh& mesh) {
     return e.what();
   }
   return "";
+}
+
+TEST(MeshTopology, WeldingMergesBitIdenticalPositionsInOrderOfFirstOccurrence) {
+  // -0 and +0 are one point; a position one ulp away is another; ids follow first occurrence.
+  const float next = std::nextafter(1.0f, 2.0f);
+  const std::vector<Vec3> positions = {Vec3(1.0f, 0.0f, 2.0f), Vec3(3.0f), Vec3(1.0f, -0.0f, 2.0f),
+                                       Vec3(next, 0.0f, 2.0f), Vec3(3.0f), Vec3(1.0f, 0.0f, 2.0f)};
+  EXPECT_EQ(firstVertexAtSamePosition(positions), (std::vector<uint32_t>{0, 1, 0, 3, 1, 0}));
+  std::vector<Vec3> welded;
+  EXPECT_EQ(weldVertices(positions, welded), (std::vector<uint32_t>{0, 1, 0, 2, 1, 0}));
+  ASSERT_EQ(welded.size(), 3u);
+  EXPECT_EQ(welded[2], Vec3(next, 0.0f, 2.0f));
+  EXPECT_TRUE(weldVertices({}, welded).empty());
+  EXPECT_TRUE(welded.empty());
 }
 
 TEST(MeshTopology, BoxIsClosedWeldedAndConvex) {
