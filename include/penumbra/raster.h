@@ -43,5 +43,8 @@ struct LightMap {
 };
 
 LightMap renderLightMap(const Scene& scene, const Light& light, int size);
+// The same into `out`, whose images keep their storage where it is large enough: a map rendered
+// every frame then costs a pass over its memory, not fresh pages.
+void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out);
 
 }  // namespace penumbra

@@ -61,17 +61,28 @@ float LightMap::texelWorldSize(float z) const {
 }
 
 LightMap renderLightMap(const Scene& scene, const Light& light, int size) {
+  LightMap m;
+  renderLightMap(scene, light, size, m);
+  return m;
+}
+
+void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out) {
   if (size < 1 || size > raster::kMaxImageSize)
     fail("renderLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
-  LightMap m;
+  // Every field from its default, the images' storage from `out`.
+  LightMap fresh;
+  fresh.lsDepth = std::move(out.lsDepth);
+  fresh.objectId = std::move(out.objectId);
+  out = std::move(fresh);
+  LightMap& m = out;
   m.size = size;
-  m.lsDepth = Image<float>(size, size, kInfinity);
-  m.objectId = Image<int32_t>(size, size, kNoObject);
+  m.lsDepth.reset(size, size, kInfinity);
+  m.objectId.reset(size, size, kNoObject);
   const Bounds3 bounds = scene.bounds();
   m.lsFrame = light.lightFrame(bounds);
   m.orthographic = light.isDirectional();
   m.wsOrigin = light.isDirectional() ? bounds.center() : light.center();
-  if (bounds.empty()) return m;
+  if (bounds.empty()) return;
 
   const std::array<Vec3, 8> wsCorners = corners(bounds);
   // Clip-space z and w from light-space z (see the header comment).
@@ -113,7 +124,7 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size) {
     if (!(maxZ > 0.0f)) {  // the whole scene is behind the light: nothing to see
       m.zNear = 0.0f;
       m.zFar = 0.0f;
-      return m;
+      return;
     }
     m.zNear = std::max(minZ * 0.999f, maxZ * 1e-6f);
     m.zFar = maxZ;
@@ -167,7 +178,6 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size) {
         m.objectId(samples.x0 + i, samples.y0 + j) = payloads[static_cast<size_t>(triangle)];
       }
   });
-  return m;
 }
 
 }  // namespace penumbra

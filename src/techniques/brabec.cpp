@@ -315,7 +315,7 @@ void BrabecTechnique::prepare(const Scene& scene, const Light& light) {
   Timer timer;
   light_ = light;
   lightRadius_ = light.extent();
-  map_ = createShadowMap(scene, light, options_.mapSize);
+  createShadowMap(scene, light, options_.mapSize, map_);
   minDepth_ = minMapDepth(map_);
   brabec::buildTiles(map_, tileMinDepth_, tileMaxDepth_, tileObjectId_, tilesPerRow_);
   if (options_.jitter > 0.0f) {

@@ -53,7 +53,7 @@ class KirschTechnique final : public ShadowTechnique {
     timings_ = {};
     Timer timer;
     plm::emitterRadius(light, "kirsch");
-    map_ = createShadowMap(scene, light, options_.mapSize);
+    createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
     widths_ = plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size,

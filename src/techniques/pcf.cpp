@@ -39,7 +39,7 @@ class PcfTechnique final : public ShadowTechnique {
   void prepare(const Scene& scene, const Light& light) override {
     timings_ = {};
     Timer timer;
-    map_ = createShadowMap(scene, light, options_.mapSize);
+    createShadowMap(scene, light, options_.mapSize, map_);
     timings_.add("prepare", timer.elapsedMs());
   }
 

@@ -82,7 +82,7 @@ class PcssTechnique final : public ShadowTechnique {
     timings_ = {};
     Timer timer;
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
-    map_ = createShadowMap(scene, light, options_.mapSize);
+    createShadowMap(scene, light, options_.mapSize, map_);
     zMin_ = minMapDepth(map_);
     // The search radius's factors that do not depend on the pixel (one division per pixel fewer).
     searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;

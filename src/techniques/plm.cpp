@@ -370,7 +370,7 @@ class PlmTechnique final : public ShadowTechnique {
     timings_ = {};
     Timer timer;
     plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
-    map_ = createShadowMap(scene, light, options_.mapSize);
+    createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);

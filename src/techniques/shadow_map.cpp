@@ -54,10 +54,16 @@ DepthBias depthBiasFromParams(const Params& params) {
 }
 
 LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize) {
+  LightMap map;
+  createShadowMap(scene, light, mapSize, map);
+  return map;
+}
+
+void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out) {
   if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
     fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", mapSize, kMinShadowMapSize,
          kMaxShadowMapSize);
-  return renderLightMap(scene, light, mapSize);
+  renderLightMap(scene, light, mapSize, out);
 }
 
 float minMapDepth(const LightMap& map) {

@@ -72,6 +72,8 @@ DepthBias depthBiasFromParams(const Params& params);
 // The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
 // Throws Error if mapSize is outside [kMinShadowMapSize, kMaxShadowMapSize].
 LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize);
+// The same into `out`, reusing its storage (renderLightMap); `out` is untouched when mapSize is refused.
+void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out);
 
 // Smallest finite depth in the map (the nearest possible blocker); kInfinity for an empty map.
 float minMapDepth(const LightMap& map);

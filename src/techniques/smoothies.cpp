@@ -52,7 +52,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
     timings_ = {};
     Timer timer;
     plm::emitterRadius(light, "smoothies");
-    map_ = createShadowMap(scene, light, options_.mapSize);
+    createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     smoothies_ = plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size,

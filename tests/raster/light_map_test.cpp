@@ -6,6 +6,8 @@
 // project/unproject round trips, texel sizes, and bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -107,6 +109,32 @@ TEST(LightMap, SphereLightMatchesRaysFromTheCentreSample) {
   }
   EXPECT_GT(outermost, 128.0f * 0.99f);
   expectMatchesRays(scene, m, 9000);  // measured: 10412 hits
+}
+
+// Rendering into a map that held another (larger, perspective) gives a fresh render's map, field for
+// field and texel for texel, and then the other way round.
+void expectSameMap(const LightMap& a, const LightMap& b) {
+  EXPECT_EQ(a.size, b.size);
+  EXPECT_EQ(a.orthographic, b.orthographic);
+  EXPECT_EQ(a.wsOrigin, b.wsOrigin);
+  EXPECT_EQ(a.lsFrame.z, b.lsFrame.z);
+  EXPECT_EQ(a.halfWidth, b.halfWidth);
+  EXPECT_EQ(a.tanHalfFov, b.tanHalfFov);
+  EXPECT_EQ(a.zNear, b.zNear);
+  EXPECT_EQ(a.zFar, b.zFar);
+  EXPECT_TRUE(std::equal(a.lsDepth.begin(), a.lsDepth.end(), b.lsDepth.begin(), b.lsDepth.end()));
+  EXPECT_TRUE(std::equal(a.objectId.begin(), a.objectId.end(), b.objectId.begin(), b.objectId.end()));
+}
+
+TEST(LightMap, RenderingIntoAUsedMapEqualsAFreshRender) {
+  const Scene scene = rastertest::objectsScene();
+  const Light sphere = Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f);
+  const Light sun = Light::directional(Vec3(0.4f, 1.0f, -0.3f), radians(0.53f));
+  LightMap reused = renderLightMap(scene, sphere, 256);
+  renderLightMap(scene, sun, 128, reused);
+  expectSameMap(reused, renderLightMap(scene, sun, 128));
+  renderLightMap(scene, sphere, 200, reused);
+  expectSameMap(reused, renderLightMap(scene, sphere, 200));
 }
 
 TEST(LightMap, RectLightUsesItsNormalAsTheAxis) {
