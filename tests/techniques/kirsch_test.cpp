@@ -5,6 +5,8 @@
 // between plm's and the hard shadow's, as in Lawlor 2006's Fig. 10.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 
 #include "penumbra/light_profile.h"
@@ -67,7 +69,8 @@ TEST(Kirsch, TriangleSceneIsWorseThanPlmAndCloseToHard) {
   const double kirsch = errorAgainstReference(runTechnique("kirsch", s, {"map_size=64"}), s).rmse8;
   const double plm = errorAgainstReference(runTechnique("plm", s, {"map_size=64"}), s).rmse8;
   const double hard = errorAgainstReference(runTechnique("hard", s, {"map_size=64"}), s).rmse8;
-  // Measured at 64^2: kirsch 15.5, plm 8.4, hard 15.2.
+  std::printf("[ measured ] triangle at 64^2: kirsch %.2f, plm %.2f, hard %.2f\n", kirsch, plm, hard);
+  // Measured at 64^2: kirsch 20.3, plm 3.2, hard 19.0.
   EXPECT_GT(kirsch, 1.5 * plm);
   EXPECT_NEAR(kirsch / hard, 1.0, 0.25);
 }

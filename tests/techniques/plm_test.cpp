@@ -5,6 +5,8 @@
 // the perspective transform; and the light shapes it refuses.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -107,7 +109,9 @@ TEST(Plm, TriangleSceneIsSoftAndCloseToTheReference) {
   const auto& s = shadowTestScene("triangle");
   const ErrorStats plm = errorAgainstReference(runTechnique("plm", s, {"map_size=32"}), s);
   const ErrorStats hard = errorAgainstReference(runTechnique("hard", s, {"map_size=32"}), s);
-  // Measured at 32^2: plm 6.8 (penumbra 25.5), hard 21.8 (penumbra 115.1); Lawlor's Fig. 10: 9.0.
+  std::printf("[ measured ] triangle at 32^2: plm %.2f (penumbra %.2f), hard %.2f (penumbra %.2f)\n", plm.rmse8, plm.penumbraRmse8,
+              hard.rmse8, hard.penumbraRmse8);
+  // Measured at 32^2: plm 5.3 (penumbra 12.6), hard 24.2 (penumbra 93.6); Lawlor's Fig. 10: 9.0.
   EXPECT_LT(plm.rmse8, 9.0);
   EXPECT_LT(plm.penumbraRmse8, 0.5 * hard.penumbraRmse8);
 }

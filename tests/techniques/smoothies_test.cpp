@@ -5,6 +5,8 @@
 // plm's and the hard shadow's, as in Lawlor 2006's Fig. 10.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 
 #include "penumbra/light_profile.h"
@@ -67,7 +69,8 @@ TEST(Smoothies, TriangleSceneIsWorseThanPlmAndCloseToHard) {
   const double smoothies = errorAgainstReference(runTechnique("smoothies", s, {"map_size=64"}), s).rmse8;
   const double plm = errorAgainstReference(runTechnique("plm", s, {"map_size=64"}), s).rmse8;
   const double hard = errorAgainstReference(runTechnique("hard", s, {"map_size=64"}), s).rmse8;
-  // Measured at 64^2: smoothies 16.2, plm 8.4, hard 15.2.
+  std::printf("[ measured ] triangle at 64^2: smoothies %.2f, plm %.2f, hard %.2f\n", smoothies, plm, hard);
+  // Measured at 64^2: smoothies 21.2, plm 3.2, hard 19.0.
   EXPECT_GT(smoothies, 1.5 * plm);
   EXPECT_NEAR(smoothies / hard, 1.0, 0.25);
 }
