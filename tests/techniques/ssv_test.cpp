@@ -50,6 +50,19 @@ Object box(int32_t id, const Mat4& renderFromObject, const Vec3& size) {
   return o;
 }
 
+// The 2.4 x 2.4 square light at height 3.6 of the tilted-cube tests (Rouf Fig. 4-10).
+Light largeSquareLight() {
+  return Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
+}
+
+// A cube of side `size` centred at `center`, turned by `aboutZ` then `aboutX` degrees.
+Object tiltedCube(const Vec3& center, float aboutZ, float aboutX, float size) {
+  Mat4 m = glm::translate(Mat4(1.0f), center);
+  m = glm::rotate(m, radians(aboutZ), Vec3(0.0f, 0.0f, 1.0f));
+  m = glm::rotate(m, radians(aboutX), Vec3(1.0f, 0.0f, 0.0f));
+  return box(1, m, Vec3(size));
+}
+
 Scene groundScene(const Light& light, const std::vector<Object>& occluders) {
   Scene scene;
   Object ground;
@@ -191,11 +204,7 @@ TEST(Ssv, ACubeWithNoFacetFullyLitOrInShadowStillCastsItsShadow) {
   // A 0.3 cube standing on a vertex 0.2 below a 2.4 x 2.4 light: every facet sees part of the light,
   // so neither silhouette of Section 3.2.2 exists; the silhouette from the light's centre stands for
   // both (a faint soft shadow without umbra, as the reference's).
-  const Light light = Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
-  Mat4 m = glm::translate(Mat4(1.0f), Vec3(0.0f, 3.14f, 0.0f));
-  m = glm::rotate(m, radians(35.26f), Vec3(0.0f, 0.0f, 1.0f));
-  m = glm::rotate(m, radians(45.0f), Vec3(1.0f, 0.0f, 0.0f));
-  const Scene scene = groundScene(light, {box(1, m, Vec3(0.3f))});
+  const Scene scene = groundScene(largeSquareLight(), {tiltedCube(Vec3(0.0f, 3.14f, 0.0f), 35.26f, 45.0f, 0.3f)});
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 64);
   const Image<float> vs = run("ssv", scene, g), vr = reference(scene, g, 1024);
   const auto ssvMin = *std::min_element(vs.begin(), vs.end()), refMin = *std::min_element(vr.begin(), vr.end());
@@ -228,11 +237,7 @@ TEST(Ssv, TheHoleOfARingShapedOccluderLetsTheLightThrough) {
 
 TEST(Ssv, TiltedCubeCloseToALargeLightContourConvexity) {
   // Rouf Fig. 4-10: a tilted cube close under a large square light.
-  const Light light = Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
-  Mat4 m = glm::translate(Mat4(1.0f), Vec3(0.3f, 2.0f, 0.2f));
-  m = glm::rotate(m, radians(35.0f), Vec3(0.0f, 0.0f, 1.0f));
-  m = glm::rotate(m, radians(45.0f), Vec3(1.0f, 0.0f, 0.0f));
-  const Scene scene = groundScene(light, {box(1, m, Vec3(0.8f))});
+  const Scene scene = groundScene(largeSquareLight(), {tiltedCube(Vec3(0.3f, 2.0f, 0.2f), 35.0f, 45.0f, 0.8f)});
   const GBuffer g = groundGridGBuffer(-6.0f, 6.0f, 160);
   const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g), vr = reference(scene, g, 256);
   for (float level : {0.9f, 0.7f, 0.5f}) {
