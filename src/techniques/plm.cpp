@@ -49,7 +49,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <memory>
 
 #include <tbb/blocked_range.h>
