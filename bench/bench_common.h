@@ -46,11 +46,17 @@ inline std::unique_ptr<ShadowTechnique> makeTechnique(const std::string& name,
 
 // Times prepare and visibility of `baseline` and `technique` on `s`, interleaved, and reports the
 // mean ms of each pass (<label>_prepare_ms, <label>_visibility_ms) and the ratios technique /
-// baseline (prepare_over_<baseline>, visibility_over_<baseline>, total_over_<baseline>).
+// baseline (prepare_over_<baseline>, visibility_over_<baseline>, total_over_<baseline>). Both run one
+// untimed frame first: the timed ones are the frame-to-frame cost, with the techniques' storage in
+// place, not the first frame's page faults (a few iterations would otherwise carry them).
 inline void timeAgainstBaseline(benchmark::State& state, const BenchScene& s, const std::string& baselineLabel,
                                 ShadowTechnique& baseline, const std::string& label, ShadowTechnique& technique) {
   const Light& light = s.scene.lights.at(0);
   Image<float> v;
+  for (ShadowTechnique* t : {&baseline, &technique}) {
+    t->prepare(s.scene, light);
+    t->visibility(s.gbuffer, v);
+  }
   double ms[2][2] = {};  // [baseline, technique][prepare, visibility]
   for (auto _ : state) {
     int index = 0;

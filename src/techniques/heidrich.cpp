@@ -90,11 +90,13 @@
 //
 // Parameters: map_size (texels per side of every map, default 1024), subdivisions (k, default 1: the
 // slides' two samples), edge_threshold (texel sizes, default 4), bias_constant and bias_slope (the
-// depth compare's, shadow_map.h). Memory: (k + 1) depth maps of map_size^2 floats, and per
-// sub-segment two two-channel maps (depth and visibility side by side) of 2 map_size^2 floats and
-// two second channels (value and depth) of 2 map_size^2 floats.
+// depth compare's, shadow_map.h). Memory: (k + 1) shadow maps (depth and object id, map_size^2 each),
+// per sub-segment two two-channel maps (depth and visibility side by side) of 2 map_size^2 floats and
+// two second channels (value and depth) of 2 map_size^2 floats, and prepare()'s working images (about
+// 5 map_size^2 floats), all kept between calls.
 // prepare() builds every map; visibility() only reads them, so a camera-only change costs one
-// visibility pass (the slides' "minimal overhead for static walk-throughs").
+// visibility pass (the slides' "minimal overhead for static walk-throughs"). A new light or scene
+// refills the maps in place.
 #include "heidrich.h"
 
 #include <algorithm>
@@ -112,11 +114,13 @@
 namespace penumbra {
 namespace heidrich {
 
-Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels) {
+void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges, Image<float>& horizontal,
+                 Image<float>& blurred) {
   const int n = map.size;
-  Image<uint8_t> edges(n, n, 0);
-  if (n == 0) return edges;
-  Image<float> horizontal(n, n), blurred(n, n);
+  edges.reset(n, n, 0);
+  if (n == 0) return;
+  horizontal.reset(n, n, 0.0f);
+  blurred.reset(n, n, 0.0f);
   auto clampIndex = [n](int i) { return std::clamp(i, 0, n - 1); };
   const float* depth = map.lsDepth.data();
   // The binomial blur, separable; borders repeat the edge texel. Empty texels (+inf) spread +inf over
@@ -164,6 +168,12 @@ Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels) {
       }
     }
   });
+}
+
+Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels) {
+  Image<uint8_t> edges;
+  Image<float> horizontal, blurred;
+  detectEdges(map, edgeThresholdTexels, edges, horizontal, blurred);
   return edges;
 }
 
@@ -186,16 +196,22 @@ bool steepStep(const Image<float>& z, int i, int j, int di, int dj, float gap) {
 
 }  // namespace
 
-SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels) {
+void buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels, SkinMesh& skin,
+               std::vector<SkinMesh>& rows) {
   const int n = map.size;
-  SkinMesh skin;
-  if (n < 2) return skin;
+  skin.wsPositions.clear();
+  skin.value.clear();
+  skin.triangles.clear();
+  if (n < 2) return;
   // Rows of quads in parallel, each into its own mesh, joined in row order: the same mesh for any
   // thread count.
-  std::vector<SkinMesh> rows(static_cast<size_t>(n - 1));
+  if (rows.size() < static_cast<size_t>(n - 1)) rows.resize(static_cast<size_t>(n - 1));
   tbb::parallel_for(tbb::blocked_range<int>(0, n - 1), [&](const tbb::blocked_range<int>& range) {
     for (int j = range.begin(); j < range.end(); ++j) {
       SkinMesh& out = rows[static_cast<size_t>(j)];
+      out.wsPositions.clear();
+      out.value.clear();
+      out.triangles.clear();
       for (int i = 0; i < n - 1; ++i) {
         if (!(edges(i, j) | edges(i + 1, j) | edges(i, j + 1) | edges(i + 1, j + 1))) continue;
         // Corners in the order 00, 10, 11, 01 (a cycle around the quad).
@@ -238,27 +254,35 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
     }
   });
   size_t vertexCount = 0, triangleCount = 0;
-  for (const SkinMesh& r : rows) {
-    vertexCount += r.wsPositions.size();
-    triangleCount += r.triangles.size();
+  for (int j = 0; j < n - 1; ++j) {
+    vertexCount += rows[static_cast<size_t>(j)].wsPositions.size();
+    triangleCount += rows[static_cast<size_t>(j)].triangles.size();
   }
   skin.wsPositions.reserve(vertexCount);
   skin.value.reserve(vertexCount);
   skin.triangles.reserve(triangleCount);
-  for (const SkinMesh& r : rows) {
+  for (int j = 0; j < n - 1; ++j) {
+    const SkinMesh& r = rows[static_cast<size_t>(j)];
     const auto offset = static_cast<uint32_t>(skin.wsPositions.size());
     skin.wsPositions.insert(skin.wsPositions.end(), r.wsPositions.begin(), r.wsPositions.end());
     skin.value.insert(skin.value.end(), r.value.begin(), r.value.end());
     for (const glm::uvec3& t : r.triangles) skin.triangles.push_back(t + glm::uvec3(offset));
   }
+}
+
+SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels) {
+  SkinMesh skin;
+  std::vector<SkinMesh> rows;
+  buildSkin(map, edges, edgeThresholdTexels, skin, rows);
   return skin;
 }
 
-VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& view) {
-  VisibilityLayers out;
-  out.front = Image<float>(view.size, view.size, kUncovered);
-  out.behind = Image<Vec2>(view.size, view.size, Vec2(kUncovered, kInfinity));
-  if (skin.triangles.empty() || view.size == 0) return out;
+void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
+                            Image<float>& frontDepth) {
+  front.reset(view.size, view.size, kUncovered);
+  behind.reset(view.size, view.size, Vec2(kUncovered, kInfinity));
+  frontDepth.reset(view.size, view.size, kInfinity);
+  if (skin.triangles.empty() || view.size == 0) return;
   if (view.orthographic) fail("heidrich: visibility maps need a perspective map (a local light)");
   // Vertices in the view's map coordinates (s, t) and light-space depth z. A skin lies between an
   // occluder and its receiver, in front of every sample point; a vertex nearer than half the near
@@ -297,7 +321,6 @@ VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& vi
   // triangles share takes the first one's value; both interpolate alike there), so no texel centre
   // falls between the triangles of a skin.
   const float texelPerDepth = view.texelWorldSize(1.0f);
-  Image<float> frontDepth(view.size, view.size, kInfinity);
   constexpr int kBand = 16;
   const int bands = (view.size + kBand - 1) / kBand;
   tbb::parallel_for(tbb::blocked_range<int>(0, bands), [&](const tbb::blocked_range<int>& range) {
@@ -326,9 +349,9 @@ VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& vi
           if (empty || !(sLo <= sHi)) continue;
           const int iBegin = std::max(0, static_cast<int>(std::ceil(sLo - 0.5)));
           const int iEnd = std::min(view.size, static_cast<int>(std::floor(sHi - 0.5)) + 1);
-          float* front = out.front.row(j);
+          float* frontRow = front.row(j);
           float* zFront = frontDepth.row(j);
-          Vec2* behind = out.behind.row(j);
+          Vec2* behindRow = behind.row(j);
           const float* zSurface = view.lsDepth.row(j);
           for (int i = iBegin; i < iEnd; ++i) {
             const double s = i + 0.5;
@@ -346,25 +369,25 @@ VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& vi
             if (zSkin < zSurface[i] - tolerance || (zSkin <= zSurface[i] + tolerance && value >= 0.5f)) {
               if (zSkin < zFront[i]) {
                 zFront[i] = zSkin;
-                front[i] = value;
+                frontRow[i] = value;
               }
-            } else if (zSkin > zSurface[i] + tolerance && zSkin < behind[i].y) {
-              behind[i] = Vec2(value, zSkin);
+            } else if (zSkin > zSurface[i] + tolerance && zSkin < behindRow[i].y) {
+              behindRow[i] = Vec2(value, zSkin);
             }
           }
         }
       }
     }
   });
-  return out;
 }
 
-Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>& visibility) {
+void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Image<TwoChannelTexel>& out,
+                       Image<uint8_t>& horizontal) {
   const int n = map.size;
-  Image<TwoChannelTexel> out(n, n);
-  if (n == 0) return out;
+  out.reset(n, n, TwoChannelTexel{});
+  if (n == 0) return;
   // Coverage dilated by one texel (3x3), separably: a horizontal then a vertical OR.
-  Image<uint8_t> horizontal(n, n);
+  horizontal.reset(n, n, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
       const float* v = visibility.row(j);
@@ -392,7 +415,6 @@ Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>
       }
     }
   });
-  return out;
 }
 
 ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
@@ -520,10 +542,7 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
 }
 
 void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
-  maps_.clear();  // a failed prepare() leaves nothing for visibility() to use
-  visibility_.clear();
-  behind_.clear();
-  wsSamples_.clear();
+  prepared_ = false;  // a failed prepare() leaves nothing for visibility() to use
   if (light.shape() != LightShape::Segment)
     fail("heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "
          "(\"type\": \"segment\" with end points a and b)",
@@ -531,20 +550,21 @@ void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
   timings_ = {};
   Timer total;
   const int k = options_.subdivisions;
+  const auto samples = static_cast<size_t>(k + 1);
   // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps
   // that axis: Light::lightFrame takes a disk's normal, turned to face the scene.
   const Frame frame = light.lightFrame(scene.bounds());
   const float tiny = 1e-4f * light.extent();
   Timer stage;
-  for (int j = 0; j <= k; ++j) {
+  maps_.resize(samples);
+  wsSamples_.clear();
+  for (size_t j = 0; j < samples; ++j) {
     const float u = static_cast<float>(j) / static_cast<float>(k);
     const Vec3 wsSample = light.a() + u * (light.b() - light.a());
     wsSamples_.push_back(wsSample);
-    LightMap map = createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize);
-    map.objectId = Image<int32_t>();  // only depths are used
-    maps_.push_back(std::move(map));
+    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize, maps_[j]);
     ++shadowMapsBuilt_;
-    reportProgress(0.5 * (j + 1) / (k + 1));
+    reportProgress(0.5 * static_cast<double>(j + 1) / static_cast<double>(samples));
   }
   sharedFrame_ = true;
   lsOffsets_.clear();
@@ -555,35 +575,38 @@ void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
   }
   shadowMapsMs_ = stage.elapsedMs();
   stage.reset();
-  std::vector<heidrich::SkinMesh> skins(maps_.size());
+  Scratch& w = scratch_;
+  w.skins.resize(samples);
   skinTriangles_ = 0;
-  for (size_t j = 0; j < maps_.size(); ++j) {
-    skins[j] = heidrich::buildSkin(maps_[j], heidrich::detectEdges(maps_[j], options_.edgeThreshold),
-                                   options_.edgeThreshold);
-    skinTriangles_ += skins[j].triangles.size();
+  for (size_t j = 0; j < samples; ++j) {
+    heidrich::detectEdges(maps_[j], options_.edgeThreshold, w.edges, w.blurHorizontal, w.blurred);
+    heidrich::buildSkin(maps_[j], w.edges, options_.edgeThreshold, w.skins[j], w.skinRows);
+    skinTriangles_ += w.skins[j].triangles.size();
   }
   skinsMs_ = stage.elapsedMs();
   stage.reset();
   // Sub-segment q = [sample q, sample q + 1]: each end's visibility channel holds the other end's
   // skins, warped into its view.
+  visibility_.resize(2 * static_cast<size_t>(k));
+  behind_.resize(2 * static_cast<size_t>(k));
   for (int q = 0; q < k; ++q) {
-    const size_t a = static_cast<size_t>(q), b = static_cast<size_t>(q + 1);
-    heidrich::VisibilityLayers inA = heidrich::renderVisibilityLayers(skins[b], maps_[a]);
-    heidrich::VisibilityLayers inB = heidrich::renderVisibilityLayers(skins[a], maps_[b]);
-    visibility_.push_back(heidrich::makeTwoChannelMap(maps_[a], inA.front));
-    visibility_.push_back(heidrich::makeTwoChannelMap(maps_[b], inB.front));
-    behind_.push_back(std::move(inA.behind));
-    behind_.push_back(std::move(inB.behind));
+    for (size_t end = 0; end < 2; ++end) {
+      const size_t self = static_cast<size_t>(q) + end, other = static_cast<size_t>(q) + 1 - end;
+      const size_t slot = 2 * static_cast<size_t>(q) + end;
+      heidrich::renderVisibilityLayers(w.skins[other], maps_[self], w.front, behind_[slot], w.frontDepth);
+      heidrich::makeTwoChannelMap(maps_[self], w.front, visibility_[slot], w.coverage);
+    }
     visibilityMapsBuilt_ += 2;
     reportProgress(0.5 + 0.5 * (q + 1) / k);
   }
   visibilityMapsMs_ = stage.elapsedMs();
+  prepared_ = true;
   prepareMs_ = total.elapsedMs();
   timings_.add("prepare", prepareMs_);
 }
 
 void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
-  if (maps_.empty()) fail("heidrich: visibility() called before prepare()");
+  if (!prepared_) fail("heidrich: visibility() called before prepare()");
   Timer timer;
   const int k = static_cast<int>(maps_.size()) - 1;
   const float subWeight = 1.0f / static_cast<float>(k);
@@ -633,7 +656,7 @@ void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
 }
 
 std::vector<std::pair<std::string, double>> HeidrichTechnique::stats() const {
-  return {{"sample_points", static_cast<double>(maps_.size())},
+  return {{"sample_points", static_cast<double>(samplePoints())},
           {"skin_triangles", static_cast<double>(skinTriangles_)},
           {"shadow_maps_built", static_cast<double>(shadowMapsBuilt_)},
           {"visibility_maps_built", static_cast<double>(visibilityMapsBuilt_)},

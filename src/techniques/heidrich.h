@@ -38,6 +38,10 @@ inline constexpr float kNoSkinNearby = -2.0f;
 // binomial, then the 5-point Laplacian) exceeds edgeThresholdTexels / 4 texel sizes at that texel's
 // depth, or where its support holds an empty texel. A depth step of D texel sizes gives |LoG| = D / 4
 // at the texels on both sides of it, so the test flags steps of more than edgeThresholdTexels.
+// Into `edges`, with the blur's two passes in `horizontal` and `blurred`; every image keeps its storage
+// where it is large enough.
+void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges, Image<float>& horizontal,
+                 Image<float>& blurred);
 Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels);
 
 // The skin polygons of one depth map (slides, "Step 3: triangulate depth values"): the depth map as a
@@ -51,18 +55,19 @@ struct SkinMesh {
   std::vector<float> value;  //!< per vertex: 0 occluder, 1 receiver
   std::vector<glm::uvec3> triangles;
 };
+// Into `skin`, one mesh per row of quads in `rows` first; both keep their capacity.
+void buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels, SkinMesh& skin,
+               std::vector<SkinMesh>& rows);
 SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThresholdTexels);
 
 // The skin warped into `view` (a perspective map) and rasterized there with Gouraud (screen-linear)
 // interpolation, against the view's depth channel. `front`: the slides' visibility channel, the nearest
 // skin in front of the surface the view sees (or at it, for a skin's receiver half: heidrich.cpp);
 // kUncovered where none lands. `behind`: the nearest skin behind that surface, as (value, light-space
-// depth); value kUncovered where none lands.
-struct VisibilityLayers {
-  Image<float> front;
-  Image<Vec2> behind;
-};
-VisibilityLayers renderVisibilityLayers(const SkinMesh& skin, const LightMap& view);
+// depth); value kUncovered where none lands. `frontDepth` holds the depth of `front`'s skin. Every
+// image keeps its storage where it is large enough.
+void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
+                            Image<float>& frontDepth);
 
 // One texel of a sample point's two-channel shadow map (slides, "Visibility Map": "additional shadow
 // map channel"), the channels side by side so a lookup reads both from one cache line.
@@ -70,7 +75,9 @@ struct TwoChannelTexel {
   float lsDepth;     //!< the depth channel (LightMap::lsDepth)
   float visibility;  //!< the visibility channel; kUncovered or kNoSkinNearby where no skin lands
 };
-Image<TwoChannelTexel> makeTwoChannelMap(const LightMap& map, const Image<float>& visibility);
+// Into `out`, with the coverage's horizontal dilation in `coverage`; both keep their storage.
+void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Image<TwoChannelTexel>& out,
+                       Image<uint8_t>& coverage);
 
 // makeReceiver (shadow_map.h) for a perspective map, from the receiver's position and geometric normal
 // already in the map's light space: the maps of one segment share their axes, so a pixel transforms
@@ -95,7 +102,7 @@ class HeidrichTechnique final : public ShadowTechnique {
   // "shadow_maps_ms", "edges_and_skins_ms", "visibility_maps_ms".
   std::vector<std::pair<std::string, double>> stats() const override;
 
-  int samplePoints() const { return static_cast<int>(maps_.size()); }
+  int samplePoints() const { return prepared_ ? static_cast<int>(maps_.size()) : 0; }
   const LightMap& shadowMap(int sample) const { return maps_.at(static_cast<size_t>(sample)); }
   // Two-channel map of sub-segment q's first (end = 0) or second (end = 1) sample point.
   const Image<heidrich::TwoChannelTexel>& visibilityMap(int subSegment, int end) const {
@@ -110,12 +117,22 @@ class HeidrichTechnique final : public ShadowTechnique {
 
  private:
   HeidrichOptions options_;
+  bool prepared_ = false;                //!< the maps below are whole (a failed prepare() clears it)
   std::vector<LightMap> maps_;           //!< sample point j's shadow map (depth channel)
   std::vector<Image<heidrich::TwoChannelTexel>> visibility_;  //!< 2q + e: map of sub-segment q's end e
   std::vector<Image<Vec2>> behind_;      //!< 2q + e: the skins behind the surface sub-segment q's end e sees
   std::vector<Vec3> wsSamples_;          //!< sample point j in world space
   bool sharedFrame_ = false;      //!< every map has map 0's axes (always, unless the light points at the scene)
   std::vector<Vec3> lsOffsets_;   //!< map j's origin in map 0's light space
+  // prepare()'s working storage, kept so that a new light or scene costs passes over memory rather
+  // than fresh pages (which dominated prepare on machines with costly page faults).
+  struct Scratch {
+    Image<uint8_t> edges;
+    Image<float> blurHorizontal, blurred;
+    std::vector<heidrich::SkinMesh> skins, skinRows;
+    Image<float> front, frontDepth;
+    Image<uint8_t> coverage;
+  } scratch_;
   size_t skinTriangles_ = 0;
   int shadowMapsBuilt_ = 0;
   int visibilityMapsBuilt_ = 0;

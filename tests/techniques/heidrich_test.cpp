@@ -459,6 +459,37 @@ TEST(Heidrich, CameraOnlyChangeRunsTheVisibilityPassAlone) {
   EXPECT_GT(shadowed, expected.size() / 50) << "the moved view must see shadows for the comparison to mean something";
 }
 
+// A new light (or scene) refills the maps in place: prepare() on a technique that was prepared before
+// for another light gives what a fresh technique gives, bit for bit, and so does a failed prepare()
+// followed by a good one.
+TEST(Heidrich, PrepareAgainForAnotherLightEqualsAFreshPrepare) {
+  const ShadowTestScene& s = shadowTestScene("linear");
+  HeidrichOptions o;
+  o.mapSize = 256;
+  o.subdivisions = 2;
+  const Light other = Light::segment(Vec3(-1.0f, 4.0f, 0.8f), Vec3(1.2f, 4.5f, -0.6f));
+  HeidrichTechnique reused(o);
+  reused.prepare(s.scene, s.light());
+  EXPECT_THROW(reused.prepare(s.scene, Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f)), Error);
+  EXPECT_EQ(reused.samplePoints(), 0);
+  Image<float> unused;
+  EXPECT_THROW(reused.visibility(s.gbuffer, unused), Error);
+  reused.prepare(s.scene, other);
+  HeidrichTechnique fresh(o);
+  fresh.prepare(s.scene, other);
+  Image<float> a, b;
+  reused.visibility(s.gbuffer, a);
+  fresh.visibility(s.gbuffer, b);
+  ASSERT_EQ(a.size(), b.size());
+  size_t differing = 0, penumbra = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    differing += a[i] != b[i];
+    penumbra += b[i] > 0.01f && b[i] < 0.99f;
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(penumbra, b.size() / 100) << "the new light must cast penumbrae for the comparison to mean something";
+}
+
 TEST(Heidrich, SameResultForAnyThreadCount) {
   const ShadowTestScene& s = shadowTestScene("linear");
   HeidrichOptions o;
