@@ -14,6 +14,9 @@ namespace penumbra {
 
 // Rasterizes the camera view of `scene` into a width x height G-buffer (pixel centres sampled).
 GBuffer renderGBuffer(const Scene& scene, int width, int height);
+// The same into `out`, whose images keep their storage where it is large enough: a G-buffer rendered
+// every frame then costs a pass over its memory, not fresh pages.
+void renderGBuffer(const Scene& scene, int width, int height, GBuffer& out);
 
 // The scene seen from the light's centre sample: a size x size map of light-space depth and object
 // id. Local lights use a perspective projection, directional lights an orthographic one; either is

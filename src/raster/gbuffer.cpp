@@ -25,29 +25,34 @@
 namespace penumbra {
 namespace {
 
-// The same empty G-buffer as GBuffer(width, height), its six images filled concurrently: at
-// 1024 x 1024 they are 48 MB whose first touch (page faults and fill; about a fifth of the pass's
-// CPU time in the benchmark, measured with perf) would otherwise run on the calling thread alone.
-GBuffer allocateGBuffer(int width, int height) {
-  GBuffer g;
-  tbb::parallel_invoke([&] { g.wsPosition = Image<Vec3>(width, height, Vec3(0.0f)); },
-                       [&] { g.wsNormal = Image<Vec3>(width, height, Vec3(0.0f)); },
-                       [&] { g.wsGeometricNormal = Image<Vec3>(width, height, Vec3(0.0f)); },
-                       [&] { g.objectId = Image<int32_t>(width, height, kNoObject); },
-                       [&] { g.triangleId = Image<int32_t>(width, height, -1); },
-                       [&] { g.csDepth = Image<float>(width, height, kInfinity); });
-  return g;
+// `g` becomes the same empty G-buffer as GBuffer(width, height), its six images filled concurrently:
+// at 1024 x 1024 they are 48 MB, whose fill (and, the first time, page faults: about a fifth of the
+// pass's CPU time in the benchmark, measured with perf) would otherwise run on the calling thread
+// alone. Images keep their storage where it is large enough.
+void resetGBuffer(GBuffer& g, int width, int height) {
+  tbb::parallel_invoke([&] { g.wsPosition.reset(width, height, Vec3(0.0f)); },
+                       [&] { g.wsNormal.reset(width, height, Vec3(0.0f)); },
+                       [&] { g.wsGeometricNormal.reset(width, height, Vec3(0.0f)); },
+                       [&] { g.objectId.reset(width, height, kNoObject); },
+                       [&] { g.triangleId.reset(width, height, -1); },
+                       [&] { g.csDepth.reset(width, height, kInfinity); });
 }
 
 }  // namespace
 
 GBuffer renderGBuffer(const Scene& scene, int width, int height) {
+  GBuffer g;
+  renderGBuffer(scene, width, height, g);
+  return g;
+}
+
+void renderGBuffer(const Scene& scene, int width, int height, GBuffer& g) {
   checkImageSize(width, height, "renderGBuffer");
   const Camera& camera = scene.camera;
   camera.validate();
-  GBuffer g = allocateGBuffer(width, height);
+  resetGBuffer(g, width, height);
   const Bounds3 bounds = scene.bounds();
-  if (bounds.empty()) return g;
+  if (bounds.empty()) return;
 
   const Mat4 cameraFromRender = camera.cameraFromRender();
   float minDepth = kInfinity, maxDepth = -kInfinity;
@@ -58,7 +63,7 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height) {
     minDepth = std::min(minDepth, depth);
     maxDepth = std::max(maxDepth, depth);
   }
-  if (!(maxDepth > 0.0f)) return g;  // the whole scene is behind the camera
+  if (!(maxDepth > 0.0f)) return;  // the whole scene is behind the camera
   const float zNear = std::max(minDepth * 0.999f, maxDepth * 1e-6f);
   const float zFar = std::max(maxDepth * 1.001f, zNear * 2.0f);  // only for clipFromCamera's x/y rows
   Mat4 clipFromCamera = camera.clipFromCamera(static_cast<float>(width) / static_cast<float>(height), zNear, zFar);
@@ -173,7 +178,6 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height) {
       }
     }
   });
-  return g;
 }
 
 }  // namespace penumbra

@@ -127,6 +127,32 @@ TEST(GBuffer, ViewsThatSeeNothingAreEmpty) {
   for (int32_t id : none.objectId) ASSERT_EQ(id, kNoObject);
 }
 
+// Every field of two G-buffers, bit for bit.
+void expectSameGBuffer(const GBuffer& a, const GBuffer& b) {
+  ASSERT_EQ(a.width(), b.width());
+  ASSERT_EQ(a.height(), b.height());
+  size_t differing = 0;
+  for (size_t i = 0; i < a.objectId.size(); ++i)
+    differing += a.wsPosition[i] != b.wsPosition[i] || a.wsNormal[i] != b.wsNormal[i] ||
+                 a.wsGeometricNormal[i] != b.wsGeometricNormal[i] || a.objectId[i] != b.objectId[i] ||
+                 a.triangleId[i] != b.triangleId[i] || a.csDepth[i] != b.csDepth[i];
+  EXPECT_EQ(differing, 0u);
+}
+
+TEST(GBuffer, RenderingIntoAUsedGBufferEqualsAFreshRender) {
+  Scene scene = rastertest::objectsScene();
+  GBuffer reused = renderGBuffer(scene, 320, 240);
+  Scene moved = scene;
+  moved.camera.position += Vec3(0.7f, 0.4f, -0.3f);
+  renderGBuffer(moved, 200, 150, reused);  // smaller: the old pixels must not show through
+  expectSameGBuffer(reused, renderGBuffer(moved, 200, 150));
+  renderGBuffer(scene, 320, 240, reused);
+  expectSameGBuffer(reused, renderGBuffer(scene, 320, 240));
+  // A refused size leaves the G-buffer as it was.
+  EXPECT_THROW(renderGBuffer(scene, 0, 10, reused), Error);
+  EXPECT_EQ(reused.width(), 320);
+}
+
 TEST(GBuffer, RejectsBadSizesAndCameras) {
   Scene scene = rastertest::objectsScene();
   EXPECT_THROW(renderGBuffer(scene, 0, 10), Error);
