@@ -84,6 +84,11 @@ KeyValues describeParams(const Params& params);
 // or took no time).
 void fillBaselineRatios(Report& report);
 
+// What a reader must know to compare the rows fairly, one sentence each: where a row did not see the
+// same geometry as the reference (parker's true spheres: its `analytic_spheres` stat). Every writer
+// prints them.
+std::vector<std::string> reportNotes(const Report& report);
+
 // A scan-line profile value as reports write it: V rounded to 1e-4 (JSON and page alike).
 double roundedProfileValue(float v);
 

@@ -538,6 +538,11 @@ std::string reportToHtml(const Report& report) {
 
   h += "<section id=\"table\"><h2>Results</h2><p class=\"muted\">Click a column header to sort.</p>\n" +
        resultsTable(report);
+  if (const std::vector<std::string> notes = reportNotes(report); !notes.empty()) {
+    h += "<ul id=\"notes\">";
+    for (const std::string& note : notes) h += "<li>" + esc(note) + "</li>";
+    h += "</ul>";
+  }
   if (!report.skipped.empty()) {
     h += "<p>Not run here:</p><ul id=\"skipped\">";
     for (const auto& [name, why] : report.skipped)

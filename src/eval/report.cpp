@@ -168,6 +168,17 @@ nlohmann::json rowJson(const ReportRow& row) {
 
 double roundedProfileValue(float v) { return std::round(static_cast<double>(v) * 1.0e4) / 1.0e4; }
 
+std::vector<std::string> reportNotes(const Report& report) {
+  std::vector<std::string> notes;
+  for (const ReportRow& row : report.rows)
+    for (const auto& [key, value] : row.stats)
+      if (key == "analytic_spheres" && value > 0.0)
+        notes.push_back(fmt::format("{} traced {} sphere object{} as true spheres (analytic_spheres); the reference and the "
+                                    "other rows use their tessellated meshes, whose outlines lie just inside the spheres'.",
+                                    row.shownName(), value, value == 1.0 ? "" : "s"));
+  return notes;
+}
+
 std::string reportToJson(const Report& report) {
   using nlohmann::json;
   json j;
@@ -197,6 +208,7 @@ std::string reportToJson(const Report& report) {
                     {"reference", profileJson(report.profile->reference)},
                     {"mask", mask}};
   }
+  if (const std::vector<std::string> notes = reportNotes(report); !notes.empty()) j["notes"] = notes;
   if (!report.skipped.empty()) {
     json skipped = json::array();
     for (const auto& [name, why] : report.skipped) skipped.push_back({{"name", name}, {"reason", why}});
@@ -251,6 +263,10 @@ std::string reportToMarkdown(const Report& report) {
       md += "\n";
     }
   }
+  if (const std::vector<std::string> notes = reportNotes(report); !notes.empty()) {
+    md += "\n## Notes\n\n";
+    for (const std::string& note : notes) md += "- " + note + "\n";
+  }
   if (!report.skipped.empty()) {
     md += "\n## Not run\n\n";
     for (const auto& [name, why] : report.skipped) md += fmt::format("- `{}`: {}\n", name, why);
@@ -286,6 +302,7 @@ std::string reportToText(const Report& report) {
     while (!out.empty() && out.back() == ' ') out.pop_back();
     text += out + "\n";
   }
+  for (const std::string& note : reportNotes(report)) text += "note: " + note + "\n";
   return text;
 }
 

@@ -113,6 +113,26 @@ TEST(Report, TextAndMarkdownListEveryRow) {
   EXPECT_NE(md.find("built-in:torus"), std::string::npos);
 }
 
+// parker's true spheres against the reference's tessellated ones: every writer says so, and only when
+// a row traced one.
+TEST(Report, EveryWriterNotesARowThatTracedTrueSpheres) {
+  Report r = sampleReport();
+  EXPECT_TRUE(reportNotes(r).empty());
+  EXPECT_EQ(reportToJson(r).find("\"notes\""), std::string::npos);
+  ReportRow parker;
+  parker.technique = "parker";
+  parker.stats = {{"analytic_spheres", 5.0}, {"rays", 100.0}};
+  r.rows.push_back(parker);
+  const std::vector<std::string> notes = reportNotes(r);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("parker traced 5 sphere objects as true spheres"), std::string::npos) << notes[0];
+  const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
+  EXPECT_EQ(j.at("notes").at(0).get<std::string>(), notes[0]);
+  EXPECT_NE(reportToMarkdown(r).find("- " + notes[0]), std::string::npos);
+  EXPECT_NE(reportToText(r).find("note: " + notes[0]), std::string::npos);
+  EXPECT_NE(reportToHtml(r).find("<ul id=\"notes\"><li>parker traced 5 sphere objects as true spheres"), std::string::npos);
+}
+
 // A compare report with a profile, a map-size sweep and error maps.
 Report richReport() {
   Report r = sampleReport();
