@@ -56,9 +56,9 @@ class KirschTechnique final : public ShadowTechnique {
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
-    widths_ = plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size,
-                                    plm::RibbonSides::Inner, plm::RibbonPriority::PenumbraLimit, options_.marginTexels, &map_.objectId,
-                                    plm::farthestSurface(scene, map_, space_));
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Inner,
+                          plm::RibbonPriority::PenumbraLimit, options_.marginTexels, &map_.objectId, farthest_, widths_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -87,6 +87,7 @@ class KirschTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> widths_;
+  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
   PassTimings timings_;
 };
 

@@ -239,7 +239,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   return edges;
 }
 
-Image<float> farthestSurface(const Scene& scene, const LightMap& map, const Space& space) {
+void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far) {
   // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
   // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
   // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
@@ -258,28 +258,32 @@ Image<float> farthestSurface(const Scene& scene, const LightMap& map, const Spac
     }
     for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
   }
-  Image<float> far(map.size, map.size, space.zetaNone);
-  if (triangles.empty()) return far;
+  far.reset(map.size, map.size, space.zetaNone);
+  if (triangles.empty()) return;
   raster::RasterInput input;
   input.width = input.height = map.size;
   input.clipPositions = clip;
   input.triangles = triangles;
-  input.attributeCount = 1;
-  input.attributes = lsZ;
-  const raster::RasterOutput out = raster::rasterize(input);
-  for (int j = 0; j < map.size; ++j)
-    for (int i = 0; i < map.size; ++i)
-      if (out.triangle(i, j) >= 0) {
-        const float z = out.attributes[0](i, j);
-        far(i, j) = map.orthographic || z > 0.0f ? space.zeta(z) : space.zetaNone;
+  // Straight from the resolved tiles, z interpolated as the rasterizer interpolates attributes:
+  // no intermediate images.
+  raster::rasterize(input, [&](const raster::TileSamples& samples) {
+    for (int j = 0; j < samples.height; ++j) {
+      float* row = far.row(samples.y0 + j) + samples.x0;
+      for (int i = 0; i < samples.width; ++i) {
+        const int k = j * raster::kTileSize + i;
+        if (samples.triangle[k] < 0) continue;
+        const glm::uvec3& t = triangles[static_cast<size_t>(samples.triangle[k])];
+        const Vec3& b = samples.barycentrics[k];
+        const float z = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];
+        row[i] = map.orthographic || z > 0.0f ? space.zeta(z) : space.zetaNone;
       }
-  return far;
+    }
+  });
 }
 
-Image<RibbonTexel> rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
-                                    RibbonPriority priority, float marginTexels, const Image<int32_t>* coverage,
-                                    const Image<float>& farthest) {
-  Image<RibbonTexel> out(mapSize, mapSize);
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
+                      float marginTexels, const Image<int32_t>* coverage, const Image<float>& farthest, Image<RibbonTexel>& out) {
+  out.reset(mapSize, mapSize, RibbonTexel{});
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
   struct Box {
@@ -340,7 +344,6 @@ Image<RibbonTexel> rasterizeRibbons(const std::vector<Edge>& edges, const Space&
       }
     }
   });
-  return out;
 }
 
 }  // namespace plm
@@ -373,12 +376,14 @@ class PlmTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);
-    const Image<plm::RibbonTexel> ribbons = plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both,
-                                                                  plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
-                                                                  &map_.objectId, plm::farthestSurface(scene, map_, space_));
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
+                          &map_.objectId, farthest_, ribbons_);
+    const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;
-    limits_ = Image<PlmTexel>(n, n);
-    std::vector<int> needLower;  // texels whose ribbon needs the lower limit b
+    limits_.reset(n, n, PlmTexel{});
+    std::vector<int>& needLower = needLower_;  // texels whose ribbon needs the lower limit b
+    needLower.clear();
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         const float depth = map_.lsDepth(i, j);
@@ -475,6 +480,11 @@ class PlmTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<PlmTexel> limits_;
+  // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
+  // fresh pages.
+  Image<float> farthest_;
+  Image<plm::RibbonTexel> ribbons_;
+  std::vector<int> needLower_;
   PassTimings timings_;
 };
 

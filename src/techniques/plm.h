@@ -102,14 +102,15 @@ struct RibbonTexel {
 // elsewhere there is nothing to receive its shadow (the border of a ground plane, seen from above,
 // would otherwise lay an inner ribbon over the ground itself, whose texels then interpolate with
 // the ribbons of the occluders above it).
-Image<float> farthestSurface(const Scene& scene, const LightMap& map, const Space& space);
+// Into `far`, which keeps its storage where it is large enough.
+void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far);
 
 // `coverage` (the light map's object ids, or nullptr): a texel on an edge's inner side is only taken
 // where the light map sees the edge's own object — the inner side of one edge's line reaches past
 // the other edges of a thin occluder, where the texel lies outside it.
-Image<RibbonTexel> rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
-                                    RibbonPriority priority, float marginTexels, const Image<int32_t>* coverage,
-                                    const Image<float>& farthest);
+// Into `out`, which keeps its storage where it is large enough.
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
+                      float marginTexels, const Image<int32_t>* coverage, const Image<float>& farthest, Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm
 

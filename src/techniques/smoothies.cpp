@@ -55,9 +55,9 @@ class SmoothiesTechnique final : public ShadowTechnique {
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
-    smoothies_ = plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size,
-                                       plm::RibbonSides::Outer, plm::RibbonPriority::EdgeDepth, options_.marginTexels, nullptr,
-                                       plm::farthestSurface(scene, map_, space_));
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Outer,
+                          plm::RibbonPriority::EdgeDepth, options_.marginTexels, nullptr, farthest_, smoothies_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -86,6 +86,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> smoothies_;
+  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
   PassTimings timings_;
 };
 

@@ -101,7 +101,14 @@ TEST(Determinism, SameSeedAndThreadCountGiveBitIdenticalOutput) {
     if (s == nullptr) continue;
     auto technique = create(info);
     const Image<float> first = runWithThreads(*technique, *s, 2);
-    const Image<float> again = runWithThreads(*technique, *s, 2);  // the same instance, prepared again
+    // The same instance prepared next for another scene (its last object gone), then for this one
+    // again: whatever a technique keeps between prepares must not leak into the next (each gives
+    // what a fresh instance gives).
+    TestScene fewer = *s;
+    fewer.scene.objects.pop_back();
+    const Image<float> afterOther = runWithThreads(*technique, fewer, 2);
+    const Image<float> freshOther = runWithThreads(*create(info), fewer, 2);
+    const Image<float> again = runWithThreads(*technique, *s, 2);
     auto fresh = create(info);
     const Image<float> other = runWithThreads(*fresh, *s, 2);
     ASSERT_EQ(first.size(), static_cast<size_t>(kImageSize * kImageSize)) << info.name;
@@ -109,8 +116,11 @@ TEST(Determinism, SameSeedAndThreadCountGiveBitIdenticalOutput) {
     ASSERT_EQ(other.size(), first.size()) << info.name;
     size_t at = 0;
     EXPECT_EQ(differingPixels(first, again, at), 0u)
-        << info.name << " on " << s->scene.name << ": a second run of one instance differs, first at pixel " << at
+        << info.name << " on " << s->scene.name << ": a run of one instance prepared for another scene before differs, first at pixel " << at
         << " (" << (at < first.size() ? first[at] : 0.0f) << " vs " << (at < first.size() ? again[at] : 0.0f) << ")";
+    EXPECT_EQ(differingPixels(afterOther, freshOther, at), 0u)
+        << info.name << " on " << s->scene.name << " less its last object, after a run on the whole scene: differs from a fresh "
+        << "instance, first at pixel " << at;
     EXPECT_EQ(differingPixels(first, other, at), 0u)
         << info.name << " on " << s->scene.name << ": a fresh instance differs, first at pixel " << at << " ("
         << (at < first.size() ? first[at] : 0.0f) << " vs " << (at < first.size() ? other[at] : 0.0f) << ")";
