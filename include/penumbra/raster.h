@@ -38,7 +38,14 @@ struct LightMap {
   Vec3 lightFromRender(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
   // light-space depth z.
-  Vec3 project(const Vec3& wsP) const;
+  Vec3 project(const Vec3& wsP) const { return projectLightSpace(lightFromRender(wsP)); }
+  // The same for a point already in light space (lightFromRender): callers that need both skip the
+  // second transform.
+  Vec3 projectLightSpace(const Vec3& lsP) const {
+    const float half = 0.5f * static_cast<float>(size);
+    const float scale = orthographic ? 1.0f / halfWidth : 1.0f / (lsP.z * tanHalfFov);
+    return Vec3(half * (1.0f + lsP.x * scale), half * (1.0f - lsP.y * scale), lsP.z);
+  }
   // World point at map coordinates (s, t) and light-space depth z (the inverse of project).
   Vec3 unproject(float s, float t, float z) const;
   // Size of one texel in world units at light-space depth z.

@@ -42,13 +42,6 @@ std::array<Vec3, 8> corners(const Bounds3& b) {
 
 }  // namespace
 
-Vec3 LightMap::project(const Vec3& wsP) const {
-  const Vec3 ls = lightFromRender(wsP);
-  const float half = 0.5f * static_cast<float>(size);
-  const float scale = orthographic ? 1.0f / halfWidth : 1.0f / (ls.z * tanHalfFov);
-  return Vec3(half * (1.0f + ls.x * scale), half * (1.0f - ls.y * scale), ls.z);
-}
-
 Vec3 LightMap::unproject(float s, float t, float z) const {
   const float ndcX = 2.0f * s / static_cast<float>(size) - 1.0f;
   const float ndcY = 1.0f - 2.0f * t / static_cast<float>(size);
@@ -132,10 +125,10 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     clipWScale = 1.0f;
   }
 
-  std::vector<Vec4> clip;
-  std::vector<float> lsZ;
-  std::vector<glm::uvec3> triangles;
-  std::vector<int32_t> payloads;
+  raster::ScratchVector<Vec4> clip;
+  raster::ScratchVector<float> lsZ;
+  raster::ScratchVector<glm::uvec3> triangles;
+  raster::ScratchVector<int32_t> payloads;
   triangles.reserve(scene.triangleCount());
   payloads.reserve(scene.triangleCount());
   for (const Object& object : scene.objects) {

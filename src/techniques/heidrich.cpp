@@ -420,9 +420,7 @@ void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Imag
 ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
   // makeReceiver for a perspective map whose frame the caller already transformed into.
   if (!(lsP.z > 0.0f)) return {};
-  const float half = 0.5f * static_cast<float>(map.size);
-  const float scale = 1.0f / (lsP.z * map.tanHalfFov);
-  return receiverAt(map, Vec3(half * (1.0f + lsP.x * scale), half * (1.0f - lsP.y * scale), lsP.z), lsP, lsN, bias);
+  return receiverAt(map, map.projectLightSpace(lsP), lsP, lsN, bias);
 }
 
 }  // namespace heidrich

@@ -120,7 +120,7 @@ ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const V
                             const DepthBias& bias) {
   const Vec3 lsP = map.lightFromRender(wsPosition);
   if (!map.orthographic && !(lsP.z > 0.0f)) return {};  // behind a local light: not in its map
-  return receiverAt(map, map.project(wsPosition), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
+  return receiverAt(map, map.projectLightSpace(lsP), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
 }
 
 float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels) {
