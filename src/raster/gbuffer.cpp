@@ -80,10 +80,10 @@ void renderGBuffer(const Scene& scene, int width, int height, GBuffer& g) {
     vertexCount += object.mesh.positions.size();
     triangleCount += object.mesh.triangleCount();
   }
-  std::vector<Vec4> clip(vertexCount);
-  std::vector<glm::uvec3> triangles(triangleCount);
-  std::vector<int32_t> objectIndex(triangleCount);
-  std::vector<Vec3> faceNormals(triangleCount);  // once per triangle rather than per pixel
+  raster::ScratchVector<Vec4> clip(vertexCount);
+  raster::ScratchVector<glm::uvec3> triangles(triangleCount);
+  raster::ScratchVector<int32_t> objectIndex(triangleCount);
+  raster::ScratchVector<Vec3> faceNormals(triangleCount);  // once per triangle rather than per pixel
   // Split within objects too: one large mesh would otherwise be one serial task.
   tbb::parallel_for(size_t(0), scene.objects.size(), [&](size_t o) {
     const Mesh& mesh = scene.objects[o].mesh;

@@ -55,9 +55,9 @@ struct Setup {
 };
 
 struct Chunk {
-  std::vector<Setup> setups;
-  std::vector<uint32_t> tileStart;  // items of tile t: items[tileStart[t], tileStart[t+1])
-  std::vector<uint32_t> items;      // indices into setups, in input order within each tile
+  ScratchVector<Setup> setups;
+  ScratchVector<uint32_t> tileStart;  // items of tile t: items[tileStart[t], tileStart[t+1])
+  ScratchVector<uint32_t> items;      // indices into setups, in input order within each tile
 };
 
 struct Context {
@@ -106,7 +106,7 @@ int32_t floorSub(int64_t v) { return static_cast<int32_t>(v >> kSubpixelBits); }
 int32_t ceilSub(int64_t v) { return static_cast<int32_t>((v + kSubpixelScale - 1) >> kSubpixelBits); }
 
 void setupTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, int32_t triangle, const Context& ctx,
-                   std::vector<Setup>& out) {
+                   ScratchVector<Setup>& out) {
   int64_t area = static_cast<int64_t>(v1.x - v0.x) * (v2.y - v0.y) - static_cast<int64_t>(v1.y - v0.y) * (v2.x - v0.x);
   if (area == 0) return;  // degenerate after snapping: covers no sample
   if (area < 0) {         // no culling: reorder so that the edge functions are positive inside
@@ -162,7 +162,7 @@ int clipPolygon(const Vec4* in, int count, const DVec3& planeXYW, double planeZ,
 
 // Clips a triangle against the near plane and the guard band, then sets up its fan.
 void clipAndSetup(const Vec4& c0, const Vec4& c1, const Vec4& c2, int32_t triangle, const Context& ctx,
-                  std::vector<Setup>& out) {
+                  ScratchVector<Setup>& out) {
   // A triangle gains at most one vertex per plane: 3 + 5.
   std::array<Vec4, 9> a{c0, c1, c2}, b{};
   int n = 3;
@@ -191,7 +191,7 @@ void clipAndSetup(const Vec4& c0, const Vec4& c1, const Vec4& c2, int32_t triang
   for (int i = 1; i + 1 < n; ++i) setupTriangle(r[0], r[i], r[i + 1], triangle, ctx, out);
 }
 
-void buildChunk(const RasterInput& input, const std::vector<uint8_t>& codes, const std::vector<RasterVertex>& rv,
+void buildChunk(const RasterInput& input, const ScratchVector<uint8_t>& codes, const ScratchVector<RasterVertex>& rv,
                 size_t begin, size_t end, const Context& ctx, Chunk& chunk) {
   chunk.setups.reserve(end - begin);
   for (size_t i = begin; i < end; ++i) {
@@ -216,7 +216,7 @@ void buildChunk(const RasterInput& input, const std::vector<uint8_t>& codes, con
   for (const Setup& s : chunk.setups) forEachTile(s, [&](size_t tile) { ++chunk.tileStart[tile + 1]; });
   for (size_t t = 0; t < tileCount; ++t) chunk.tileStart[t + 1] += chunk.tileStart[t];
   chunk.items.resize(chunk.tileStart[tileCount]);
-  std::vector<uint32_t> cursor(chunk.tileStart.begin(), chunk.tileStart.end() - 1);
+  ScratchVector<uint32_t> cursor(chunk.tileStart.begin(), chunk.tileStart.end() - 1);
   for (uint32_t k = 0; k < chunk.setups.size(); ++k)
     forEachTile(chunk.setups[k], [&](size_t tile) { chunk.items[cursor[tile]++] = k; });
 }
@@ -343,8 +343,8 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
 
   // 1. Vertices.
   const size_t vertexCount = input.clipPositions.size();
-  std::vector<uint8_t> codes(vertexCount);
-  std::vector<RasterVertex> rv(vertexCount);
+  ScratchVector<uint8_t> codes(vertexCount);
+  ScratchVector<RasterVertex> rv(vertexCount);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, vertexCount, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       codes[i] = outcode(input.clipPositions[i], ctx.guardBand);
@@ -355,7 +355,7 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
   // 2. Triangle setup and binning, in fixed chunks.
   const size_t triangleCount = input.triangles.size();
   const size_t chunkCount = (triangleCount + kChunkTriangles - 1) / kChunkTriangles;
-  std::vector<Chunk> chunks(chunkCount);
+  ScratchVector<Chunk> chunks(chunkCount);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, chunkCount, 1), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c < r.end(); ++c)
       buildChunk(input, codes, rv, c * kChunkTriangles, std::min(triangleCount, (c + 1) * kChunkTriangles), ctx,

@@ -38,10 +38,19 @@
 #include <span>
 #include <vector>
 
+#include <tbb/scalable_allocator.h>
+
 #include "penumbra/image.h"
 #include "penumbra/math.h"
 
 namespace penumbra::raster {
+
+// The per-call working arrays of the rasterizer and of its callers (flattened vertices, triangle
+// setups, tile bins). oneTBB's scalable allocator keeps freed blocks of these sizes for the next
+// call, where the C library returns them to the system and every frame faults its temporaries in
+// afresh (a quarter of a light map's time on a machine with costly page faults).
+template <class T>
+using ScratchVector = std::vector<T, tbb::scalable_allocator<T>>;
 
 inline constexpr int kSubpixelBits = 8;                 //!< vertex snapping: 1/256 pixel
 inline constexpr int kSubpixelScale = 1 << kSubpixelBits;
