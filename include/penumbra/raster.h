@@ -49,7 +49,7 @@ struct LightMap {
   // World point at map coordinates (s, t) and light-space depth z (the inverse of project).
   Vec3 unproject(float s, float t, float z) const;
   // Size of one texel in world units at light-space depth z.
-  float texelWorldSize(float z) const;
+  float texelWorldSize(float z) const { return 2.0f * (orthographic ? halfWidth : z * tanHalfFov) / static_cast<float>(size); }
 };
 
 LightMap renderLightMap(const Scene& scene, const Light& light, int size);

@@ -49,10 +49,6 @@ Vec3 LightMap::unproject(float s, float t, float z) const {
   return wsOrigin + lsFrame.fromLocal(Vec3(ndcX * scale, ndcY * scale, z));
 }
 
-float LightMap::texelWorldSize(float z) const {
-  return 2.0f * (orthographic ? halfWidth : z * tanHalfFov) / static_cast<float>(size);
-}
-
 LightMap renderLightMap(const Scene& scene, const Light& light, int size) {
   LightMap m;
   renderLightMap(scene, light, size, m);

@@ -83,39 +83,6 @@ float minMapDepth(const LightMap& map) {
   return m;
 }
 
-namespace {
-
-// num / den limited to [-kMaxDepthSlope, kMaxDepthSlope], also when den is 0.
-float limitedRatio(float num, float den) {
-  if (std::abs(num) <= kMaxDepthSlope * std::abs(den)) return num / den;
-  const float sign = (num < 0.0f) != (den < 0.0f) ? -1.0f : 1.0f;
-  return sign * kMaxDepthSlope;
-}
-
-}  // namespace
-
-ShadowReceiver receiverAt(const LightMap& map, const Vec3& stz, const Vec3& lsP, const Vec3& lsN, const DepthBias& bias) {
-  ShadowReceiver r;
-  r.s = stz.x;
-  r.t = stz.y;
-  r.lsDepth = stz.z;
-  const float size = static_cast<float>(map.size);
-  if (!(r.s >= 0.0f && r.s < size && r.t >= 0.0f && r.t < size) || !std::isfinite(r.lsDepth)) return r;
-  r.inMap = true;
-  r.texelWorld = map.texelWorldSize(r.lsDepth);
-  // The receiver plane N.X = N.P met by the ray through map position (s, t). Perspective: the ray
-  // is X = z (a, b, 1), a growing with s and b falling with t by texelWorld / z per texel, so
-  // dz/ds = -Nx texelWorld / (N.d) and dz/dt = +Ny texelWorld / (N.d) with N.d = N.P / z.
-  // Orthographic: X = (x, y, z), the same with N.d = Nz. Both in texel sizes per texel here.
-  const float nDotD = map.orthographic ? lsN.z : glm::dot(lsN, lsP) / lsP.z;
-  const float gs = limitedRatio(-lsN.x, nDotD);
-  const float gt = limitedRatio(lsN.y, nDotD);
-  r.dzds = gs * r.texelWorld;
-  r.dzdt = gt * r.texelWorld;
-  r.bias = r.texelWorld * (bias.constantTexels + bias.slope * std::sqrt(gs * gs + gt * gt));
-  return r;
-}
-
 ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
                             const DepthBias& bias) {
   const Vec3 lsP = map.lightFromRender(wsPosition);
