@@ -402,6 +402,22 @@ class PlmTechnique final : public ShadowTechnique {
         limits_(i, j) = texel;
       }
     if (!needLower.empty()) findLowerLimits(scene, light, ribbons, needLower);
+    // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
+    // a flag per texel that no ribbon covers it or its right, lower and lower-right neighbours (the
+    // 2x2 footprint of a bilinear fetch whose top-left texel it is; clamped at the border as there).
+    g_.reset(n, n, 0.0f);
+    ribbonFree2x2_.reset(n, n, 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        const int j1 = std::min(j + 1, n - 1);
+        for (int i = 0; i < n; ++i) {
+          const int i1 = std::min(i + 1, n - 1);
+          g_(i, j) = limits_(i, j).g;
+          ribbonFree2x2_(i, j) = std::min(std::min(limits_(i, j).c, limits_(i1, j).c), std::min(limits_(i, j1).c, limits_(i1, j1).c)) >=
+                                 space_.zetaNone;
+        }
+      }
+    });
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -418,16 +434,18 @@ class PlmTechnique final : public ShadowTechnique {
       const float ws = fs - is, wt = ft - it;
       const int i0 = std::clamp(static_cast<int>(is), 0, n - 1), i1 = std::clamp(static_cast<int>(is) + 1, 0, n - 1);
       const int j0 = std::clamp(static_cast<int>(it), 0, n - 1), j1 = std::clamp(static_cast<int>(it) + 1, 0, n - 1);
-      const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       const auto lerp2 = [&](float a00, float a10, float a01, float a11) {
         const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
         return top + wt * (bottom - top);
       };
-      const float g = lerp2(t00.g, t10.g, t01.g, t11.g);
+      const float g = lerp2(g_(i0, j0), g_(i1, j0), g_(i0, j1), g_(i1, j1));
       const float biased = r.lsDepth - r.bias;
       const float zc = space_.orthographic || biased > 0.0f ? space_.zeta(biased) : -kInfinity;
       // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
-      // interpolate to zetaNone exactly, p_i to 0), the same value without the division.
+      // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The flag's
+      // 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
+      if (ribbonFree2x2_(i0, j0)) return zc < g ? 1.0f : 0.0f;
+      const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
       const float c = lerp2(t00.c, t10.c, t01.c, t11.c);
       const float b = lerp2(t00.b, t10.b, t01.b, t11.b);
@@ -480,6 +498,8 @@ class PlmTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<PlmTexel> limits_;
+  Image<float> g_;                  //!< limits_' g alone, for the lit fast path
+  Image<uint8_t> ribbonFree2x2_;    //!< 1: no ribbon in the 2x2 texels whose top-left this is
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
