@@ -3,8 +3,10 @@
 // and noisy, so only same-run ratios are comparable; DESIGN.md, "Conventions"). Micro-benchmarks
 // of individual kernels live in bench/ (Google Benchmark).
 #include <algorithm>
+#include <optional>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli.h"
 #include "penumbra/error.h"
@@ -58,9 +60,21 @@ int runBench(const BenchOptions& options) {
                      {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
   if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
   if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
+  std::vector<std::string> namedNotRun;
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
-    const TechniqueRun run = runTechnique(setup, gbuffer, info, given[i], options.repeat);
+    std::optional<TechniqueRun> attempt;
+    try {
+      attempt = runTechnique(setup, gbuffer, info, given[i], options.repeat);
+    } catch (const std::exception& e) {
+      fmt::print("{}: not run here: {}\n", info.name, e.what());
+      report.skipped.emplace_back(info.name, e.what());
+      if (!options.techniques.empty() || (!options.baseline.empty() && info.name == baseline))
+        namedNotRun.push_back(info.name);
+      continue;
+    }
+    const TechniqueRun& run = *attempt;
     ReportRow row;
     row.technique = info.name;
     row.params = describeParams(run.params);
@@ -73,6 +87,11 @@ int runBench(const BenchOptions& options) {
   if (!options.jsonPath.empty()) {
     writeTextFile(options.jsonPath, reportToJson(report));
     fmt::print("wrote {}\n", options.jsonPath);
+  }
+  if (!namedNotRun.empty()) {
+    fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the table): {}\n",
+               namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
+    return 1;
   }
   return 0;
 }

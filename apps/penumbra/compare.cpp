@@ -219,6 +219,13 @@ int runCompare(const CompareOptions& options) {
   truth.profile = profile.reference;
   report.profile = profile;
 
+  // Techniques the user named that did not run: the exit status says so once the report is written.
+  std::vector<std::string> namedNotRun;
+  auto notRun = [&](const std::string& name, const std::string& why) {
+    fmt::print("{}: not run here: {}\n", name, why);
+    report.skipped.emplace_back(name, why);
+    if (!options.techniques.empty() || (!options.baseline.empty() && name == baseline)) namedNotRun.push_back(name);
+  };
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     const Params params = resolveParams(info.name, info.params, given[i]);
@@ -242,13 +249,11 @@ int runCompare(const CompareOptions& options) {
       std::optional<TechniqueRun> attempt;
       try {
         attempt = runTechnique(setup, gbuffer, info, given[i]);
-      } catch (const Error& e) {
-        // Every registered technique by default: one that cannot handle this scene (most often its
-        // light's shape) is listed with the reason instead of ending the whole comparison. A
-        // technique asked for by name fails loudly.
-        if (!options.techniques.empty()) throw;
-        fmt::print("{}: skipped: {}\n", info.name, e.what());
-        report.skipped.emplace_back(info.name, e.what());
+      } catch (const std::exception& e) {
+        // A technique that cannot take this scene (its light's shape, or anything its prepare or
+        // visibility refuses) costs its row, never the comparison: the others run and the report is
+        // written with its reason. Only one the user named makes the exit status non-zero.
+        notRun(info.name, e.what());
         continue;
       }
       TechniqueRun& run = *attempt;
@@ -266,9 +271,17 @@ int runCompare(const CompareOptions& options) {
         MapSizePoint point{mapSizes[s], *row.error, row.timings};
         if (row.mapSizeVaries && (params.isAuto(kMapSize) || params.getInt(kMapSize) != mapSizes[s])) {
           fmt::print("{}: map_size={}\n", row.shownName(), mapSizes[s]);
-          const TechniqueRun run = runTechnique(setup, gbuffer, info, sweepGiven[i][s]);
-          point.error = compareVisibility(run.v, vTruth, mask);
-          point.timings = run.timings;
+          try {
+            const TechniqueRun run = runTechnique(setup, gbuffer, info, sweepGiven[i][s]);
+            point.error = compareVisibility(run.v, vTruth, mask);
+            point.timings = run.timings;
+          } catch (const std::exception& e) {
+            // The row leaves the map-size sweep (its plot and table) and this size is listed as not run.
+            notRun(fmt::format("{} (map_size={})", info.name, mapSizes[s]), e.what());
+            row.mapSizeVaries = false;
+            row.mapSizeSweep.clear();
+            break;
+          }
         }
         row.mapSizeSweep.push_back(point);
       }
@@ -291,6 +304,11 @@ int runCompare(const CompareOptions& options) {
              "it)\n",
              gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report), htmlPath, "compare.json",
              "compare.md");
+  if (!namedNotRun.empty()) {
+    fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the report): {}\n",
+               namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
+    return 1;
+  }
   return 0;
 }
 

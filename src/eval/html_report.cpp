@@ -346,6 +346,7 @@ header { padding-top: 18px; }
 h1 { font-size: 22px; margin: 0 0 4px; } h2 { font-size: 18px; margin: 28px 0 8px; border-bottom: 1px solid var(--line); padding-bottom: 4px; }
 h3 { font-size: 15px; margin: 0 0 6px; }
 .muted { color: var(--muted); }
+td.not-run { color: var(--muted); font-style: italic; }
 code { font: 12px/1.4 ui-monospace, "DejaVu Sans Mono", monospace; background: var(--panel); padding: 1px 4px; border-radius: 3px; }
 dl.setup { display: grid; grid-template-columns: max-content 1fr; gap: 3px 14px; margin: 0; }
 dl.setup dt { color: var(--muted); } dl.setup dd { margin: 0; overflow-wrap: anywhere; }
@@ -460,8 +461,9 @@ std::string resultsTable(const Report& report) {
   const std::string ratioHeader = report.baseline.empty() ? "&#215; baseline" : "&#215; " + esc(report.baseline);
   std::string s = "<table id=\"results\"><thead><tr>";
   const std::pair<const char*, std::string> columns[] = {
-      {"text", "technique"},    {"number", "RMSE8"},        {"number", "penumbra RMSE8"}, {"number", "max error"},
-      {"number", "prepare ms"}, {"number", "visibility ms"}, {"number", "total ms"},       {"number", ratioHeader}};
+      {"text", "technique"},      {"number", "RMSE8"},         {"number", "penumbra RMSE8"}, {"number", "max error"},
+      {"number", "umbra leaks"},  {"number", "speckle"},       {"number", "prepare ms"},     {"number", "visibility ms"},
+      {"number", "total ms"},     {"number", ratioHeader}};
   for (const auto& [type, name] : columns)
     s += fmt::format("<th data-type=\"{}\" scope=\"col\"><button type=\"button\">{}</button></th>", type,
                      type == std::string("text") ? esc(name) : name);
@@ -476,12 +478,23 @@ std::string resultsTable(const Report& report) {
       return static_cast<double>((*row.error).*member);
     };
     s += numberCell(err(&ErrorStats::rmse8), 2) + numberCell(err(&ErrorStats::penumbraRmse8), 2) +
-         numberCell(err(&ErrorStats::maxAbsError), 3);
+         numberCell(err(&ErrorStats::maxAbsError), 3) + numberCell(err(&ErrorStats::umbraLeaks), 0) +
+         numberCell(err(&ErrorStats::speckle), 0);
     s += numberCell(row.timings.get("prepare"), 2) + numberCell(row.timings.get("visibility"), 2) +
          numberCell(row.timings.total(), 2) + numberCell(row.ratioToBaseline, 2);
     s += fmt::format("<td class=\"params\">{}</td></tr>\n", esc(joinedParams(row.params)));
   }
-  return s + "</tbody></table>\n";
+  s += "</tbody>\n";
+  // Techniques that could not take this scene keep a row, outside the sorted body, with the reason.
+  if (!report.skipped.empty()) {
+    s += "<tbody id=\"not-run\">\n";
+    for (const auto& [name, why] : report.skipped)
+      s += fmt::format("<tr data-not-run=\"{0}\"><td>{0}</td><td colspan=\"{1}\" class=\"not-run\">not run here: {2}</td>"
+                       "</tr>\n",
+                       esc(name), std::size(columns), esc(why));
+    s += "</tbody>\n";
+  }
+  return s + "</table>\n";
 }
 
 std::string seriesLegend(const Report& report) {
@@ -507,8 +520,10 @@ std::string reportToHtml(const Report& report) {
   h += fmt::format("<header><h1>penumbra {}: <code>{}</code></h1><p class=\"muted\">Every technique's visibility V "
                    "against the ray-traced reference on the same G-buffer. RMSE8 = sqrt(mean((V &#8722; V<sub>ref</sub>)"
                    "&#178;)) &#215; 255 over pixels facing the light; penumbra RMSE8 over those where V or V<sub>ref</sub>"
-                   " is in (0.01, 0.99); max error in V. Times are medians of this run, on this machine; the ratio is "
-                   "to <code>{}</code> measured in the same run.</p></header>\n<main>\n",
+                   " is in (0.01, 0.99); max error in V; umbra leaks: pixels the reference puts in the umbra "
+                   "(V<sub>ref</sub> &lt; 0.05) that the technique lights (V &gt; 0.5); speckle: pixels whose V is "
+                   "more than 0.25 from the median of its 3&#215;3 block where V<sub>ref</sub>'s is within 0.05 of its "
+                   "own. Times are medians of this run, on this machine; the ratio is to <code>{}</code> measured in the same run.</p></header>\n<main>\n",
                    esc(report.kind), esc(report.scene), esc(report.baseline.empty() ? "-" : report.baseline));
 
   // Setup: enough to reproduce the report.
@@ -541,12 +556,6 @@ std::string reportToHtml(const Report& report) {
   if (const std::vector<std::string> notes = reportNotes(report); !notes.empty()) {
     h += "<ul id=\"notes\">";
     for (const std::string& note : notes) h += "<li>" + esc(note) + "</li>";
-    h += "</ul>";
-  }
-  if (!report.skipped.empty()) {
-    h += "<p>Not run here:</p><ul id=\"skipped\">";
-    for (const auto& [name, why] : report.skipped)
-      h += fmt::format("<li><code>{}</code>: {}</li>", esc(name), esc(why));
     h += "</ul>";
   }
   h += "</section>\n";

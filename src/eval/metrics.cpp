@@ -3,6 +3,8 @@
 // accumulated in double so the metric does not depend on image size through float round-off.
 #include "penumbra/metrics.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "penumbra/error.h"
@@ -16,6 +18,26 @@ constexpr float kPenumbraLow = 0.01f;
 constexpr float kPenumbraHigh = 0.99f;
 
 bool inPenumbra(float v) { return v > kPenumbraLow && v < kPenumbraHigh; }
+
+// |V(x, y) - median of V over the 3x3 block around it|; (x, y) not on the border.
+float distanceToMedian3x3(const Image<float>& v, int x, int y) {
+  std::array<float, 9> block;
+  int n = 0;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) block[n++] = v(x + dx, y + dy);
+  std::nth_element(block.begin(), block.begin() + 4, block.end());
+  return std::abs(v(x, y) - block[4]);
+}
+
+size_t countSpeckle(const Image<float>& v, const Image<float>& reference, const Image<uint8_t>& mask) {
+  size_t count = 0;
+  for (int y = 1; y + 1 < v.height(); ++y)
+    for (int x = 1; x + 1 < v.width(); ++x) {
+      if (!mask(x, y)) continue;
+      if (distanceToMedian3x3(v, x, y) > kSpeckleJump && distanceToMedian3x3(reference, x, y) < kSpeckleCalm) ++count;
+    }
+  return count;
+}
 
 }  // namespace
 
@@ -38,6 +60,7 @@ ErrorStats compareVisibility(const Image<float>& v, const Image<float>& referenc
       v.height() != mask.height())
     fail("compareVisibility: visibility {}x{}, reference {}x{} and mask {}x{} must have the same size", v.width(),
          v.height(), reference.width(), reference.height(), mask.width(), mask.height());
+  ErrorStats stats;
   double sumSq = 0.0, penumbraSumSq = 0.0, maxAbs = 0.0;
   size_t maskCount = 0, penumbraCount = 0;
   for (size_t i = 0; i < v.size(); ++i) {
@@ -46,12 +69,13 @@ ErrorStats compareVisibility(const Image<float>& v, const Image<float>& referenc
     sumSq += d * d;
     maxAbs = std::max(maxAbs, std::abs(d));
     ++maskCount;
+    if (reference[i] < kUmbraReference && v[i] > kUmbraLeakLit) ++stats.umbraLeaks;
     if (inPenumbra(v[i]) || inPenumbra(reference[i])) {
       penumbraSumSq += d * d;
       ++penumbraCount;
     }
   }
-  ErrorStats stats;
+  stats.speckle = countSpeckle(v, reference, mask);
   stats.maskPixels = maskCount;
   stats.penumbraPixels = penumbraCount;
   stats.maxAbsError = maxAbs;

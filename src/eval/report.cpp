@@ -37,6 +37,17 @@ std::string joinParams(const KeyValues& params) {
   return s;
 }
 
+// A table cell's text with the characters that would end the cell or the row made harmless.
+std::string markdownCell(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') out += "\\|";
+    else if (c == '\n' || c == '\r') out += ' ';
+    else out += c;
+  }
+  return out;
+}
+
 bool anyError(const Report& report) {
   return std::any_of(report.rows.begin(), report.rows.end(), [](const ReportRow& r) { return r.error.has_value(); });
 }
@@ -46,7 +57,7 @@ std::vector<std::vector<std::string>> tableCells(const Report& report) {
   const bool withError = anyError(report);
   std::vector<std::vector<std::string>> cells;
   std::vector<std::string> header = {"technique"};
-  if (withError) header.insert(header.end(), {"RMSE8", "penumbra RMSE8", "max err"});
+  if (withError) header.insert(header.end(), {"RMSE8", "penumbra RMSE8", "max err", "umbra leaks", "speckle"});
   header.insert(header.end(), {"prepare ms", "visibility ms", "total ms",
                                report.baseline.empty() ? "x baseline" : "x " + report.baseline, "stats", "params"});
   cells.push_back(header);
@@ -55,14 +66,22 @@ std::vector<std::vector<std::string>> tableCells(const Report& report) {
     if (withError) {
       if (row.error)
         line.insert(line.end(), {number(row.error->rmse8), number(row.error->penumbraRmse8),
-                                 number(row.error->maxAbsError, 3)});
+                                 number(row.error->maxAbsError, 3), std::to_string(row.error->umbraLeaks),
+                                 std::to_string(row.error->speckle)});
       else
-        line.insert(line.end(), {"-", "-", "-"});
+        line.insert(line.end(), {"-", "-", "-", "-", "-"});
     }
     line.insert(line.end(), {number(row.timings.get("prepare")), number(row.timings.get("visibility")),
                              number(row.timings.total()),
                              row.ratioToBaseline ? number(*row.ratioToBaseline) : std::string("-"),
                              joinStats(row.stats), joinParams(row.params)});
+    cells.push_back(line);
+  }
+  // A technique that could not take this scene keeps its row, with the reason where its numbers would be.
+  for (const auto& [name, why] : report.skipped) {
+    std::vector<std::string> line(header.size(), "-");
+    line.front() = name;
+    line.back() = "not run here: " + why;
     cells.push_back(line);
   }
   return cells;
@@ -113,6 +132,8 @@ nlohmann::json errorJson(const ErrorStats& e) {
   return {{"rmse8", e.rmse8},
           {"penumbra_rmse8", e.penumbraRmse8},
           {"max_abs_error", e.maxAbsError},
+          {"umbra_leaks", e.umbraLeaks},
+          {"speckle", e.speckle},
           {"mask_pixels", e.maskPixels},
           {"penumbra_pixels", e.penumbraPixels}};
 }
@@ -236,12 +257,14 @@ std::string reportToMarkdown(const Report& report) {
   md += "\n";
   if (anyError(report))
     md += "RMSE8 = sqrt(mean((V - V_ref)^2)) x 255 over pixels facing the light; penumbra RMSE8 over those where "
-          "V or V_ref is in (0.01, 0.99); max err in V. The reference row's error is 0 by definition: its own "
-          "noise is its standard error in the stats column.\n\n";
+          "V or V_ref is in (0.01, 0.99); max err in V; umbra leaks: pixels with V_ref < 0.05 and V > 0.5; "
+          "speckle: pixels whose V is more than 0.25 from the median of its 3x3 block where V_ref's is within 0.05 "
+          "of its own. The reference row's error is 0 by definition: its own noise is its standard error in the "
+          "stats column.\n\n";
   const auto cells = tableCells(report);
   for (size_t r = 0; r < cells.size(); ++r) {
     md += "|";
-    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : c) + " |";
+    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : markdownCell(c)) + " |";
     md += "\n";
     if (r == 0) {
       md += "|";

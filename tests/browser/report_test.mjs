@@ -81,7 +81,7 @@ try {
   check(images.every((img) => img.width === report.image.width && img.height === report.image.height),
     `every image is ${report.image.width}x${report.image.height}`);
 
-  const labels = await page.$$eval('#results tbody tr', (rows) => rows.map((row) => row.dataset.technique));
+  const labels = await page.$$eval('#results tbody tr[data-technique]', (rows) => rows.map((row) => row.dataset.technique));
   const expected = report.techniques.map((t) => t.label);
   check(JSON.stringify(labels) === JSON.stringify(expected), 'the table lists every technique of compare.json',
     `${labels} vs ${expected}`);
@@ -92,7 +92,7 @@ try {
     'every registered technique is in the table or listed as not run', registered.filter((n) => !listed.has(n)).join(', '));
 
   // Sorting: by RMSE8 (column 1) up, then down, then by name.
-  const columnValues = (column) => page.$$eval('#results tbody tr',
+  const columnValues = (column) => page.$$eval('#results tbody tr[data-technique]',
     (rows, c) => rows.map((row) => row.cells[c].dataset.value), column);
   const header = (name) => page.locator('#results thead th', { hasText: new RegExp(`^${name}`) }).first();
   const numbers = (values) => values.filter((v) => v !== '').map(Number);
@@ -108,12 +108,12 @@ try {
   values = numbers(await columnValues(1));
   check(isSorted(values, -1), 'a second click sorts descending', values.join(' '));
   await header('total ms').locator('button').click();
-  values = numbers(await columnValues(6));
+  values = numbers(await columnValues(8));
   check(isSorted(values, +1), 'total ms sorts ascending', values.join(' '));
   await header('technique').locator('button').click();
   const names = await columnValues(0);
   check(names.every((n, i) => i === 0 || names[i - 1].localeCompare(n) <= 0), 'technique sorts by name', names.join(' '));
-  const shown = await page.$$eval('#results tbody tr td:nth-child(2)', (cells) => cells.map((c) => c.textContent));
+  const shown = await page.$$eval('#results tbody tr[data-technique] td:nth-child(2)', (cells) => cells.map((c) => c.textContent));
   const byLabel = Object.fromEntries(report.techniques.map((t) => [t.label, t.rmse8.toFixed(2)]));
   check(names.every((n, i) => byLabel[n] === shown[i]), 'the shown RMSE8 is compare.json\'s, rounded to 0.01');
 

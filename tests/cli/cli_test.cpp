@@ -282,12 +282,12 @@ TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
   const std::string html = read("out/report/index.html");
   const auto table = pageTable(html);
   ASSERT_EQ(table.size(), 4u) << html;
-  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "prepare_ms", "visibility_ms", "total_ms",
-                        "ratio_to_baseline"};
+  const char* keys[] = {"rmse8",      "penumbra_rmse8", "max_abs_error", "umbra_leaks",      "speckle",
+                        "prepare_ms", "visibility_ms",  "total_ms",      "ratio_to_baseline"};
   for (const auto& row : j["techniques"]) {
     const auto it = table.find(row["label"].get<std::string>());
     ASSERT_NE(it, table.end()) << row["label"] << "\n" << html;
-    ASSERT_EQ(it->second.size(), 8u);
+    ASSERT_EQ(it->second.size(), 1 + std::size(keys));
     for (size_t k = 0; k < std::size(keys); ++k)
       EXPECT_DOUBLE_EQ(std::stod(it->second[k + 1]), row[keys[k]].get<double>()) << row["label"] << " " << keys[k];
     // Every image the page shows exists beside it.
@@ -407,13 +407,36 @@ TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {
     }
   for (const TechniqueInfo& info : techniqueRegistry()) EXPECT_TRUE(seen.count(info.name)) << info.name;
   EXPECT_EQ(seen.size(), techniqueRegistry().size());
-  if (!skippedName.empty()) {
-    // Only prepare() knows, so the error comes after the progress lines of the work before it.
-    const Result named = run("compare --scene s.json --techniques " + skippedName + " " + kTiny);
-    EXPECT_EQ(named.code, 1) << named.output;
-    EXPECT_NE(named.output.find("penumbra: error: " + skippedName), std::string::npos) << named.output;
-    EXPECT_NE(named.output.find("sphere"), std::string::npos) << named.output;
-  }
+  ASSERT_FALSE(skippedName.empty()) << "the scene's sphere light should be one some technique refuses";
+  // The default set skipped it for a stated reason: not a failure, and its row says why in every writer.
+  EXPECT_NE(read("out/report/compare.md").find("| " + skippedName + " |"), std::string::npos);
+  EXPECT_NE(read("out/report/compare.md").find("not run here: "), std::string::npos);
+  EXPECT_NE(read("out/report/index.html").find("<tr data-not-run=\"" + skippedName + "\">"), std::string::npos);
+  EXPECT_NE(r.output.find(skippedName + ": not run here: "), std::string::npos) << r.output;
+
+  // Named beside others, it costs its row only: the others run, the report is written, and the exit
+  // status (after the report) says which named technique did not run.
+  fs::remove_all(dir_ / "out");
+  const Result named = run("compare --scene s.json --techniques hard," + skippedName + ",pcf " + kTiny);
+  EXPECT_EQ(named.code, 1) << named.output;
+  EXPECT_NE(named.output.find("penumbra: error: a technique asked for did not run on this scene (the reasons are in "
+                              "the report): " + skippedName),
+            std::string::npos)
+      << named.output;
+  ASSERT_TRUE(fs::exists(dir_ / "out/report/index.html")) << named.output;
+  const nlohmann::json k = nlohmann::json::parse(read("out/report/compare.json"));
+  std::set<std::string> ran;
+  for (const auto& row : k["techniques"]) ran.insert(row["name"].get<std::string>());
+  EXPECT_EQ(ran, (std::set<std::string>{"hard", "pcf"}));
+  ASSERT_EQ(k["skipped"].size(), 1u);
+  EXPECT_EQ(k["skipped"][0]["name"], skippedName);
+  EXPECT_NE(k["skipped"][0]["reason"].get<std::string>().find("sphere"), std::string::npos);
+
+  // bench alike: the row says why, the others are timed, and a named one fails the run.
+  const Result bench = run("bench --scene s.json --techniques hard," + skippedName + " --repeat 1 --width 32 --height 32");
+  EXPECT_EQ(bench.code, 1) << bench.output;
+  EXPECT_NE(bench.output.find(skippedName + ": not run here: "), std::string::npos) << bench.output;
+  EXPECT_NE(bench.output.find("hard "), std::string::npos) << bench.output;
 }
 
 TEST_F(CliTest, EmptySceneRendersFullyLit) {

@@ -60,6 +60,50 @@ TEST(CompareVisibility, HandComputedRmse8) {
   EXPECT_DOUBLE_EQ(s.maxAbsError, 0.5);
 }
 
+TEST(CompareVisibility, UmbraLeaksCountLitPixelsTheReferencePutsInTheUmbra) {
+  Image<float> v(5, 1), ref(5, 1);
+  Image<uint8_t> mask(5, 1, 1);
+  // (v, ref): a leak (0.6, 0.0); at the thresholds, which do not count (0.5, 0.0) and (0.9, 0.05); a
+  // leak outside the mask; and a dark pixel in the umbra.
+  const float vs[5] = {0.6f, 0.5f, 0.9f, 1.0f, 0.0f};
+  const float rs[5] = {0.0f, 0.0f, 0.05f, 0.01f, 0.0f};
+  for (int i = 0; i < 5; ++i) {
+    v[i] = vs[i];
+    ref[i] = rs[i];
+  }
+  mask[3] = 0;
+  EXPECT_EQ(compareVisibility(v, ref, mask).umbraLeaks, 1u);
+}
+
+TEST(CompareVisibility, SpeckleCountsIsolatedJumpsTheReferenceDoesNotHave) {
+  // A lit 7x7 image: the reference has a smooth ramp, the technique the same ramp with one dark speck,
+  // one bright speck in a dark block and a one-pixel line across the image. A straight hard edge (half
+  // the block dark) is no speckle: the median of a pixel on either side of it is its own side.
+  Image<float> ref(7, 7, 1.0f), v(7, 7, 1.0f);
+  Image<uint8_t> mask(7, 7, 1);
+  for (int y = 0; y < 7; ++y)
+    for (int x = 0; x < 7; ++x) ref(x, y) = v(x, y) = 0.5f + 0.01f * static_cast<float>(x);
+  v(2, 2) = 0.0f;  // a dark speck in the ramp
+  EXPECT_EQ(compareVisibility(v, ref, mask).speckle, 1u);
+  for (int x = 0; x < 7; ++x) v(x, 4) = 1.0f;  // a line: each of its 5 inner pixels is 3 of 9 in its block
+  EXPECT_EQ(compareVisibility(v, ref, mask).speckle, 1u + 5u);
+  // Where the reference jumps too (its own edge), a jump of the technique is not speckle.
+  ref(2, 2) = 0.0f;
+  EXPECT_EQ(compareVisibility(v, ref, mask).speckle, 5u);
+  // A hard edge, in both images: none.
+  Image<float> edge(7, 7, 1.0f);
+  for (int y = 0; y < 7; ++y)
+    for (int x = 0; x < 3; ++x) edge(x, y) = 0.0f;
+  EXPECT_EQ(compareVisibility(edge, Image<float>(7, 7, 1.0f), mask).speckle, 0u);
+  // Border pixels have no full block and are not counted; masked-out pixels neither.
+  Image<float> border(7, 7, 1.0f);
+  border(0, 3) = 0.0f;
+  border(3, 3) = 0.0f;
+  EXPECT_EQ(compareVisibility(border, Image<float>(7, 7, 1.0f), mask).speckle, 1u);
+  mask(3, 3) = 0;
+  EXPECT_EQ(compareVisibility(border, Image<float>(7, 7, 1.0f), mask).speckle, 0u);
+}
+
 TEST(CompareVisibility, PenumbraIntervalIsOpen) {
   // 0.01 and 0.99 themselves are not penumbra values; just inside them are.
   Image<float> v(4, 1), ref(4, 1);

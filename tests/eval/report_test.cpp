@@ -139,7 +139,7 @@ Report richReport() {
   r.rows[1].mapSizeVaries = false;
   ReportRow map;
   map.technique = "hard";
-  map.error = ErrorStats{20.125, 60.5, 0.75, 100, 10};
+  map.error = ErrorStats{20.125, 60.5, 0.75, 100, 10, 7, 3};
   map.timings.add("prepare", 0.25);
   map.timings.add("visibility", 0.5);
   map.images = {{"shaded", "t_hard.png"}, {"visibility", "t_hard_v.png"}, {"error", "t_hard_err.png"}};
@@ -171,7 +171,7 @@ TEST(Report, HtmlTableHoldsTheJsonNumbers) {
   const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
   const auto table = tableValues(reportToHtml(r));
   ASSERT_EQ(table.size(), j["techniques"].size());
-  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "prepare_ms", "visibility_ms", "total_ms",
+  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "umbra_leaks", "speckle", "prepare_ms", "visibility_ms", "total_ms",
                         "ratio_to_baseline"};
   for (const auto& row : j["techniques"]) {
     const auto it = table.find(row["label"].get<std::string>());
@@ -181,6 +181,26 @@ TEST(Report, HtmlTableHoldsTheJsonNumbers) {
     for (size_t k = 0; k < std::size(keys); ++k)
       EXPECT_DOUBLE_EQ(std::stod(it->second[k + 1]), row[keys[k]].get<double>()) << row["label"] << " " << keys[k];
   }
+}
+
+// A technique that could not take the scene keeps a row with its reason in every writer, outside the
+// sorted table body; characters that would break a Markdown table stay inside their cell.
+TEST(Report, TechniquesNotRunKeepARowWithTheReason) {
+  Report r = richReport();
+  r.skipped = {{"ssv", "ssv: a sphere light is not supported | needs a polygon\nlight"}};
+  const std::string md = reportToMarkdown(r);
+  EXPECT_NE(md.find("| ssv | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("not run here: ssv: a sphere light is not supported \\| needs a polygon light |"), std::string::npos)
+      << md;
+  const std::string text = reportToText(r);
+  EXPECT_NE(text.find("not run here: ssv: a sphere light"), std::string::npos) << text;
+  const std::string html = reportToHtml(r);
+  EXPECT_NE(html.find("<tbody id=\"not-run\">\n<tr data-not-run=\"ssv\"><td>ssv</td><td colspan=\"10\" "
+                      "class=\"not-run\">not run here: ssv: a sphere light is not supported | needs a polygon\nlight"),
+            std::string::npos);
+  EXPECT_EQ(tableValues(html).size(), r.rows.size());  // the sorted body holds the rows that ran
+  const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
+  EXPECT_EQ(j["skipped"][0]["name"], "ssv");
 }
 
 TEST(Report, HtmlPlotsAreDrawnFromTheJsonNumbers) {
