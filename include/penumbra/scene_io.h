@@ -26,4 +26,8 @@ std::string sceneToJson(const Scene& scene);
 // file's own coordinates. Throws Error naming the file on failure or when it holds no triangles.
 Mesh importMesh(const std::string& path);
 
+// Where Debian's assimp-testmodels package installs its models, which the real-mesh built-in scenes
+// and the test corpus (tests/corpus/) use; a missing file there is reported as a missing package.
+inline constexpr const char* kAssimpTestModels = "/usr/share/assimp/models/";
+
 }  // namespace penumbra

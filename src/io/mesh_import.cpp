@@ -128,7 +128,14 @@ void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
 Mesh importMesh(const std::string& path) {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) fail("{}: mesh file not found (check the path; relative paths start at the scene file's folder)", path);
+  if (ec || !std::filesystem::exists(status)) {
+    // The real-mesh scenes use the models Debian's assimp-testmodels installs: say which package is missing.
+    if (path.rfind(kAssimpTestModels, 0) == 0)
+      fail("{}: mesh file not found; it is one of the models of Debian's assimp-testmodels package: install it "
+           "(apt-get install assimp-testmodels, or scripts/install-deps)",
+           path);
+    fail("{}: mesh file not found (check the path; relative paths start at the scene file's folder)", path);
+  }
   if (!std::filesystem::is_regular_file(status)) fail("{}: expected a mesh file, found a directory or special file", path);
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) fail("{}: cannot read the mesh file ({})", path, ec.message());

@@ -498,8 +498,29 @@ std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& renderFro
   return AnalyticSphere{Vec3(renderFromObject[3]), radius * scale};
 }
 
+// `fit`: the uniform scale and translation that give the (already transformed) mesh a bounding box
+// whose largest side is `size` and whose bottom face (lowest y) is centred on `base`. Models come in
+// every unit and origin; this sets one on a ground plane without knowing either.
+Mat4 readFit(const Field& field, const Mesh& mesh) {
+  const ObjectField o(field, {"size", "base"});
+  const float size = o.required("size").positive();
+  const Vec3 base = o.has("base") ? o.required("base").vec3() : Vec3(0.0f);
+  const Bounds3 bounds = mesh.bounds();
+  const Vec3 lo = bounds.lower, hi = bounds.upper;
+  const Vec3 extent = hi - lo;
+  const float largest = std::max({extent.x, extent.y, extent.z});
+  if (!(largest > 0.0f) || !std::isfinite(largest))
+    field.error("expected an object with a non-zero, finite extent to fit, got a bounding box from ({}, {}, {}) to ({}, {}, {})",
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+  const float scale = size / largest;
+  const Vec3 bottomCentre(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
+  Mat4 m = glm::translate(Mat4(1.0f), base);
+  m = glm::scale(m, Vec3(scale));
+  return glm::translate(m, -bottomCentre);
+}
+
 Object readObject(const Field& field, size_t index, const std::string& baseDir) {
-  const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "analytic_sphere"});
+  const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "fit", "analytic_sphere"});
   Object object;
   object.name = o.required("name").string();
   object.id = o.has("id") ? o.required("id").integer(0, 0x7fffffff) : static_cast<int32_t>(index);
@@ -531,12 +552,17 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir) 
   Mat4 renderFromObject(1.0f);
   if (auto t = o.optional("transform")) transformMesh(object.mesh, renderFromObject = readTransform(*t));
   if (auto m = o.optional("matrix")) transformMesh(object.mesh, renderFromObject = readMatrix(*m));
+  if (auto f = o.optional("fit")) {
+    const Mat4 fit = readFit(*f, object.mesh);
+    transformMesh(object.mesh, fit);
+    renderFromObject = fit * renderFromObject;
+  }
   // A sphere primitive stays a true sphere under rotation, uniform scale and translation.
   if (auto p = o.optional("primitive"); p && p->value().at("type") == "sphere")
     object.sphere = analyticSphere(p->child("radius").number(), renderFromObject);
   if (auto a = o.optional("analytic_sphere")) {
     // Written by sceneToJson next to the inline tessellation, in world space.
-    if (!o.has("inline") || o.has("transform") || o.has("matrix"))
+    if (!o.has("inline") || o.has("transform") || o.has("matrix") || o.has("fit"))
       a->error("expected only on an object with 'inline' geometry and no 'transform' or 'matrix' (it is in world "
                "space, as sceneToJson writes it); for a new sphere use \"primitive\": {{\"type\": \"sphere\"}}");
     const ObjectField ao(*a, {"center", "radius"});

@@ -287,6 +287,28 @@ TEST(ParseScene, TransformScalesThenRotatesXYZThenTranslates) {
   EXPECT_NEAR(glm::distance(p[2], t + Vec3(0, -4, 0)), 0.0f, 1e-5f);
 }
 
+TEST(ParseScene, FitScalesUniformlyAndSetsTheBottomCentreOnBase) {
+  json j = baseScene();
+  // A 2 x 4 x 1 box rotated 90 degrees about z (so 4 wide, 2 tall, 1 deep), then fitted to size 8 on (1, 2, 3).
+  j["objects"] = json::array({json::parse(R"({"name": "b", "primitive": {"type": "box", "size": [2, 4, 1]},
+      "transform": {"rotate": [0, 0, 90], "translate": [100, -50, 7]}, "fit": {"size": 8, "base": [1, 2, 3]}})")});
+  const Scene s = parseScene(j.dump(), "f.json");
+  const Bounds3 b = s.objects[0].mesh.bounds();
+  // The largest side (4, along x after the rotation) becomes 8: a scale of 2 in every direction.
+  EXPECT_NEAR(b.lower.x, 1.0f - 4.0f, 1e-4f);
+  EXPECT_NEAR(b.upper.x, 1.0f + 4.0f, 1e-4f);
+  EXPECT_NEAR(b.lower.y, 2.0f, 1e-4f);
+  EXPECT_NEAR(b.upper.y, 2.0f + 4.0f, 1e-4f);
+  EXPECT_NEAR(b.lower.z, 3.0f - 1.0f, 1e-4f);
+  EXPECT_NEAR(b.upper.z, 3.0f + 1.0f, 1e-4f);
+  // base defaults to the origin; a sphere stays a true sphere (uniform scale).
+  j["objects"] = json::array({json::parse(R"({"name": "s", "primitive": {"type": "sphere", "radius": 3}, "fit": {"size": 1}})")});
+  const Scene t = parseScene(j.dump(), "f.json");
+  ASSERT_TRUE(t.objects[0].sphere.has_value());
+  EXPECT_NEAR(t.objects[0].sphere->radius, 0.5f, 1e-5f);
+  EXPECT_NEAR(glm::distance(t.objects[0].sphere->center, Vec3(0.0f, 0.5f, 0.0f)), 0.0f, 1e-5f);
+}
+
 TEST(ParseScene, MatrixIsRowMajorAffine) {
   json j = baseScene();
   j["objects"][1].erase("transform");
@@ -433,6 +455,10 @@ TEST(SceneErrors, EachNamesFileFieldAndExpectation) {
        {"scenes/x.json", "unknown key 'lihgts'", "did you mean 'lights'"}},
       {"unknown object key", [](json& j) { j["objects"][1]["colour"] = 1; }, {"scenes/x.json: objects[1]: unknown key 'colour'"}},
       {"missing camera", [](json& j) { j.erase("camera"); }, {"scenes/x.json", "missing required key 'camera'"}},
+      {"fit without size", [](json& j) { j["objects"][1]["fit"] = json::object(); },
+       {"scenes/x.json: objects[1].fit: missing required key 'size'"}},
+      {"fit to a zero size", [](json& j) { j["objects"][1]["fit"] = {{"size", 0}}; },
+       {"scenes/x.json: objects[1].fit.size: expected a number > 0"}},
       {"missing lights", [](json& j) { j.erase("lights"); }, {"missing required key 'lights'"}},
       {"missing object name", [](json& j) { j["objects"][0].erase("name"); }, {"objects[0]: missing required key 'name'"}},
       {"rotate of 2 numbers", [](json& j) { j["objects"][1]["transform"]["rotate"] = {1, 2}; },
