@@ -3,6 +3,7 @@
 // and noisy, so only same-run ratios are comparable; DESIGN.md, "Conventions"). Micro-benchmarks
 // of individual kernels live in bench/ (Google Benchmark).
 #include <algorithm>
+#include <cstdio>
 #include <optional>
 
 #include <fmt/format.h>
@@ -89,6 +90,7 @@ int runBench(const BenchOptions& options) {
     fmt::print("wrote {}\n", options.jsonPath);
   }
   if (!namedNotRun.empty()) {
+    std::fflush(stdout);  // the table first, then the error, also when both go to one pipe
     fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the table): {}\n",
                namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
     return 1;

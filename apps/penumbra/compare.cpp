@@ -13,6 +13,7 @@
 // most penumbra pixels in the truth) is kept for the profile plot. Time ratios are to a baseline
 // measured in the same run.
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -305,6 +306,7 @@ int runCompare(const CompareOptions& options) {
              gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report), htmlPath, "compare.json",
              "compare.md");
   if (!namedNotRun.empty()) {
+    std::fflush(stdout);  // the table first, then the error, also when both go to one pipe
     fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the report): {}\n",
                namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
     return 1;

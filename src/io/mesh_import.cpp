@@ -189,6 +189,11 @@ Mesh importMesh(const std::string& path) {
     for (unsigned f = 0; f < in->mNumFaces; ++f) {
       const aiFace& face = in->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines
+      // A triangle that repeats a vertex (joined vertices of a sliver, or written so) covers no area
+      // and blocks no light; dropping it keeps every imported mesh valid as an inline mesh too.
+      if (face.mIndices[0] == face.mIndices[1] || face.mIndices[1] == face.mIndices[2] ||
+          face.mIndices[0] == face.mIndices[2])
+        continue;
       mesh.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
       anyTriangle = true;
     }

@@ -205,6 +205,18 @@ TEST(MeshImport, QuadsAreTriangulatedAndObjectsMerged) {
   EXPECT_NEAR(area, 1.5, 1e-6);
 }
 
+TEST(MeshImport, TrianglesThatRepeatAVertexAreDropped) {
+  TempDir dir;
+  // Two faces repeat a vertex, directly or once identical vertices are joined (5 and 1 coincide):
+  // they cover no area; the one real triangle stays, and the mesh reads back as an inline mesh.
+  const std::string path =
+      dir.file("d.obj", "v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 2 0 0\nv 0 0 0\nf 1 2 3\nf 1 1 4\nf 1 5 2\n");
+  const Mesh m = importMesh(path);
+  ASSERT_EQ(m.triangleCount(), 1u);
+  const glm::uvec3& t = m.triangles[0];
+  EXPECT_TRUE(t.x != t.y && t.y != t.z && t.x != t.z);
+}
+
 TEST(MeshImport, NormalsFromTheFileAreKept) {
   TempDir dir;
   const std::string path = dir.file("n.obj", "v 0 0 0\nv 1 0 0\nv 0 0 -1\nvn 0 2 0\nf 1//1 2//1 3//1\n");
