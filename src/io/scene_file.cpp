@@ -498,6 +498,16 @@ std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& renderFro
   return AnalyticSphere{Vec3(renderFromObject[3]), radius * scale};
 }
 
+// Coordinates the ray tracer accepts (Embree refuses rays beyond about 1.8e18; squared distances
+// between such points still fit a float).
+constexpr float kMaxWorldCoordinate = 1e18f;
+
+void checkWorldReach(const Field& field, float reach, const char* what) {
+  if (!(reach <= kMaxWorldCoordinate))
+    field.error("expected world coordinates within +-{:g} (the ray tracer's limit), but {} reaches {:g}",
+                kMaxWorldCoordinate, what, reach);
+}
+
 // `fit`: the uniform scale and translation that give the (already transformed) mesh a bounding box
 // whose largest side is `size` and whose bottom face (lowest y) is centred on `base`. Models come in
 // every unit and origin; this sets one on a ground plane without knowing either.
@@ -550,13 +560,18 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir) 
 
   if (o.has("transform") && o.has("matrix")) field.error("expected at most one of 'transform' and 'matrix', got both");
   Mat4 renderFromObject(1.0f);
-  if (auto t = o.optional("transform")) transformMesh(object.mesh, renderFromObject = readTransform(*t));
-  if (auto m = o.optional("matrix")) transformMesh(object.mesh, renderFromObject = readMatrix(*m));
+  if (auto t = o.optional("transform"))
+    withPath(*t, [&] { return transformMesh(object.mesh, renderFromObject = readTransform(*t)), 0; });
+  if (auto m = o.optional("matrix"))
+    withPath(*m, [&] { return transformMesh(object.mesh, renderFromObject = readMatrix(*m)), 0; });
   if (auto f = o.optional("fit")) {
     const Mat4 fit = readFit(*f, object.mesh);
     transformMesh(object.mesh, fit);
     renderFromObject = fit * renderFromObject;
   }
+  const Bounds3 bounds = object.mesh.bounds();
+  const Vec3 reach = glm::max(glm::abs(bounds.lower), glm::abs(bounds.upper));
+  checkWorldReach(field, std::max({reach.x, reach.y, reach.z}), "the object (after its transform)");
   // A sphere primitive stays a true sphere under rotation, uniform scale and translation.
   if (auto p = o.optional("primitive"); p && p->value().at("type") == "sphere")
     object.sphere = analyticSphere(p->child("radius").number(), renderFromObject);
@@ -706,7 +721,14 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
 
   const Field lights = o.required("lights");
   lights.array(0, "lights");
-  for (size_t i = 0; i < lights.value().size(); ++i) scene.lights.push_back(readLight(lights.element(i)));
+  for (size_t i = 0; i < lights.value().size(); ++i) {
+    scene.lights.push_back(readLight(lights.element(i)));
+    const Light& light = scene.lights.back();
+    if (!light.isDirectional()) {
+      const Vec3 reach = glm::abs(light.center()) + Vec3(light.extent());
+      checkWorldReach(lights.element(i), std::max({reach.x, reach.y, reach.z}), "the light");
+    }
+  }
 
   const Field objects = o.required("objects");
   objects.array(0, "objects");

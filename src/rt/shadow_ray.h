@@ -15,6 +15,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 
 #include "penumbra/light.h"
 #include "penumbra/math.h"
@@ -45,6 +46,13 @@ inline Ray shadowRay(const Vec3& wsP, const Vec3& wsOrigin, const Vec3& wsDirect
   }
   const Vec3 d = (wsP + distance * wsDirection) - wsOrigin;
   const float len = glm::length(d);
+  if (!(len < kInfinity)) {
+    // A sample some 1e19 units away (or more) overflows the squared length: at that distance the
+    // offset of the origin does not turn the ray, so it keeps the direction seen from wsP.
+    ray.direction = wsDirection;
+    ray.tMax = std::numeric_limits<float>::max();
+    return ray;
+  }
   ray.direction = len > 0.0f ? d / len : wsDirection;
   ray.tMax = std::max(0.0f, len - epsilon);
   return ray;

@@ -146,7 +146,11 @@ class PcssTechnique final : public ShadowTechnique {
     }
     const float zb = blockers.meanDepth;
     const float penumbraWorld = map_.orthographic ? lightSize_ * (zr - zb) : lightSize_ * (zr - zb) / zb;
-    const float filterRadius = std::min(penumbraWorld / r.texelWorld, maxRadius);
+    // The receiver plane's slope extrapolated across a wide search can count texels behind the
+    // receiver's own depth as blockers, putting z_b past z_r: a negative (or NaN) width is no
+    // penumbra, and a filter radius outside [0, map size] would read outside the map.
+    const float widthTexels = penumbraWorld / r.texelWorld;
+    const float filterRadius = widthTexels > 0.0f ? std::min(widthTexels, maxRadius) : 0.0f;
     if (filterRadius <= options_.bilinearMaxRadius) {
       ++counts[kFilterBilinear];
       return pcfDisk(map_, r, filterRadius, filterDisk_, rotation);

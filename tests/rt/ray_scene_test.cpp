@@ -1,12 +1,15 @@
 // Tests of the Embree wrapper (src/rt/ray_scene.cpp): closest hits and occlusion on quads whose
 // answers are known exactly (t, object id, triangle id, barycentrics, normal), packets against
 // single rays, the empty scene, degenerate triangles, bad indices, and the shadow-ray epsilon.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/sampling.h"
 #include "rt/rt_test_scenes.h"
+#include "rt/shadow_ray.h"
 
 namespace penumbra {
 namespace {
@@ -204,6 +207,25 @@ TEST(ShadowRayEpsilon, PreventsSelfIntersectionOnAGrazingPlane) {
     selfHits += rays.occluded(makeRay(p + eps * n, dir));
   }
   EXPECT_EQ(selfHits, 0);
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// A sample so far away that its squared distance overflows still gives a valid ray (unit direction
+// towards it, finite length): Embree aborts on a zero or NaN direction.
+TEST(ShadowRay, AFarSampleKeepsAUnitDirection) {
+  const Vec3 p(0.0f), origin(0.0f, 1e-4f, 0.0f), toLight = glm::normalize(Vec3(0.1f, 1.0f, 0.0f));
+  const Ray far = rt::shadowRay(p, origin, toLight, 3e38f, 1e-4f);
+  EXPECT_NEAR(glm::length(far.direction), 1.0f, 1e-6f);
+  EXPECT_GT(glm::dot(far.direction, toLight), 0.999f);
+  EXPECT_TRUE(std::isfinite(far.tMax));
+  const Ray near = rt::shadowRay(p, origin, toLight, 5.0f, 1e-4f);
+  EXPECT_NEAR(glm::length(near.direction), 1.0f, 1e-6f);
+  EXPECT_NEAR(near.tMax, glm::length(p + 5.0f * toLight - origin) - 1e-4f, 1e-5f);
 }
 
 }  // namespace

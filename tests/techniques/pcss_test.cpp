@@ -217,3 +217,22 @@ TEST(Pcss, NearestTapsForWideFiltersCostLittleQuality) {
 
 }  // namespace
 }  // namespace penumbra
+
+namespace penumbra::testing {
+namespace {
+
+// A light far wider than its distance to the occluders (light_size at the top of its range): the
+// receiver plane's slope, extrapolated over a search as wide as the map, counts texels behind the
+// receiver as blockers and made the estimated width negative; the filter then read outside the map.
+TEST(Pcss, LightsWiderThanTheSceneStayInsideTheMap) {
+  const Scene scene = loadScene("torus");
+  const GBuffer gbuffer = renderGBuffer(scene, 64, 64);
+  for (const char* size : {"light_size=50", "light_size=100", "light_size=1000000"}) {
+    SCOPED_TRACE(size);
+    const Image<float> v = runTechnique("pcss", scene, gbuffer, {size, "map_size=256"});
+    for (size_t i = 0; i < v.size(); ++i) ASSERT_TRUE(v[i] >= 0.0f && v[i] <= 1.0f) << i << " " << v[i];
+  }
+}
+
+}  // namespace
+}  // namespace penumbra::testing
