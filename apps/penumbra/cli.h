@@ -49,6 +49,7 @@ struct FrameOptions {
   std::optional<int64_t> spp, seed;
   std::vector<std::string> params;  //!< "key=value" (render) or "technique.key=value" (compare, bench)
   int threads = 0;                  //!< 0: oneTBB's default (every core)
+  std::string name;                 //!< stem of the output files; empty: the scene's name (made safe either way)
 };
 // Adds --scene, --width, --height, --light, --spp, --seed, --threads (and --param) to a subcommand.
 void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp);
@@ -59,6 +60,7 @@ struct Setup {
   std::optional<std::string> sceneFile;  //!< the input file, when the scene came from one
   int width = 0, height = 0;
   int lightIndex = 0;
+  std::string stem;  //!< output files are stem + "_" + ...: the scene's name or --name as a safe file name
 };
 // Loads the scene and checks the light index and image size. Throws Error with the fix.
 Setup loadSetup(const FrameOptions& options);
@@ -110,9 +112,24 @@ class ReferenceCache {
 
 // Creates the output directory (and parents). Throws Error naming it when that fails.
 void makeOutputDir(const std::string& dir);
-// dir/file, refused when it would overwrite the input scene file.
+// dir/file, where `file` is one file name of penumbra's own making (never a path), refused when it
+// names one of the scene's input files (the scene file, its meshes), compared by identity.
 std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file);
 void refuseInputOverwrite(const Setup& setup, const std::string& path);
+
+// Holds an exclusive lock on an output folder for the lifetime of the object (flock on
+// DIR/.penumbra.lock), so two runs cannot mix their files in one folder: the second is refused at
+// once with a message naming the folder.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::string& dir);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 // Every technique name if `names` is empty; otherwise the names, checked against the registry.
 std::vector<std::string> techniqueList(const std::vector<std::string>& names);

@@ -12,8 +12,18 @@
 // size (the others once); a scan line through the penumbra (--profile-row, or the row with the
 // most penumbra pixels in the truth) is kept for the profile plot. Time ratios are to a baseline
 // measured in the same run.
+//
+// Outputs: file names start with the scene's name (or --name) made a safe file name; DIR is locked
+// for the run (a second compare into it is refused, not mixed in), and the report is written into a
+// fresh folder swapped in for DIR/report only when complete (StagedReport), so an interrupted run
+// leaves the previous report whole.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -96,6 +106,60 @@ std::string reproduceCommand(const CompareOptions& options, const Setup& setup, 
   return command;
 }
 
+// The report is written into a fresh folder beside DIR/report and swapped in whole once complete,
+// so a failed or interrupted run leaves the previous report as it was (and a folder named
+// .report-partial-* that says what it holds), never a page of one run beside images of another.
+class StagedReport {
+ public:
+  StagedReport(const std::string& outDir, const Setup& setup)
+      : outDir_(outDir), final_((fs::path(outDir) / "report").string()) {
+    struct stat st {};
+    if (::lstat(final_.c_str(), &st) == 0 && !S_ISDIR(st.st_mode))
+      fail("cannot write the report into '{}': it exists and is not a folder", final_);
+    // The swap replaces the whole folder: an input there would be lost with it.
+    const fs::path finalCanonical = fs::weakly_canonical(final_);
+    for (const std::string& input : setup.scene.inputFiles) {
+      const fs::path in = fs::weakly_canonical(input);
+      if (std::mismatch(finalCanonical.begin(), finalCanonical.end(), in.begin(), in.end()).first == finalCanonical.end())
+        fail("refusing to replace '{}': it holds the input '{}', and a new report replaces the whole folder; copy the "
+             "input elsewhere or choose another --out",
+             final_, input);
+    }
+    std::string pattern = (fs::path(outDir) / ".report-partial-XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+      fail("cannot create a folder in '{}': {} (check that it is writable)", outDir, std::strerror(errno));
+    staging_ = pattern;
+    ::chmod(staging_.c_str(), 0755);  // mkdtemp makes it private; a report is as readable as any folder
+  }
+  ~StagedReport() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(staging_, ec);
+  }
+  StagedReport(const StagedReport&) = delete;
+  StagedReport& operator=(const StagedReport&) = delete;
+
+  const std::string& dir() const { return staging_; }
+  const std::string& finalDir() const { return final_; }
+
+  void commit() {
+    std::string old;
+    if (fs::exists(final_)) {
+      old = (fs::path(outDir_) / ".report-old-XXXXXX").string();
+      if (!::mkdtemp(old.data()) || ::rename(final_.c_str(), old.c_str()) != 0)
+        fail("cannot move the previous report '{}' aside: {}", final_, std::strerror(errno));
+    }
+    if (::rename(staging_.c_str(), final_.c_str()) != 0)
+      fail("cannot move the new report into '{}': {} (it is complete in '{}')", final_, std::strerror(errno), staging_);
+    committed_ = true;
+    std::error_code ec;
+    if (!old.empty()) fs::remove_all(old, ec);
+  }
+
+ private:
+  std::string outDir_, final_, staging_;
+  bool committed_ = false;
+};
+
 int runCompare(const CompareOptions& options) {
   ThreadLimit threads(options.frame.threads);
   std::vector<std::string> names = techniqueList(options.techniques);
@@ -141,14 +205,11 @@ int runCompare(const CompareOptions& options) {
     }
   }
 
-  const std::string reportDir = (fs::path(options.outDir) / "report").string();
-  const std::string stem = setup.scene.name + "_";
-  std::vector<std::string> files = {"index.html", "compare.json", "compare.md", "scene.json"};
-  for (const std::string& name : names)
-    for (const char* suffix : {".png", "_v.exr", "_v.png", "_err.png"}) files.push_back(stem + name + suffix);
-  for (const char* suffix : {".png", "_v.exr", "_v.png"}) files.push_back(stem + "truth" + suffix);
-  for (const std::string& file : files) outputPath(setup, reportDir, file);
-  makeOutputDir(reportDir);
+  makeOutputDir(options.outDir);
+  const OutputLock lock(options.outDir);
+  StagedReport staged(options.outDir, setup);
+  const std::string& reportDir = staged.dir();
+  const std::string stem = setup.stem + "_";
 
   fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
              setup.lightIndex, describeLight(light));
@@ -207,7 +268,14 @@ int runCompare(const CompareOptions& options) {
     vTruth = std::move(run.v);
     truth.timings = run.timings;
     truth.stats = run.stats;
-    if (cache) cache->store(vTruth, truth.timings, truth.stats);
+    if (cache) {
+      try {
+        cache->store(vTruth, truth.timings, truth.stats);
+      } catch (const Error& e) {
+        // The truth is rendered: losing the report for want of a cache would waste it.
+        fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", e.what());
+      }
+    }
   }
   truth.error = compareVisibility(vTruth, vTruth, mask);
   writeImages(stem + "truth", vTruth, truth, nullptr);
@@ -301,9 +369,11 @@ int runCompare(const CompareOptions& options) {
   writeTextFile(jsonPath, reportToJson(report));
   writeTextFile(mdPath, reportToMarkdown(report));
   writeTextFile(htmlPath, reportToHtml(report));
+  staged.commit();
   fmt::print("G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
              "it)\n",
-             gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report), htmlPath, "compare.json",
+             gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report),
+             (fs::path(staged.finalDir()) / "index.html").string(), "compare.json",
              "compare.md");
   if (!namedNotRun.empty()) {
     std::fflush(stdout);  // the table first, then the error, also when both go to one pipe

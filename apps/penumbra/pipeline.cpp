@@ -1,11 +1,16 @@
 // The steps render, compare and bench share: loading the scene and choosing its light, merging
 // technique parameters (scene file < --spp/--seed < --param), running a technique with timings,
 // output paths that never overwrite the input scene file, --threads, and the progress bar.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -13,6 +18,7 @@
 
 #include "cli.h"
 #include "penumbra/error.h"
+#include "penumbra/output_file.h"
 #include "penumbra/scene_io.h"
 
 namespace penumbra::cli {
@@ -38,6 +44,9 @@ void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& pa
   app.add_option("--param,-p", options.params, paramHelp);
   app.add_option("--threads", options.threads, "worker threads (0: every core)")->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_option("--name", options.name,
+                 "stem of the output file names (default: the scene's name); either is made a safe file name "
+                 "(letters, digits, '-', '_', '.'; others become '_')");
 }
 
 Setup loadSetup(const FrameOptions& options) {
@@ -65,6 +74,8 @@ Setup loadSetup(const FrameOptions& options) {
     fail("--light {} is out of range: scene '{}' has {} light{} (valid: {})", options.lightIndex, scene.name, count,
          count == 1 ? "" : "s", count == 1 ? std::string("0") : fmt::format("0 to {}", count - 1));
   setup.lightIndex = options.lightIndex;
+  // A scene's name comes from a file anyone may have written: never a path, a NUL or a URL's '#'.
+  setup.stem = fileNameSlug(options.name.empty() ? scene.name : options.name);
   setup.width = options.width.value_or(scene.image.width);
   setup.height = options.height.value_or(scene.image.height);
   if (setup.width < 1 || setup.height < 1 || setup.width > kMaxImageSize || setup.height > kMaxImageSize)
@@ -161,18 +172,40 @@ void makeOutputDir(const std::string& dir) {
 }
 
 void refuseInputOverwrite(const Setup& setup, const std::string& path) {
-  if (!setup.sceneFile) return;
-  std::error_code ec1, ec2;
-  const bool same = fs::exists(path, ec1) ? fs::equivalent(path, *setup.sceneFile, ec2)
-                                           : fs::weakly_canonical(path, ec1) == fs::weakly_canonical(*setup.sceneFile, ec2);
-  if (same)
-    fail("refusing to write '{}': it is the input scene file; choose another output path", path);
+  // By identity (device and inode), which no other spelling of the path escapes; a file that does
+  // not exist yet is no input.
+  const std::optional<FileIdentity> target = fileIdentity(path);
+  if (!target) return;
+  for (const std::string& input : setup.scene.inputFiles)
+    if (fileIdentity(input) == target)
+      fail("refusing to write '{}': it is {} '{}'; choose another output path", path,
+           input == setup.scene.inputFiles.front() && setup.sceneFile ? "the input scene file" : "an input file,",
+           input);
 }
 
 std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file) {
+  if (file.empty() || file.find('/') != std::string::npos || file == "." || file == ".." || file.find('\0') != std::string::npos)
+    fail("internal: output file name '{}' is not one file name", file);
   const std::string path = (fs::path(dir) / file).string();
   refuseInputOverwrite(setup, path);
   return path;
+}
+
+OutputLock::OutputLock(const std::string& dir) {
+  const std::string path = (fs::path(dir) / ".penumbra.lock").string();
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd_ < 0) fail("cannot lock the output folder '{}': {} ({})", dir, std::strerror(errno), path);
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd_);
+    fd_ = -1;
+    fail("the output folder '{}' is in use by another penumbra run (it holds {}); wait for it to finish or choose "
+         "another --out",
+         dir, path);
+  }
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing releases the lock
 }
 
 std::vector<std::string> techniqueList(const std::vector<std::string>& names) {

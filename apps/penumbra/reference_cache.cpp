@@ -5,15 +5,17 @@
 // compare with the same key reads the files instead of tracing the rays again.
 //
 // The key is 64-bit FNV-1a; the metadata repeats the key's readable parts and the scene's hash so
-// that a file from another setup is never taken for this one. A cache entry that cannot be read
-// (truncated, edited) is reported and rendered anew, not trusted. Writes go to a temporary name
-// and are renamed into place, so an interrupted run leaves no half-written entry.
+// that a file from another setup is never taken for this one. The EXR itself carries the key's hash
+// and a checksum of its pixels in its header, so an image copied or edited over the entry (another
+// technique's V, say) is caught and rendered anew, saying why. A cache entry that cannot be read
+// (truncated, edited) is reported and rendered anew, not trusted. Each file is written beside its
+// target and renamed into place (penumbra/output_file.h), the image first, so an interrupted run
+// leaves no half-written entry.
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
-#include <unistd.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -51,6 +53,20 @@ nlohmann::json keyJson(const Setup& setup, const Params& params, uint64_t sceneH
           {"params", params_json}};
 }
 
+// FNV-1a over the pixels' bytes: any edited value changes it.
+std::string pixelChecksum(const Image<float>& v) {
+  return fmt::format("{:016x}", fnv1a(std::string_view(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float))));
+}
+
+constexpr const char* kKeyAttribute = "penumbra.cache_key";
+constexpr const char* kChecksumAttribute = "penumbra.pixel_checksum";
+
+std::string attribute(const ExrAttributes& attributes, const std::string& name) {
+  for (const auto& [n, v] : attributes)
+    if (n == name) return v;
+  return {};
+}
+
 }  // namespace
 
 ReferenceCache::ReferenceCache(std::string dir, const Setup& setup, const Params& params) : dir_(std::move(dir)) {
@@ -77,7 +93,16 @@ std::optional<CachedTruth> ReferenceCache::load(std::string& why) const {
       return std::nullopt;
     }
     CachedTruth truth;
-    truth.v = readExr(exrPath_);
+    ExrAttributes attributes;
+    truth.v = readExr(exrPath_, &attributes);
+    if (attribute(attributes, kKeyAttribute) != fmt::format("{:016x}", fnv1a(key_))) {
+      why = "its image was not written for this key (replaced or copied from elsewhere)";
+      return std::nullopt;
+    }
+    if (attribute(attributes, kChecksumAttribute) != pixelChecksum(truth.v)) {
+      why = "its image does not match its checksum (edited or damaged)";
+      return std::nullopt;
+    }
     for (const auto& pass : meta.at("passes")) truth.timings.add(pass.at("pass").get<std::string>(), pass.at("ms").get<double>());
     for (const auto& [k, v] : meta.at("stats").items())
       truth.stats.emplace_back(k, v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN());
@@ -103,12 +128,8 @@ void ReferenceCache::store(const Image<float>& v, const PassTimings& timings,
   nlohmann::json statsJson = nlohmann::json::object();
   for (const auto& [k, x] : stats) statsJson[k] = std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
   meta["stats"] = statsJson;
-  const std::string suffix = fmt::format(".tmp{}", getpid());
-  writeExr(exrPath_ + suffix + ".exr", v);
-  writeTextFile(metaPath_ + suffix, meta.dump(2) + "\n");
-  fs::rename(exrPath_ + suffix + ".exr", exrPath_, ec);
-  if (!ec) fs::rename(metaPath_ + suffix, metaPath_, ec);
-  if (ec) fail("cannot move the reference cache entry into '{}': {}", dir_, ec.message());
+  writeExr(exrPath_, v, {{kKeyAttribute, fmt::format("{:016x}", fnv1a(key_))}, {kChecksumAttribute, pixelChecksum(v)}});
+  writeTextFile(metaPath_, meta.dump(2) + "\n");
 }
 
 }  // namespace penumbra::cli

@@ -32,7 +32,7 @@ int runRender(const RenderOptions& options) {
     fmt::print(stderr, "penumbra: note: technique '{}' has no parameter 'seed'; --seed has no effect\n", info.name);
 
   // Every output path is checked before any work, so a refused path costs nothing.
-  const std::string base = setup.scene.name + "_" + info.name;
+  const std::string base = setup.stem + "_" + info.name;
   const std::string pngPath = outputPath(setup, options.outDir, base + ".png");
   const std::string exrPath = outputPath(setup, options.outDir, base + "_v.exr");
 

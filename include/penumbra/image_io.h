@@ -2,6 +2,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "penumbra/image.h"
 #include "penumbra/math.h"
@@ -12,8 +14,15 @@ namespace penumbra {
 void writePng(const std::string& path, const Image<Vec3>& linearRgb);
 // Single channel, 8-bit, values in [0, 1] written linearly (for visibility previews and masks).
 void writePngGray(const std::string& path, const Image<float>& values);
-// Single-channel 32-bit float EXR, channel "V".
-void writeExr(const std::string& path, const Image<float>& values);
+// Text attributes of an EXR header (name, value), e.g. the reference cache's key and checksum.
+using ExrAttributes = std::vector<std::pair<std::string, std::string>>;
+
+// Single-channel 32-bit float EXR, channel "V", with optional text attributes in its header.
+void writeExr(const std::string& path, const Image<float>& values, const ExrAttributes& attributes = {});
 Image<float> readExr(const std::string& path);
+// Also returns the header's text attributes (OpenEXR's own and the writer's).
+Image<float> readExr(const std::string& path, ExrAttributes* attributes);
+
+// Every file above is written beside its target and renamed into place (penumbra/output_file.h).
 
 }  // namespace penumbra

@@ -68,6 +68,8 @@ struct Scene {
   float ambient = 0.05f;  //!< ambient term of the shading, relative to the light's peak irradiance
   // Technique parameters given in the scene file ("techniques": {"pcss": {...}}), by technique name.
   std::map<std::string, ParamSet> techniqueParams;
+  // The files the scene was read from (the scene file and its mesh files): outputs never replace them.
+  std::vector<std::string> inputFiles;
 
   Bounds3 bounds() const;
   size_t triangleCount() const;

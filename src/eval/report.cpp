@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "penumbra/error.h"
+#include "penumbra/output_file.h"
 
 namespace penumbra {
 
@@ -330,11 +331,13 @@ std::string reportToText(const Report& report) {
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) fail("cannot write '{}': the file cannot be opened (check that the directory exists and is writable)", path);
-  file << text;
-  file.close();
-  if (!file) fail("cannot write '{}': the write failed (disk full?)", path);
+  replaceFile(path, [&](const std::string& temp) {
+    std::ofstream file(temp, std::ios::binary | std::ios::trunc);
+    if (!file) fail("cannot write '{}': the file cannot be opened (check that the directory exists and is writable)", path);
+    file << text;
+    file.close();
+    if (!file) fail("cannot write '{}': the write failed (disk full?)", path);
+  });
 }
 
 }  // namespace penumbra

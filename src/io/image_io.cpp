@@ -15,11 +15,13 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
 
 #include "penumbra/error.h"
+#include "penumbra/output_file.h"
 
 namespace penumbra {
 
@@ -40,10 +42,31 @@ void requireNonEmpty(const std::string& path, int width, int height) {
 }
 
 void writePngBytes(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& bytes) {
-  errno = 0;
-  if (!stbi_write_png(path.c_str(), width, height, channels, bytes.data(), width * channels))
-    fail("cannot write PNG '{}': {} (check that the directory exists and is writable)", path,
-         errno ? std::strerror(errno) : "write failed");
+  replaceFile(path, [&](const std::string& temp) {
+    errno = 0;
+    if (!stbi_write_png(temp.c_str(), width, height, channels, bytes.data(), width * channels))
+      fail("cannot write PNG '{}': {} (check that the directory exists and is writable)", path,
+           errno ? std::strerror(errno) : "write failed");
+  });
+}
+
+// Writes the EXR to `file` (a temporary name); messages name `path`, the file the user asked for.
+void writeExrTo(const std::string& file, const std::string& path, const Image<float>& values,
+                const ExrAttributes& attributes) {
+  try {
+    Imf::Header header(values.width(), values.height());
+    header.channels().insert("V", Imf::Channel(Imf::FLOAT));
+    for (const auto& [name, value] : attributes) header.insert(name, Imf::StringAttribute(value));
+    Imf::OutputFile out(file.c_str(), header);
+    Imf::FrameBuffer frameBuffer;
+    // OpenEXR only reads through the slice; the cast drops const for its char* API.
+    char* base = reinterpret_cast<char*>(const_cast<float*>(values.data()));
+    frameBuffer.insert("V", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * values.width()));
+    out.setFrameBuffer(frameBuffer);
+    out.writePixels(values.height());
+  } catch (const std::exception& e) {
+    fail("cannot write EXR '{}': {} (check that the directory exists and is writable)", path, e.what());
+  }
 }
 
 }  // namespace
@@ -63,26 +86,22 @@ void writePngGray(const std::string& path, const Image<float>& values) {
   writePngBytes(path, values.width(), values.height(), 1, bytes);
 }
 
-void writeExr(const std::string& path, const Image<float>& values) {
+void writeExr(const std::string& path, const Image<float>& values, const ExrAttributes& attributes) {
   requireNonEmpty(path, values.width(), values.height());
-  try {
-    Imf::Header header(values.width(), values.height());
-    header.channels().insert("V", Imf::Channel(Imf::FLOAT));
-    Imf::OutputFile file(path.c_str(), header);
-    Imf::FrameBuffer frameBuffer;
-    // OpenEXR only reads through the slice; the cast drops const for its char* API.
-    char* base = reinterpret_cast<char*>(const_cast<float*>(values.data()));
-    frameBuffer.insert("V", Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * values.width()));
-    file.setFrameBuffer(frameBuffer);
-    file.writePixels(values.height());
-  } catch (const std::exception& e) {
-    fail("cannot write EXR '{}': {} (check that the directory exists and is writable)", path, e.what());
-  }
+  replaceFile(path, [&](const std::string& temp) { writeExrTo(temp, path, values, attributes); });
 }
 
-Image<float> readExr(const std::string& path) {
+Image<float> readExr(const std::string& path) { return readExr(path, nullptr); }
+
+Image<float> readExr(const std::string& path, ExrAttributes* attributes) {
   try {
     Imf::InputFile file(path.c_str());
+    if (attributes) {
+      attributes->clear();
+      for (auto it = file.header().begin(); it != file.header().end(); ++it)
+        if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+          attributes->emplace_back(it.name(), text->value());
+    }
     const Imath::Box2i window = file.header().dataWindow();
     if (!file.header().channels().findChannel("V"))
       fail("cannot read EXR '{}': it has no channel \"V\" (penumbra writes visibility as channel \"V\")", path);

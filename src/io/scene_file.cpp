@@ -529,7 +529,8 @@ Mat4 readFit(const Field& field, const Mesh& mesh) {
   return glm::translate(m, -bottomCentre);
 }
 
-Object readObject(const Field& field, size_t index, const std::string& baseDir) {
+// `inputFiles` gains the mesh file the object reads, if any.
+Object readObject(const Field& field, size_t index, const std::string& baseDir, std::vector<std::string>& inputFiles) {
   const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "fit", "analytic_sphere"});
   Object object;
   object.name = o.required("name").string();
@@ -553,7 +554,8 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir) 
     if (file.empty()) m->error("expected a mesh file path, got an empty string");
     std::filesystem::path path(file);
     if (path.is_relative()) path = std::filesystem::path(baseDir) / path;
-    object.mesh = withPath(*m, [&] { return importMesh(path.lexically_normal().string()); });
+    inputFiles.push_back(path.lexically_normal().string());
+    object.mesh = withPath(*m, [&] { return importMesh(inputFiles.back()); });
   } else {
     object.mesh = readInlineMesh(o.required("inline"));
   }
@@ -735,7 +737,7 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
   std::map<int32_t, size_t> idToIndex;
   for (size_t i = 0; i < objects.value().size(); ++i) {
     const Field f = objects.element(i);
-    Object object = readObject(f, i, baseDir);
+    Object object = readObject(f, i, baseDir, scene.inputFiles);
     if (auto [it, inserted] = idToIndex.emplace(object.id, i); !inserted)
       f.error("duplicate object id {} (objects[{}] has it too; an object without 'id' takes its index); expected unique ids",
               object.id, it->second);
@@ -834,7 +836,9 @@ Scene loadScene(const std::string& nameOrPath) {
   }
   const std::string text = readFileText(nameOrPath);
   const std::filesystem::path parent = std::filesystem::path(nameOrPath).parent_path();
-  return parseScene(text, nameOrPath, parent.empty() ? "." : parent.string());
+  Scene scene = parseScene(text, nameOrPath, parent.empty() ? "." : parent.string());
+  scene.inputFiles.insert(scene.inputFiles.begin(), nameOrPath);
+  return scene;
 }
 
 }  // namespace penumbra

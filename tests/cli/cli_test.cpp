@@ -5,9 +5,12 @@
 // and only images that exist; a second compare reads the truth from the cache; --map-sizes runs
 // the techniques with a map_size at each size. Tiny images (32 x 32, 4 spp) keep the whole file to
 // a few seconds.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -465,6 +468,165 @@ TEST_F(CliTest, BenchPrintsRatiosAndWritesJson) {
     EXPECT_DOUBLE_EQ(row["ratio_to_baseline"].get<double>(), 1.0);
   }
   EXPECT_TRUE(found) << j.dump(2);
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// A scene JSON like sceneJson's, with the given (JSON-escaped) name.
+std::string namedScene(const std::string& escapedName) {
+  return "{\"name\": \"" + escapedName + "\", " + kCamera + ", \"lights\": [" + kLight + "], \"objects\": " + kObjects + "}";
+}
+
+std::vector<std::string> filesUnder(const fs::path& dir) {
+  std::vector<std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) files.push_back(fs::relative(e.path(), dir).string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// A scene's name is text anyone may write: output names are a slug of it, never a path.
+TEST_F(CliTest, SceneNamesNeverBecomePaths) {
+  fs::create_directories(dir_ / "work");
+  write("victim.txt", "keep");
+  write("work/rock.obj", "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n");
+  const std::pair<std::string, std::string> cases[] = {
+      {"../escaped", "_escaped_none.png"},           // a relative path
+      {"/tmp/absolute", "_tmp_absolute_none.png"},  // an absolute one
+      {"rock.obj\\u0000", "rock.obj__none.png"},    // a NUL that cut the suffix off
+      {"../victim.txt\\u0000", "_victim.txt__none.png"},
+      {"a#b?c%d e", "a_b_c_d_e_none.png"},          // characters that break a URL
+  };
+  for (const auto& [name, expected] : cases) {
+    SCOPED_TRACE(name);
+    write("work/s.json", namedScene(name));
+    fs::remove_all(dir_ / "work/o");
+    const Result r = run("render --scene work/s.json -t none --width 8 --height 8 --out work/o");
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(exists("work/o/" + expected)) << r.output;
+    EXPECT_EQ(filesUnder(dir_ / "work/o").size(), 2u) << r.output;  // the PNG and the EXR, nothing else
+  }
+  EXPECT_EQ(read("victim.txt"), "keep");
+  EXPECT_EQ(read("work/rock.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n");
+  EXPECT_FALSE(exists("escaped_none.png"));
+  // In compare every image gets its own name, and the page's links work.
+  write("work/s.json", namedScene("x#y\\u0000"));
+  const Result c = run("compare --scene work/s.json -t hard --width 8 --height 8 --spp 2 --out work/c");
+  ASSERT_EQ(c.code, 0) << c.output;
+  EXPECT_TRUE(exists("work/c/report/x_y__hard.png")) << c.output;
+  EXPECT_TRUE(exists("work/c/report/x_y__truth_v.exr")) << c.output;
+  // --name sets the stem, made safe the same way.
+  const Result n = run("render --scene work/s.json -t none --width 8 --height 8 --name ../mine --out work/n");
+  ASSERT_EQ(n.code, 0) << n.output;
+  EXPECT_TRUE(exists("work/n/_mine_none.png")) << n.output;
+}
+
+// An input file is never a write target, whatever it is called (compared by identity).
+TEST_F(CliTest, InputMeshesAreNeverReplaced) {
+  const std::string mesh = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
+  write("tiny_none.png", mesh);  // a mesh file that carries an output's name
+  write("s.json", "{\"name\": \"tiny\", " + kCamera + ", \"lights\": [" + kLight +
+                      "], \"objects\": [{\"name\": \"m\", \"mesh\": \"tiny_none.png\"}]}");
+  const Result r = run("render --scene s.json -t none --width 8 --height 8 --out .");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("refusing to write"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("an input file"), std::string::npos) << r.output;
+  EXPECT_EQ(read("tiny_none.png"), mesh);
+}
+
+// Outputs are written beside their target and renamed into place: a link is replaced itself (its
+// target untouched), a read-only file is refused, and nothing half-written is left at the name.
+TEST_F(CliTest, OutputsAreNotWrittenThroughLinksOrOverReadOnlyFiles) {
+  write("s.json", sceneJson(kLight, kObjects));
+  write("victim.txt", "keep");
+  fs::create_directories(dir_ / "o");
+  fs::create_symlink(dir_ / "victim.txt", dir_ / "o/tiny_none.png");
+  const Result r = run("render --scene s.json -t none --width 8 --height 8 --out o");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(read("victim.txt"), "keep");
+  EXPECT_FALSE(fs::is_symlink(dir_ / "o/tiny_none.png"));
+  EXPECT_EQ(read("o/tiny_none.png").rfind("\x89PNG", 0), 0u);
+  fs::permissions(dir_ / "o/tiny_none_v.exr", fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  const std::string before = read("o/tiny_none_v.exr");
+  const Result ro = run("render --scene s.json -t none --width 8 --height 8 --out o");
+  EXPECT_EQ(ro.code, 1) << ro.output;
+  EXPECT_NE(ro.output.find("read-only"), std::string::npos) << ro.output;
+  EXPECT_EQ(read("o/tiny_none_v.exr"), before);
+  for (const std::string& f : filesUnder(dir_ / "o")) EXPECT_EQ(f.find(".partial-"), std::string::npos) << f;
+}
+
+// Two compare runs into one folder: the second is refused at once instead of mixing the reports.
+TEST_F(CliTest, ACompareFolderInUseIsRefused) {
+  write("s.json", sceneJson(kLight, kObjects));
+  fs::create_directories(dir_ / "out");
+  const int fd = ::open((dir_ / "out/.penumbra.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);  // as a running compare holds it
+  expectError("compare --scene s.json -t hard " + kTiny, {"is in use by another penumbra run", ".penumbra.lock"});
+  ::close(fd);
+  const Result r = run("compare --scene s.json -t hard " + kTiny);
+  EXPECT_EQ(r.code, 0) << r.output;
+}
+
+// An interrupted compare leaves the previous report whole: the page, its JSON and its images from
+// one run, and the new run's files only in a folder that says it is partial.
+TEST_F(CliTest, AnInterruptedCompareLeavesThePreviousReportWhole) {
+  write("s.json", sceneJson(kLight, kObjects));
+  ASSERT_EQ(run("compare --scene s.json -t hard,pcf " + kTiny).code, 0);
+  const std::string html = read("out/report/index.html"), json = read("out/report/compare.json");
+  const std::vector<std::string> files = filesUnder(dir_ / "out/report");
+  // A truth of many samples takes seconds; interrupt it once its staging folder exists.
+  const std::string command = "cd '" + dir_.string() + "' && exec '" PENUMBRA_CLI
+                              "' compare --scene s.json -t hard --width 256 --height 256 --spp 65536 --out out "
+                              ">/dev/null 2>&1";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool staged = false;
+  for (int i = 0; i < 600 && !staged; ++i) {
+    for (const auto& e : fs::directory_iterator(dir_ / "out"))
+      staged = staged || e.path().filename().string().rfind(".report-partial-", 0) == 0;
+    if (!staged) ::usleep(10000);
+  }
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(staged);
+  EXPECT_EQ(read("out/report/index.html"), html);
+  EXPECT_EQ(read("out/report/compare.json"), json);
+  EXPECT_EQ(filesUnder(dir_ / "out/report"), files);
+}
+
+// The cache checks the image it reads: another technique's V copied over the cached truth is
+// caught (by the key and pixel checksum in the EXR's header) and the truth rendered anew.
+TEST_F(CliTest, TheCacheDoesNotTrustAnEditedImage) {
+  write("s.json", sceneJson(kLight, kObjects));
+  ASSERT_EQ(run("compare --scene s.json -t hard " + kTiny).code, 0);
+  const Result again = run("compare --scene s.json -t hard " + kTiny);
+  ASSERT_NE(again.output.find("truth: reused"), std::string::npos) << again.output;
+  std::string cached;
+  for (const auto& e : fs::directory_iterator(dir_ / "out/cache"))
+    if (e.path().extension() == ".exr") cached = e.path().string();
+  ASSERT_FALSE(cached.empty());
+  fs::copy_file(dir_ / "out/report/tiny_hard_v.exr", cached, fs::copy_options::overwrite_existing);
+  const Result edited = run("compare --scene s.json -t hard " + kTiny);
+  ASSERT_EQ(edited.code, 0) << edited.output;
+  EXPECT_NE(edited.output.find("truth: rendering reference"), std::string::npos) << edited.output;
+  EXPECT_NE(edited.output.find("its image was not written for this key"), std::string::npos) << edited.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  EXPECT_GT(j["techniques"][0]["rmse8"].get<double>(), 0.0);
+  // A cache folder that cannot be made is a warning: the report is still written.
+  write("plain.txt", "a file, not a folder");
+  const Result uncached = run("compare --scene s.json -t hard --cache-dir plain.txt/cache --width 32 --height 32 --spp 4 --out out2");
+  EXPECT_EQ(uncached.code, 0) << uncached.output;
+  EXPECT_NE(uncached.output.find("penumbra: warning: "), std::string::npos) << uncached.output;
+  EXPECT_TRUE(exists("out2/report/index.html")) << uncached.output;
 }
 
 }  // namespace
