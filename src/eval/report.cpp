@@ -38,12 +38,16 @@ std::string joinParams(const KeyValues& params) {
   return s;
 }
 
-// A table cell's text with the characters that would end the cell or the row made harmless.
-std::string markdownCell(const std::string& text) {
+// Text from names and files (a scene's name, a reason) made harmless in Markdown: no raw HTML, no
+// line breaks that would end a heading or a list item, no '|' that would end a table cell.
+std::string markdownText(const std::string& text) {
   std::string out;
   for (char c : text) {
     if (c == '|') out += "\\|";
-    else if (c == '\n' || c == '\r') out += ' ';
+    else if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else if (c == '\n' || c == '\r' || c == '\0') out += ' ';
     else out += c;
   }
   return out;
@@ -243,8 +247,8 @@ std::string reportToJson(const Report& report) {
 }
 
 std::string reportToMarkdown(const Report& report) {
-  std::string md = fmt::format("# penumbra {}: {}\n\n", report.kind, report.scene);
-  md += fmt::format("- scene: `{}` ({})\n", report.scene, report.sceneSource);
+  std::string md = fmt::format("# penumbra {}: {}\n\n", report.kind, markdownText(report.scene));
+  md += fmt::format("- scene: {} ({})\n", markdownText(report.scene), markdownText(report.sceneSource));
   md += fmt::format("- light {}: {}\n", report.lightIndex, report.light);
   md += fmt::format("- image: {} x {}\n", report.width, report.height);
   if (!report.baseline.empty()) md += fmt::format("- time ratios relative to `{}`, measured in the same run\n", report.baseline);
@@ -265,7 +269,7 @@ std::string reportToMarkdown(const Report& report) {
   const auto cells = tableCells(report);
   for (size_t r = 0; r < cells.size(); ++r) {
     md += "|";
-    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : markdownCell(c)) + " |";
+    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : markdownText(c)) + " |";
     md += "\n";
     if (r == 0) {
       md += "|";
@@ -293,7 +297,7 @@ std::string reportToMarkdown(const Report& report) {
   }
   if (!report.skipped.empty()) {
     md += "\n## Not run\n\n";
-    for (const auto& [name, why] : report.skipped) md += fmt::format("- `{}`: {}\n", name, why);
+    for (const auto& [name, why] : report.skipped) md += fmt::format("- `{}`: {}\n", name, markdownText(why));
   }
   bool anyImages = false;
   for (const ReportRow& row : report.rows) anyImages = anyImages || !row.images.empty();

@@ -203,6 +203,16 @@ TEST(Report, TechniquesNotRunKeepARowWithTheReason) {
   EXPECT_EQ(j["skipped"][0]["name"], "ssv");
 }
 
+// A scene's name is free text from a file: in Markdown it cannot open raw HTML or end the heading.
+TEST(Report, MarkdownEscapesNamesFromFiles) {
+  Report r = richReport();
+  r.scene = "evil\n# injected <script>alert(1)</script>";
+  const std::string md = reportToMarkdown(r);
+  EXPECT_EQ(md.find("<script>"), std::string::npos) << md;
+  EXPECT_EQ(md.find("\n# injected"), std::string::npos) << md;
+  EXPECT_EQ(md.rfind("# penumbra compare: evil # injected &lt;script&gt;alert(1)&lt;/script&gt;\n", 0), 0u) << md;
+}
+
 TEST(Report, HtmlPlotsAreDrawnFromTheJsonNumbers) {
   const Report r = richReport();
   const std::string html = reportToHtml(r);
