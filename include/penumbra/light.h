@@ -6,8 +6,12 @@
 //  - sphere {center, radius}; its emitting area seen from p is the silhouette disk: the disk of
 //    radius R*sqrt(d^2 - R^2)/d, at distance (d^2 - R^2)/d from p, perpendicular to p->center.
 //  - disk {center, normal, radius}, rect {center, u, v} (u, v half-edge vectors, any lengths, must
-//    be perpendicular), polygon {vertices} (planar, convex, >= 3, in order): planar emitters that
-//    emit from both faces, so a ceiling light works whichever way its normal points.
+//    be perpendicular), polygon {vertices} (>= 3, in order, either orientation; planar and simple:
+//    no two vertices coincide and no two edges cross or touch; convex or concave): planar emitters
+//    that emit from both faces, so a ceiling light works whichever way its normal points. A
+//    polygon's centre sample is its area centroid, which for a concave polygon (an L, a U) can lie
+//    off the emitter; it is sampled uniformly by area over a triangulation (a fan from vertex 0 when
+//    convex, ear clipping otherwise: include/penumbra/planar_polygon.h).
 //  - segment {a, b}: a linear light (Heidrich et al. 2000); sampled uniformly along its length.
 //  - directional {direction, angular_diameter, profile}: `direction` points from the scene towards
 //    the light (the sun direction); its emitting area is the solar disk, a disk of radius
@@ -20,6 +24,8 @@
 //    visibility V does not depend on it.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <string_view>
 #include <vector>
 
@@ -46,7 +52,8 @@ struct LightSample {
 class Light {
  public:
   // Factories validate their input and throw Error for a degenerate light (zero or non-finite
-  // size, a non-planar or non-convex polygon, parallel rect edges, ...).
+  // size, a non-planar or self-intersecting polygon or one with repeated vertices, parallel rect
+  // edges, ...).
   static Light sphere(const Vec3& center, float radius);
   static Light disk(const Vec3& center, const Vec3& normal, float radius);
   static Light rect(const Vec3& center, const Vec3& u, const Vec3& v);
@@ -78,6 +85,16 @@ class Light {
   float angularDiameter() const { return angularDiameter_; }  //!< directional, radians
   // Corners of rect and polygon lights, in order (for rect: c-u-v, c+u-v, c+u+v, c-u+v).
   const std::vector<Vec3>& vertices() const { return vertices_; }
+  // Emitting area of disk, rect and polygon lights (world units squared); 0 for the other shapes.
+  float area() const;
+  // Rect and polygon lights: whether the polygon is convex (every corner turns the same way, to a
+  // tolerance of 1e-6 of its squared size). False for the other shapes.
+  bool convex() const { return convex_; }
+  // Rect and polygon lights: convex polygons (in the light's own orientation, straight corners
+  // dropped) that tile it without overlap: the polygon itself when convex, otherwise the fewest
+  // pieces cut along diagonals (planar_polygon.h's convexPartition; Rouf 2007, Section 5.2.5).
+  // Empty for the other shapes.
+  std::vector<std::vector<Vec3>> convexParts() const;
 
   // Radius of the smallest circle around the centre that holds the emitter (world units); for a
   // directional light, tan(angular_diameter / 2), the solar disk's radius at unit distance.
@@ -136,7 +153,9 @@ class Light {
   Vec3 direction_{0.0f, 1.0f, 0.0f};
   float angularDiameter_ = 0.0f;
   std::vector<Vec3> vertices_;
-  std::vector<float> triangleCdf_;  // polygon: cumulative fan-triangle areas, normalized
+  bool convex_ = false;
+  std::vector<std::array<uint32_t, 3>> triangles_;  // polygon: a triangulation (vertex indices)
+  std::vector<float> triangleCdf_;                  // polygon: cumulative triangle areas, normalized
 };
 
 }  // namespace penumbra

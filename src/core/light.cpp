@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "penumbra/error.h"
+#include "penumbra/planar_polygon.h"
 #include "penumbra/sampling.h"
 
 namespace penumbra {
@@ -50,6 +51,26 @@ Vec3 newellNormal(const std::vector<Vec3>& vs) {
   return Vec3(n);
 }
 
+// A corner turns the wrong way (the polygon is concave there) when the cross product of its two
+// edges is below -kTurnTolerance times the polygon's squared size: rounding of float coordinates
+// stays far below that.
+constexpr double kTurnTolerance = 1e-6;
+
+// The polygon in its plane (normal n, unit): 2D coordinates about the vertex mean, along axes x, y
+// with x cross y = n, so vertices that turn counter-clockwise about n are counter-clockwise here.
+std::vector<polygon2d::DVec2> inPlane(const std::vector<Vec3>& vs, const DVec3& n) {
+  DVec3 o(0.0);
+  for (const Vec3& v : vs) o += DVec3(v);
+  o /= static_cast<double>(vs.size());
+  const DVec3 helper = std::abs(n.x) < 0.9 ? DVec3(1.0, 0.0, 0.0) : DVec3(0.0, 1.0, 0.0);
+  const DVec3 x = glm::normalize(glm::cross(helper, n));
+  const DVec3 y = glm::cross(n, x);
+  std::vector<polygon2d::DVec2> out;
+  out.reserve(vs.size());
+  for (const Vec3& v : vs) out.emplace_back(glm::dot(DVec3(v) - o, x), glm::dot(DVec3(v) - o, y));
+  return out;
+}
+
 }  // namespace
 
 Light Light::sphere(const Vec3& center, float radius) {
@@ -88,6 +109,7 @@ Light Light::rect(const Vec3& center, const Vec3& u, const Vec3& v) {
   l.v_ = v;
   l.normal_ = glm::normalize(glm::cross(u, v));
   l.vertices_ = {center - u - v, center + u - v, center + u + v, center - u + v};
+  l.convex_ = true;
   return l;
 }
 
@@ -106,35 +128,61 @@ Light Light::segment(const Vec3& a, const Vec3& b) {
 Light Light::polygon(const std::vector<Vec3>& vertices) {
   if (vertices.size() < 3) fail("light: polygon needs at least 3 vertices (got {})", vertices.size());
   for (size_t i = 0; i < vertices.size(); ++i) requireFinite(vertices[i], fmt::format("polygon vertex {}", i));
-  const Vec3 nn = newellNormal(vertices);
-  const float area = 0.5f * glm::length(nn);
   Vec3 centroid(0.0f);
   float size = 0.0f;
   for (const Vec3& p : vertices) centroid += p;
   centroid /= static_cast<float>(vertices.size());
   for (const Vec3& p : vertices) size = std::max(size, glm::length(p - centroid));
-  if (!(area > 1e-8f * size * size) || !(size > 0.0f)) fail("light: polygon has zero area");
-  const Vec3 n = nn / (2.0f * area);
-  for (size_t i = 0; i < vertices.size(); ++i) {
-    const float off = std::abs(glm::dot(vertices[i] - centroid, n));
-    if (off > 1e-3f * size) fail("light: polygon is not planar (vertex {} is {} off its plane)", i, off);
-    // Convex and consistently ordered: every turn has the same sign as the polygon's normal.
-    const Vec3& p0 = vertices[i];
-    const Vec3& p1 = vertices[(i + 1) % vertices.size()];
-    const Vec3& p2 = vertices[(i + 2) % vertices.size()];
-    if (glm::dot(glm::cross(p1 - p0, p2 - p1), n) < -1e-6f * size * size)
-      fail("light: polygon is not convex (turn at vertex {} goes the wrong way)", (i + 1) % vertices.size());
+  // Distances below a millionth of the polygon's size are float rounding of its coordinates.
+  const double lengthTolerance = 1e-6 * size;
+  for (size_t i = 0; i < vertices.size(); ++i)
+    for (size_t j = i + 1; j < vertices.size(); ++j)
+      if (glm::length(DVec3(vertices[i]) - DVec3(vertices[j])) <= lengthTolerance)
+        fail("light: polygon vertices {} and {} coincide; expected distinct vertices", i, j);
+  const Vec3 nn = newellNormal(vertices);
+  const float area = 0.5f * glm::length(nn);
+  const bool hasArea = area > 1e-8f * size * size;
+  // The plane: Newell's normal, or where that vanishes (a polygon whose loops cancel, a bow tie) the
+  // widest triangle of vertex 0, the vertex farthest from it and a third, so that the crossing
+  // edges are found and named below.
+  DVec3 n = hasArea ? glm::normalize(DVec3(nn)) : DVec3(0.0);
+  if (!hasArea) {
+    size_t far = 0;
+    for (size_t i = 1; i < vertices.size(); ++i)
+      if (glm::length(vertices[i] - vertices[0]) > glm::length(vertices[far] - vertices[0])) far = i;
+    const DVec3 e = DVec3(vertices[far]) - DVec3(vertices[0]);
+    for (const Vec3& v : vertices) {
+      const DVec3 c = glm::cross(e, DVec3(v) - DVec3(vertices[0]));
+      if (glm::length(c) > glm::length(n)) n = c;
+    }
+    if (!(glm::length(n) > 1e-8 * size * size)) fail("light: polygon has zero area (its vertices lie on one line)");
+    n = glm::normalize(n);
   }
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const double off = std::abs(glm::dot(DVec3(vertices[i]) - DVec3(centroid), n));
+    if (off > 1e-3 * size) fail("light: polygon is not planar (vertex {} is {} off its plane); expected all vertices in one plane", i, off);
+  }
+  const std::vector<polygon2d::DVec2> flat = inPlane(vertices, n);
+  if (const std::string problem = polygon2d::simplePolygonProblem(flat, lengthTolerance); !problem.empty())
+    fail("light: polygon {}; expected a simple polygon (no edge crossing or touching another, each vertex once)", problem);
+  if (!hasArea) fail("light: polygon has zero area");
   Light l;
   l.shape_ = LightShape::Polygon;
   l.vertices_ = vertices;
-  l.normal_ = n;
+  l.normal_ = nn / (2.0f * area);
+  l.convex_ = polygon2d::isConvex(flat, kTurnTolerance * size * size);
+  if (l.convex_) {
+    for (uint32_t i = 1; i + 1 < vertices.size(); ++i) l.triangles_.push_back({0, i, i + 1});
+  } else {
+    l.triangles_ = polygon2d::earClip(flat);
+  }
   // Area-weighted centroid: the centre sample.
   Vec3 c(0.0f);
   float total = 0.0f;
-  for (size_t i = 1; i + 1 < vertices.size(); ++i) {
-    const float ai = 0.5f * glm::length(glm::cross(vertices[i] - vertices[0], vertices[i + 1] - vertices[0]));
-    c += ai * (vertices[0] + vertices[i] + vertices[i + 1]) / 3.0f;
+  for (const auto& t : l.triangles_) {
+    const Vec3 &a = vertices[t[0]], &b = vertices[t[1]], &d = vertices[t[2]];
+    const float ai = 0.5f * glm::length(glm::cross(b - a, d - a));
+    c += ai * (a + b + d) / 3.0f;
     total += ai;
     l.triangleCdf_.push_back(total);
   }
@@ -142,6 +190,44 @@ Light Light::polygon(const std::vector<Vec3>& vertices) {
   l.triangleCdf_.back() = 1.0f;
   l.center_ = c / total;
   return l;
+}
+
+std::vector<std::vector<Vec3>> Light::convexParts() const {
+  if (shape_ != LightShape::Rect && shape_ != LightShape::Polygon) return {};
+  if (convex_) return {vertices_};
+  float size = 0.0f;
+  Vec3 mean(0.0f);
+  for (const Vec3& p : vertices_) mean += p;
+  mean /= static_cast<float>(vertices_.size());
+  for (const Vec3& p : vertices_) size = std::max(size, glm::length(p - mean));
+  const double tolerance = kTurnTolerance * size * size;
+  const std::vector<polygon2d::DVec2> flat = inPlane(vertices_, DVec3(normal_));
+  std::vector<std::vector<Vec3>> parts;
+  for (const std::vector<uint32_t>& piece : polygon2d::convexPartition(flat, tolerance)) {
+    // Straight corners (a vertex of the polygon on a piece's side) add nothing to a convex piece.
+    std::vector<Vec3> part;
+    const size_t m = piece.size();
+    for (size_t k = 0; k < m; ++k) {
+      const polygon2d::DVec2 &a = flat[piece[(k + m - 1) % m]], &b = flat[piece[k]], &d = flat[piece[(k + 1) % m]];
+      const double turn = (b.x - a.x) * (d.y - b.y) - (b.y - a.y) * (d.x - b.x);
+      if (std::abs(turn) > tolerance) part.push_back(vertices_[piece[k]]);
+    }
+    if (part.size() < 3) {
+      part.clear();
+      for (uint32_t k : piece) part.push_back(vertices_[k]);
+    }
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+float Light::area() const {
+  switch (shape_) {
+    case LightShape::Disk: return kPi * radius_ * radius_;
+    case LightShape::Rect: return 4.0f * glm::length(glm::cross(u_, v_));
+    case LightShape::Polygon: return 0.5f * glm::length(newellNormal(vertices_));
+    default: return 0.0f;
+  }
 }
 
 Light Light::directional(const Vec3& wsToLight, float angularDiameterRadians, LightProfile profile) {
@@ -224,13 +310,15 @@ LightSample Light::sample(const Vec3& wsP, const Vec2& u) const {
     case LightShape::Rect: x = center_ + (2.0f * u.x - 1.0f) * u_ + (2.0f * u.y - 1.0f) * v_; break;
     case LightShape::Segment: x = a_ + u.x * (b_ - a_); break;
     case LightShape::Polygon: {
-      // Pick a fan triangle by area with u.x, reuse the remainder of u.x inside it.
+      // Pick a triangle by area with u.x, reuse the remainder of u.x inside it: stratified u stays
+      // stratified within each triangle.
       size_t i = 0;
       while (i + 1 < triangleCdf_.size() && u.x >= triangleCdf_[i]) ++i;
       const float lo = i == 0 ? 0.0f : triangleCdf_[i - 1];
       const float ux = std::min((u.x - lo) / (triangleCdf_[i] - lo), 0x1.fffffep-1f);
       const Vec2 bc = uniformTriangle(Vec2(ux, u.y));
-      x = bc.x * vertices_[0] + bc.y * vertices_[i + 1] + (1.0f - bc.x - bc.y) * vertices_[i + 2];
+      const auto& t = triangles_[i];
+      x = bc.x * vertices_[t[0]] + bc.y * vertices_[t[1]] + (1.0f - bc.x - bc.y) * vertices_[t[2]];
       break;
     }
     case LightShape::Directional: {
@@ -351,10 +439,8 @@ float Light::irradiance(const Vec3& wsP, const Vec3& wsN) const {
   const CmjSampler sampler(64);
   float measure;
   switch (shape_) {
-    case LightShape::Disk: measure = kPi * radius_ * radius_; break;
-    case LightShape::Rect: measure = 4.0f * glm::length(glm::cross(u_, v_)); break;
     case LightShape::Segment: measure = glm::length(b_ - a_); break;
-    default: measure = 0.5f * glm::length(newellNormal(vertices_)); break;
+    default: measure = area(); break;
   }
   float sum = 0.0f;
   for (uint32_t i = 0; i < sampler.count(); ++i) {

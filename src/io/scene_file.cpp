@@ -320,7 +320,7 @@ Light readLight(const Field& field) {
   } else if (type == "polygon") {
     o.emplace(field, keys({"vertices"}));
     const Field vs = o->required("vertices");
-    vs.array(3, "[x, y, z] vertices (a planar convex polygon, in order)");
+    vs.array(3, "[x, y, z] vertices (a planar simple polygon, convex or concave, in order)");
     std::vector<Vec3> vertices;
     for (size_t i = 0; i < vs.value().size(); ++i) vertices.push_back(vs.element(i).vec3());
     light = withPath(vs, [&] { return Light::polygon(vertices); });

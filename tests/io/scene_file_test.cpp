@@ -326,10 +326,11 @@ TEST(ParseScene, EveryLightType) {
     {"type": "rect", "center": [0, 4, 0], "u": [0.5, 0, 0], "v": [0, 0, 0.25]},
     {"type": "segment", "a": [-1, 4, 0], "b": [1, 4, 0]},
     {"type": "polygon", "vertices": [[0, 4, 0], [1, 4, 0], [0, 4, 1]]},
-    {"type": "directional", "direction": [0, 1, 0], "angular_diameter": 0.53, "profile": "limb-darkened"}
+    {"type": "directional", "direction": [0, 1, 0], "angular_diameter": 0.53, "profile": "limb-darkened"},
+    {"type": "polygon", "vertices": [[0, 4, 0], [2, 4, 0], [2, 4, 1], [1, 4, 1], [1, 4, 2], [0, 4, 2]]}
   ])");
   const Scene s = parseScene(j.dump(), "lights.json");
-  ASSERT_EQ(s.lights.size(), 6u);
+  ASSERT_EQ(s.lights.size(), 7u);
   EXPECT_EQ(s.lights[0].shape(), LightShape::Sphere);
   EXPECT_EQ(s.lights[0].intensity(), 2.0f);
   EXPECT_EQ(s.lights[1].shape(), LightShape::Disk);
@@ -340,6 +341,12 @@ TEST(ParseScene, EveryLightType) {
   EXPECT_EQ(s.lights[5].shape(), LightShape::Directional);
   EXPECT_EQ(s.lights[5].profile(), LightProfile::LimbDarkened);
   EXPECT_NEAR(s.lights[5].angularDiameter(), 0.53 * M_PI / 180.0, 1e-7);
+  // A concave (L-shaped) polygon is a light like any other, its vertices kept as given.
+  EXPECT_EQ(s.lights[6].shape(), LightShape::Polygon);
+  EXPECT_FALSE(s.lights[6].convex());
+  EXPECT_EQ(s.lights[6].vertices().size(), 6u);
+  EXPECT_EQ(s.lights[6].vertices()[3], Vec3(1, 4, 1));
+  EXPECT_NEAR(s.lights[6].area(), 3.0f, 1e-6f);
 }
 
 TEST(ParseScene, TechniqueParametersKeepTypeAndSource) {
@@ -369,7 +376,8 @@ TEST(SceneToJson, RoundTripIsExact) {
     {"type": "rect", "center": [0, 4, 0], "u": [0.5, 0, 0], "v": [0, 0, 0.25], "intensity": 3.7},
     {"type": "segment", "a": [-1, 4, 0], "b": [1, 4.5, 0]},
     {"type": "polygon", "vertices": [[0, 4, 0], [1, 4, 0], [1.2, 4, 0.9], [0, 4, 1]]},
-    {"type": "directional", "direction": [0.2, 1, 0.1], "angular_diameter": 0.53, "profile": "limb-darkened"}
+    {"type": "directional", "direction": [0.2, 1, 0.1], "angular_diameter": 0.53, "profile": "limb-darkened"},
+    {"type": "polygon", "vertices": [[0.1, 4, 0], [2, 4, 0], [2, 4, 1.3], [1, 4, 1.3], [1, 4, 2], [0.1, 4, 2]]}
   ])");
   j["objects"].push_back(json::parse(R"({"name": "torus", "id": 17, "albedo": [0.1, 0.2, 0.3],
       "primitive": {"type": "torus", "major_radius": 1, "minor_radius": 0.3, "major_segments": 12, "minor_segments": 6},
@@ -509,9 +517,21 @@ TEST(SceneErrors, EachNamesFileFieldAndExpectation) {
       {"degenerate disk normal", [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "disk", "center": [0, 4, 0], "normal": [0, 0, 0], "radius": 1})");
        }, {"scenes/x.json: lights[0].normal: disk normal must be a non-zero vector"}},
-      {"non-convex polygon light", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[1,4,0.2],[2,4,2],[0,4,2]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon is not convex"}},
+      {"self-intersecting polygon light", [](json& j) {
+         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,4,1],[1,4,-1],[0,4,2]]})");
+       }, {"scenes/x.json: lights[0].vertices: polygon edges 0 and 3 cross; expected a simple polygon"}},
+      {"bow-tie polygon light", [](json& j) {
+         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[1,4,0],[0,4,1],[1,4,1]]})");
+       }, {"scenes/x.json: lights[0].vertices: polygon edges 1 and 3 cross; expected a simple polygon"}},
+      {"polygon light with a repeated vertex", [](json& j) {
+         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[1,4,1],[2,4,2],[1,4,1],[0,4,2]]})");
+       }, {"scenes/x.json: lights[0].vertices: polygon vertices 2 and 4 coincide; expected distinct vertices"}},
+      {"non-planar polygon light", [](json& j) {
+         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,5,1],[1,4,2],[0,4,2]]})");
+       }, {"scenes/x.json: lights[0].vertices: polygon is not planar", "expected all vertices in one plane"}},
+      {"zero-area polygon light", [](json& j) {
+         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[1,4,0],[3,4,0]]})");
+       }, {"scenes/x.json: lights[0].vertices: polygon has zero area"}},
       {"rect with parallel edges", [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "rect", "center": [0,4,0], "u": [1,0,0], "v": [1,0,0.1]})");
        }, {"scenes/x.json: lights[0]: rect half-edges u and v must be perpendicular"}},
