@@ -1,6 +1,7 @@
 // Tests of the `reference` technique (src/techniques/reference.cpp) against closed-form visibility:
 // parallel rect / disk / polygon / segment lights over parallel occluders (the occluder's central
-// projection from p onto the light's plane gives V = 1 - overlap / light measure), a sphere light on
+// projection from p onto the light's plane gives V = 1 - overlap / light measure), an L-shaped
+// (concave) polygon light over half-plane occluders (the same, by area), a sphere light on
 // its axis (its silhouette disk), and a directional solar disk behind a straight edge (a circular
 // segment; with limb darkening, the segment integral of the linear law in closed form).
 // Every estimate must lie within 3 of its own standard errors of the exact value and within 1/255.
@@ -187,6 +188,62 @@ TEST(Reference, ConvexPolygonLightOverParallelRectOccluder) {
     exact.push_back(1.0 - (clipped.size() >= 3 ? polygonArea(clipped) : 0.0) / lightArea);
   }
   expectMatches(runReference(scene, light, points), exact);
+}
+
+// The part of a (possibly concave) polygon on the side dot(x, m) >= c of a line, by Sutherland–Hodgman
+// against one half-plane: for a concave polygon the result may run along the line and back, which
+// adds no area, so the shoelace area is still the area of the part.
+std::vector<Vec2> clipToHalfPlane(const std::vector<Vec2>& poly, const Vec2& m, float c) {
+  std::vector<Vec2> out;
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const Vec2 a = poly[i], b = poly[(i + 1) % poly.size()];
+    const float da = glm::dot(a, m) - c, db = glm::dot(b, m) - c;
+    if (da >= 0.0f) out.push_back(a);
+    if ((da >= 0.0f) != (db >= 0.0f)) out.push_back(a + (da / (da - db)) * (b - a));
+  }
+  return out;
+}
+
+TEST(Reference, LShapedLightOverHalfPlaneOccluder) {
+  // An L of three unit squares ([-1, 1] x [-1, 0] and [-1, 0] x [0, 1]) at z = 4 over a half-plane
+  // occluder at z = 2 whose edge runs through the origin: from p the occluder hides the light's part
+  // beyond the edge's projection 2q - p, so V is the fraction of the L's area on the lit side. Edge
+  // along y (occluder x < 0): V = ((1 - s) + max(0, -s)) / 3 with s = -p.x clamped to [-1, 1]; edge
+  // along the diagonal (occluder x + y < 0): the L clipped by x + y >= -(p.x + p.y).
+  // Listed from a corner that does not see the whole L, so a fan from vertex 0 would leave it.
+  const std::vector<Vec2> lightPoly = {Vec2(1, 0), Vec2(0, 0), Vec2(0, 1), Vec2(-1, 1), Vec2(-1, -1), Vec2(1, -1)};
+  std::vector<Vec3> vertices;
+  for (const Vec2& q : lightPoly) vertices.push_back(Vec3(q.x, q.y, kLightZ));
+  const Light light = Light::polygon(vertices);
+  ASSERT_FALSE(light.convex());
+  const double lightArea = polygonArea(lightPoly);
+  ASSERT_NEAR(lightArea, 3.0, 1e-6);
+  const std::vector<Vec3> points = {Vec3(-1.5f, 0.1f, 0), Vec3(-0.7f, 0.3f, 0), Vec3(-0.2f, -0.5f, 0), Vec3(0.0f, 0.0f, 0),
+                                    Vec3(0.4f, 0.2f, 0),  Vec3(0.9f, -0.4f, 0), Vec3(1.5f, 0.0f, 0)};
+  {
+    SCOPED_TRACE("edge along y");
+    const Scene scene = withReceiver({makeObject(1, quadMesh(Vec3(-25.0f, 0, kOccluderZ), Vec3(25.0f, 0, 0), Vec3(0, 25.0f, 0)), "half-plane")});
+    std::vector<double> exact;
+    for (const Vec3& p : points) {
+      const double s = std::clamp(-static_cast<double>(p.x), -1.0, 1.0);
+      exact.push_back(((1.0 - s) + std::max(0.0, -s)) / 3.0);
+    }
+    EXPECT_EQ(exact.front(), 0.0);
+    EXPECT_EQ(exact.back(), 1.0);
+    expectMatches(runReference(scene, light, points), exact);
+  }
+  {
+    SCOPED_TRACE("diagonal edge");
+    const float h = 25.0f * std::sqrt(0.5f);  // the half-plane x + y < 0 as a 50 x 50 square beside its edge
+    const Vec3 along(h, -h, 0), across(-h, -h, 0);
+    const Scene scene = withReceiver({makeObject(1, quadMesh(Vec3(0, 0, kOccluderZ) + across, across, along), "half-plane")});
+    std::vector<double> exact;
+    for (const Vec3& p : points) {
+      const auto lit = clipToHalfPlane(lightPoly, Vec2(1, 1), -(p.x + p.y));
+      exact.push_back(lit.size() >= 3 ? polygonArea(lit) / lightArea : 0.0);
+    }
+    expectMatches(runReference(scene, light, points), exact);
+  }
 }
 
 TEST(Reference, SegmentLightOverParallelRectOccluder) {
