@@ -92,8 +92,9 @@ class Light {
   bool convex() const { return convex_; }
   // Rect and polygon lights: convex polygons (in the light's own orientation, straight corners
   // dropped) that tile it without overlap: the polygon itself when convex, otherwise the fewest
-  // pieces cut along diagonals (planar_polygon.h's convexPartition; Rouf 2007, Section 5.2.5).
-  // Empty for the other shapes.
+  // pieces cut along diagonals and edge extensions, the shortest cuts among those (an L gives two
+  // rectangles; planar_polygon.h's convexPartition; Rouf 2007, Section 5.2.5). Empty for the other
+  // shapes.
   std::vector<std::vector<Vec3>> convexParts() const;
 
   // Radius of the smallest circle around the centre that holds the emitter (world units); for a

@@ -202,19 +202,28 @@ std::vector<std::vector<Vec3>> Light::convexParts() const {
   for (const Vec3& p : vertices_) size = std::max(size, glm::length(p - mean));
   const double tolerance = kTurnTolerance * size * size;
   const std::vector<polygon2d::DVec2> flat = inPlane(vertices_, DVec3(normal_));
+  const polygon2d::ConvexPartition partition = polygon2d::convexPartition(flat, tolerance);
+  // A corner of a piece: a vertex, or a point on an edge (where the cut continues an edge).
+  const auto corner3 = [&](uint32_t id) {
+    if (id < vertices_.size()) return vertices_[id];
+    const polygon2d::ConvexPartition::EdgePoint& e = partition.added[id - vertices_.size()];
+    const DVec3 a(vertices_[e.edge]), b(vertices_[(e.edge + 1) % vertices_.size()]);
+    return Vec3(a + e.t * (b - a));
+  };
   std::vector<std::vector<Vec3>> parts;
-  for (const std::vector<uint32_t>& piece : polygon2d::convexPartition(flat, tolerance)) {
+  for (const std::vector<uint32_t>& piece : partition.pieces) {
     // Straight corners (a vertex of the polygon on a piece's side) add nothing to a convex piece.
     std::vector<Vec3> part;
     const size_t m = piece.size();
     for (size_t k = 0; k < m; ++k) {
-      const polygon2d::DVec2 &a = flat[piece[(k + m - 1) % m]], &b = flat[piece[k]], &d = flat[piece[(k + 1) % m]];
+      const polygon2d::DVec2 a = partition.corner(flat, piece[(k + m - 1) % m]), b = partition.corner(flat, piece[k]),
+                             d = partition.corner(flat, piece[(k + 1) % m]);
       const double turn = (b.x - a.x) * (d.y - b.y) - (b.y - a.y) * (d.x - b.x);
-      if (std::abs(turn) > tolerance) part.push_back(vertices_[piece[k]]);
+      if (std::abs(turn) > tolerance) part.push_back(corner3(piece[k]));
     }
     if (part.size() < 3) {
       part.clear();
-      for (uint32_t k : piece) part.push_back(vertices_[k]);
+      for (uint32_t k : piece) part.push_back(corner3(k));
     }
     parts.push_back(std::move(part));
   }

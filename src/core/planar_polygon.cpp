@@ -152,60 +152,75 @@ std::vector<std::vector<uint32_t>> optimalConvexPartition(const std::vector<DVec
   }
   const auto at = [n](size_t i, size_t j) { return i * n + j; };
   const auto convexCorner = [&](size_t a, size_t b, size_t c) { return orient(p[a], p[b], p[c]) >= -turnTolerance; };
-  // chord[i, j], i < j: a polygon edge or a diagonal.
+  // chord[i, j], i < j: a polygon edge or a diagonal; cut[i, j]: its length when it is a diagonal.
   std::vector<uint8_t> chord(n * n, 0);
+  std::vector<double> cut(n * n, 0.0);
   for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 1; j < n; ++j) chord[at(i, j)] = (j == i + 1 || (i == 0 && j == n - 1)) || isDiagonal(p, i, j);
-  constexpr int kNone = std::numeric_limits<int>::max() / 4;
-  // pieces[i, j]: the fewest convex pieces of the sub-polygon i, i+1, ..., j closed by the chord
-  // (j, i); inner[i, j]: the vertices strictly between i and j of the piece that holds the chord.
-  std::vector<int> pieces(n * n, kNone);
+    for (size_t j = i + 1; j < n; ++j) {
+      const bool edge = j == i + 1 || (i == 0 && j == n - 1);
+      chord[at(i, j)] = edge || isDiagonal(p, i, j);
+      if (!edge) cut[at(i, j)] = glm::length(p[j] - p[i]);
+    }
+  // Costs are (pieces, total cut length), compared in that order.
+  struct Cost {
+    int pieces = std::numeric_limits<int>::max();
+    double length = 0.0;
+    bool valid() const { return pieces != std::numeric_limits<int>::max(); }
+    bool operator<(const Cost& o) const { return pieces != o.pieces ? pieces < o.pieces : length < o.length; }
+    Cost operator+(const Cost& o) const { return {pieces + o.pieces, length + o.length}; }
+  };
+  // best[i, j]: the sub-polygon i, i+1, ..., j closed by the chord (j, i), cut into the fewest convex
+  // pieces (the chord itself not counted as a cut); inner[i, j]: the vertices strictly between i and
+  // j of the piece that holds the chord.
+  std::vector<Cost> best(n * n);
   std::vector<std::vector<uint32_t>> inner(n * n);
-  for (size_t i = 0; i + 1 < n; ++i) pieces[at(i, i + 1)] = 0;
-  // cost[a, b]: the fewest pieces beyond the chain i = v0 < ... < a < b built so far (convex at every
-  // corner from v0 to a); from[a, b]: the vertex before a on that chain.
-  std::vector<int> cost(n * n);
+  for (size_t i = 0; i + 1 < n; ++i) best[at(i, i + 1)] = {0, 0.0};
+  // What the chord (b, d) of a piece brings: the sub-polygon it cuts off, and itself as a cut.
+  const auto beyond = [&](size_t b, size_t d) { return best[at(b, d)] + Cost{0, cut[at(b, d)]}; };
+  // chain[a, b]: the cheapest chain i = v0 < ... < a < b built so far (convex at every corner from
+  // v0 to a), counting what its chords cut off; from[a, b]: the vertex before a on it.
+  std::vector<Cost> chain(n * n);
   std::vector<uint32_t> from(n * n);
   for (size_t len = 2; len < n; ++len)
     for (size_t i = 0; i + len < n; ++i) {
       const size_t j = i + len;
       if (!chord[at(i, j)]) continue;
-      std::fill(cost.begin(), cost.end(), kNone);
+      std::fill(chain.begin(), chain.end(), Cost{});
       for (size_t b = i + 1; b < j; ++b)
-        if (chord[at(i, b)] && pieces[at(i, b)] < kNone && convexCorner(j, i, b)) {
-          cost[at(i, b)] = pieces[at(i, b)];
+        if (chord[at(i, b)] && best[at(i, b)].valid() && convexCorner(j, i, b)) {
+          chain[at(i, b)] = beyond(i, b);
           from[at(i, b)] = static_cast<uint32_t>(i);
         }
       for (size_t b = i + 1; b < j; ++b)
         for (size_t a = i; a < b; ++a) {
-          if (cost[at(a, b)] >= kNone) continue;
+          if (!chain[at(a, b)].valid()) continue;
           for (size_t d = b + 1; d <= j; ++d) {
-            if (!chord[at(b, d)] || pieces[at(b, d)] >= kNone || !convexCorner(a, b, d)) continue;
-            const int c = cost[at(a, b)] + pieces[at(b, d)];
-            if (c < cost[at(b, d)]) {
-              cost[at(b, d)] = c;
+            if (!chord[at(b, d)] || !best[at(b, d)].valid() || !convexCorner(a, b, d)) continue;
+            const Cost c = chain[at(a, b)] + beyond(b, d);
+            if (c < chain[at(b, d)]) {
+              chain[at(b, d)] = c;
               from[at(b, d)] = static_cast<uint32_t>(a);
             }
           }
         }
-      int best = kNone;
+      Cost cheapest;
       size_t last = 0;
       for (size_t a = i + 1; a < j; ++a)
-        if (cost[at(a, j)] < best && convexCorner(a, j, i)) {
-          best = cost[at(a, j)];
+        if (chain[at(a, j)] < cheapest && convexCorner(a, j, i)) {
+          cheapest = chain[at(a, j)];
           last = a;
         }
-      if (best >= kNone) continue;
-      pieces[at(i, j)] = best + 1;
-      std::vector<uint32_t> chain;
+      if (!cheapest.valid()) continue;
+      best[at(i, j)] = cheapest + Cost{1, 0.0};
+      std::vector<uint32_t> piece;
       for (size_t a = last, b = j; a != i;) {
-        chain.push_back(static_cast<uint32_t>(a));
+        piece.push_back(static_cast<uint32_t>(a));
         const size_t prev = from[at(a, b)];
         b = a;
         a = prev;
       }
-      std::reverse(chain.begin(), chain.end());
-      inner[at(i, j)] = std::move(chain);
+      std::reverse(piece.begin(), piece.end());
+      inner[at(i, j)] = std::move(piece);
     }
   // Unfold: the piece on chord (i, j), then the sub-polygons cut off by its chords.
   std::vector<std::vector<uint32_t>> out;
@@ -265,8 +280,71 @@ std::vector<std::vector<uint32_t>> hertelMehlhorn(const std::vector<DVec2>& p, d
   return pieces;
 }
 
-std::vector<std::vector<uint32_t>> convexPartition(const std::vector<DVec2>& p, double turnTolerance) {
-  return p.size() <= kOptimalPartitionMaxVertices ? optimalConvexPartition(p, turnTolerance) : hertelMehlhorn(p, turnTolerance);
+ConvexPartition convexPartition(const std::vector<DVec2>& p, double turnTolerance) {
+  const size_t n = p.size();
+  ConvexPartition out;
+  if (isConvex(p, turnTolerance) || n > kOptimalPartitionMaxVertices) {
+    out.pieces = n > kOptimalPartitionMaxVertices ? hertelMehlhorn(p, turnTolerance) : optimalConvexPartition(p, turnTolerance);
+    return out;
+  }
+  double size = 0.0;
+  for (const DVec2& v : p) size = std::max(size, glm::length(v - p[0]));
+  const double tiny = 1e-9 * size;
+  // Where each edge at a reflex corner, continued beyond it, first meets the boundary.
+  std::vector<std::vector<std::pair<double, uint32_t>>> onEdge(n);  // per edge: (t, index into out.added)
+  for (size_t r = 0; r < n; ++r) {
+    const size_t prev = (r + n - 1) % n, next = (r + 1) % n;
+    if (orient(p[prev], p[r], p[next]) >= -turnTolerance) continue;
+    for (const size_t from : {prev, next}) {
+      const DVec2 d = glm::normalize(p[r] - p[from]);
+      double nearest = std::numeric_limits<double>::infinity(), hitT = 0.0;
+      size_t hitEdge = n;
+      for (size_t e = 0; e < n; ++e) {
+        const size_t e1 = (e + 1) % n;
+        if (e == r || e1 == r) continue;
+        const DVec2 ab = p[e1] - p[e];
+        const double denom = cross(d, ab);
+        if (std::abs(denom) <= 1e-12 * glm::length(ab)) continue;  // parallel
+        const DVec2 ar = p[e] - p[r];
+        const double s = cross(ar, ab) / denom, t = cross(ar, d) / denom;
+        if (s > tiny && t >= 0.0 && t <= 1.0 && s < nearest) {
+          nearest = s;
+          hitEdge = e;
+          hitT = t;
+        }
+      }
+      if (hitEdge == n) continue;
+      const double len = glm::length(p[(hitEdge + 1) % n] - p[hitEdge]);
+      if (hitT * len <= tiny || (1.0 - hitT) * len <= tiny) continue;  // a vertex: a diagonal reaches it
+      bool known = false;
+      for (const auto& [t, k] : onEdge[hitEdge]) known = known || std::abs(t - hitT) * len <= tiny;
+      if (known) continue;
+      onEdge[hitEdge].emplace_back(hitT, static_cast<uint32_t>(out.added.size()));
+      out.added.push_back({static_cast<uint32_t>(hitEdge), hitT});
+    }
+  }
+  // The polygon with the added points in place along their edges; ids maps its corners back.
+  std::vector<DVec2> refined;
+  std::vector<uint32_t> ids;
+  for (size_t e = 0; e < n; ++e) {
+    refined.push_back(p[e]);
+    ids.push_back(static_cast<uint32_t>(e));
+    std::sort(onEdge[e].begin(), onEdge[e].end());
+    for (const auto& [t, k] : onEdge[e]) {
+      refined.push_back(out.corner(p, static_cast<uint32_t>(n + k)));
+      ids.push_back(static_cast<uint32_t>(n + k));
+    }
+  }
+  if (refined.size() > kOptimalPartitionMaxVertices) {
+    out.added.clear();
+    out.pieces = optimalConvexPartition(p, turnTolerance);
+    return out;
+  }
+  for (std::vector<uint32_t>& piece : optimalConvexPartition(refined, turnTolerance)) {
+    for (uint32_t& c : piece) c = ids[c];
+    out.pieces.push_back(std::move(piece));
+  }
+  return out;
 }
 
 }  // namespace penumbra::polygon2d

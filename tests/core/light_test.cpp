@@ -149,11 +149,12 @@ TEST(LightSample, ConcavePolygonSamplesAreUniformInsideAndAverageToTheAreaCentro
       EXPECT_NEAR(light.center().x, c.x, 1e-5);
       EXPECT_NEAR(light.center().y, c.y, 1e-5);
       // The convex parts tile the polygon: their areas add up to its own, and there are as few as
-      // the shape allows (an L needs 2, a U 3).
+      // the shape allows (an L needs 2, a U 3), rectangles (cuts continue the edges).
       const auto parts = light.convexParts();
       EXPECT_EQ(parts.size(), static_cast<size_t>(pieces));
       double partsArea = 0.0;
       for (const auto& part : parts) {
+        EXPECT_EQ(part.size(), 4u);
         const Light piece = Light::polygon(part);
         EXPECT_TRUE(piece.convex());
         partsArea += piece.area();

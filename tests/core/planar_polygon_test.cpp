@@ -1,10 +1,12 @@
 // Tests of include/penumbra/planar_polygon.h on an L, a U and seeded random star-shaped polygons:
-// the ear triangulation and both convex partitions tile the polygon (areas add up, and random
-// points inside it fall in exactly one piece), every piece is convex and counter-clockwise, the
-// optimal partition has as few pieces as an exhaustive search over sets of diagonals finds (written
-// here independently: a set of non-crossing diagonals cuts the polygon into convex pieces exactly
-// when it splits every reflex corner into angles of at most 180 degrees), and Hertel–Mehlhorn stays
-// within its bounds (at most 2r + 1 pieces, r the reflex corners, and at most 4 times the optimum).
+// the ear triangulation and every convex partition tile the polygon (areas add up, and random
+// points inside it fall in exactly one piece), every piece is convex and counter-clockwise; the
+// partition along diagonals has as few pieces, and among those as short cuts, as an exhaustive
+// search over sets of diagonals finds (written here independently: a set of non-crossing diagonals
+// cuts the polygon into convex pieces exactly when it splits every reflex corner into angles of at
+// most 180 degrees); cuts that continue an edge split an L into two rectangles and a U into three,
+// and never give more pieces; Hertel–Mehlhorn stays within its bounds (at most 2r + 1 pieces, r the
+// reflex corners, and at most 4 times the optimum).
 #include "penumbra/planar_polygon.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 #include "penumbra/sampling.h"
 #include "penumbra/timer.h"
@@ -60,12 +63,10 @@ Poly piecePolygon(const Poly& p, const std::vector<uint32_t>& piece) {
 }
 
 // Checks that `pieces` tile `p` with convex counter-clockwise pieces.
-void expectConvexTiling(const Poly& p, const std::vector<std::vector<uint32_t>>& pieces, uint32_t seed) {
+void expectConvexTiling(const Poly& p, const std::vector<Poly>& pieces, uint32_t seed) {
   double total = 0.0;
-  for (const auto& piece : pieces) {
-    ASSERT_GE(piece.size(), 3u);
-    for (uint32_t k : piece) ASSERT_LT(k, p.size());
-    const Poly q = piecePolygon(p, piece);
+  for (const Poly& q : pieces) {
+    ASSERT_GE(q.size(), 3u);
     EXPECT_GT(twiceSignedArea(q), 0.0) << "a piece runs clockwise";
     EXPECT_TRUE(isConvex(q, 1e-12)) << "a piece is not convex";
     total += 0.5 * twiceSignedArea(q);
@@ -79,9 +80,48 @@ void expectConvexTiling(const Poly& p, const std::vector<std::vector<uint32_t>>&
   for (uint32_t i = 0; i < 400; ++i) {
     const DVec2 x = lo + (hi - lo) * DVec2(unitRandom(seed + 7, 2 * i), unitRandom(seed + 7, 2 * i + 1));
     int in = 0;
-    for (const auto& piece : pieces) in += inside(piecePolygon(p, piece), x);
+    for (const Poly& q : pieces) in += inside(q, x);
     EXPECT_EQ(in, inside(p, x) ? 1 : 0) << "point (" << x.x << ", " << x.y << ")";
   }
+}
+
+void expectConvexTiling(const Poly& p, const std::vector<std::vector<uint32_t>>& pieces, uint32_t seed) {
+  std::vector<Poly> polys;
+  for (const auto& piece : pieces) {
+    for (uint32_t k : piece) ASSERT_LT(k, p.size());
+    polys.push_back(piecePolygon(p, piece));
+  }
+  expectConvexTiling(p, polys, seed);
+}
+
+std::vector<Poly> piecePolygons(const Poly& p, const ConvexPartition& partition) {
+  std::vector<Poly> out;
+  for (const auto& piece : partition.pieces) {
+    Poly q;
+    for (uint32_t c : piece) q.push_back(partition.corner(p, c));
+    out.push_back(q);
+  }
+  return out;
+}
+
+// Total length of the cuts: the pieces' perimeters beyond the polygon's own, halved.
+double cutLength(const Poly& p, const std::vector<Poly>& pieces) {
+  const auto perimeter = [](const Poly& q) {
+    double l = 0.0;
+    for (size_t i = 0; i < q.size(); ++i) l += glm::length(q[(i + 1) % q.size()] - q[i]);
+    return l;
+  };
+  double sum = 0.0;
+  for (const Poly& q : pieces) sum += perimeter(q);
+  return 0.5 * (sum - perimeter(p));
+}
+
+// Corners of a piece that are not straight (a rectangle has 4).
+size_t realCorners(const Poly& q) {
+  size_t c = 0;
+  for (size_t i = 0; i < q.size(); ++i)
+    c += std::abs(cross(q[(i + 1) % q.size()] - q[i], q[(i + 2) % q.size()] - q[(i + 1) % q.size()])) > 1e-12;
+  return c;
 }
 
 // --- The exhaustive search, independent of the library's code. ---
@@ -121,27 +161,35 @@ bool splitsEveryReflexCorner(const Poly& p, const std::vector<std::pair<size_t, 
   return true;
 }
 
-size_t exhaustiveMinimum(const Poly& p) {
+// The fewest pieces of any partition along diagonals, and the shortest total cut among those.
+std::pair<size_t, double> exhaustiveMinimum(const Poly& p) {
   std::vector<std::pair<size_t, size_t>> diagonals;
   for (size_t i = 0; i < p.size(); ++i)
     for (size_t j = i + 1; j < p.size(); ++j)
       if (validDiagonal(p, i, j)) diagonals.emplace_back(i, j);
   std::vector<std::pair<size_t, size_t>> chosen;
-  std::function<bool(size_t, size_t)> search = [&](size_t from, size_t left) {
-    if (left == 0) return splitsEveryReflexCorner(p, chosen);
+  double shortest = std::numeric_limits<double>::infinity();
+  std::function<void(size_t, size_t)> search = [&](size_t from, size_t left) {
+    if (left == 0) {
+      if (!splitsEveryReflexCorner(p, chosen)) return;
+      double length = 0.0;
+      for (const auto& [a, b] : chosen) length += glm::length(p[a] - p[b]);
+      shortest = std::min(shortest, length);
+      return;
+    }
     for (size_t k = from; k < diagonals.size(); ++k) {
       bool crosses = false;
       for (const auto& c : chosen) crosses = crosses || properCross(p[c.first], p[c.second], p[diagonals[k].first], p[diagonals[k].second]);
       if (crosses) continue;
       chosen.push_back(diagonals[k]);
-      const bool found = search(k + 1, left - 1);
+      search(k + 1, left - 1);
       chosen.pop_back();
-      if (found) return true;
     }
-    return false;
   };
-  for (size_t s = 0;; ++s)
-    if (search(0, s)) return s + 1;
+  for (size_t s = 0;; ++s) {
+    search(0, s);
+    if (shortest < std::numeric_limits<double>::infinity()) return {s + 1, shortest};
+  }
 }
 
 // --- Tests. ---
@@ -163,7 +211,7 @@ TEST(PlanarPolygon, EarClippingTilesThePolygon) {
   }
 }
 
-TEST(PlanarPolygon, OptimalPartitionHasTheFewestPieces) {
+TEST(PlanarPolygon, OptimalPartitionHasTheFewestPiecesAndTheShortestCuts) {
   const auto l = optimalConvexPartition(kL, 1e-9);
   EXPECT_EQ(l.size(), 2u);
   expectConvexTiling(kL, l, 1);
@@ -171,7 +219,7 @@ TEST(PlanarPolygon, OptimalPartitionHasTheFewestPieces) {
   // Above the bound ceil(r / 2) + 1 = 2 (each diagonal resolves at most two reflex corners): the
   // notch's two reflex corners share an edge, so no diagonal resolves both.
   EXPECT_EQ(u.size(), 3u);
-  EXPECT_EQ(exhaustiveMinimum(kU), 3u);
+  EXPECT_EQ(exhaustiveMinimum(kU).first, 3u);
   expectConvexTiling(kU, u, 2);
   // A convex polygon is its own partition, straight corners and all.
   const Poly square = {{0, 0}, {1, 0}, {2, 0}, {2, 1}, {0, 1}};
@@ -181,8 +229,43 @@ TEST(PlanarPolygon, OptimalPartitionHasTheFewestPieces) {
     SCOPED_TRACE(::testing::Message() << "seed " << seed << ", " << p.size() << " vertices");
     const auto pieces = optimalConvexPartition(p, 1e-12);
     expectConvexTiling(p, pieces, seed);
-    EXPECT_EQ(pieces.size(), exhaustiveMinimum(p));
+    const auto [fewest, shortest] = exhaustiveMinimum(p);
+    EXPECT_EQ(pieces.size(), fewest);
+    std::vector<Poly> polys;
+    for (const auto& piece : pieces) polys.push_back(piecePolygon(p, piece));
+    EXPECT_NEAR(cutLength(p, polys), shortest, 1e-9);
     EXPECT_GE(pieces.size(), static_cast<size_t>(reflexCorners(p) + 1) / 2 + 1);
+  }
+}
+
+TEST(PlanarPolygon, CutsMayContinueAnEdge) {
+  // The L: two rectangles (cut 1 long), not two trapezoids along the diagonal (1.41).
+  const ConvexPartition l = convexPartition(kL, 1e-9);
+  const std::vector<Poly> lPieces = piecePolygons(kL, l);
+  ASSERT_EQ(lPieces.size(), 2u);
+  expectConvexTiling(kL, lPieces, 3);
+  for (const Poly& q : lPieces) EXPECT_EQ(realCorners(q), 4u);
+  EXPECT_NEAR(cutLength(kL, lPieces), 1.0, 1e-12);
+  // The U: three rectangles, the two short vertical cuts (0.5 each) below the notch rather than the
+  // two horizontal ones (1 each).
+  const ConvexPartition u = convexPartition(kU, 1e-9);
+  const std::vector<Poly> uPieces = piecePolygons(kU, u);
+  ASSERT_EQ(uPieces.size(), 3u);
+  expectConvexTiling(kU, uPieces, 4);
+  for (const Poly& q : uPieces) EXPECT_EQ(realCorners(q), 4u);
+  EXPECT_NEAR(cutLength(kU, uPieces), 1.0, 1e-12);
+  // Never more pieces than along diagonals alone, and always a tiling.
+  for (uint32_t seed = 300; seed < 330; ++seed) {
+    const Poly p = starPolygon(seed, 5 + seed % 25);
+    SCOPED_TRACE(::testing::Message() << "seed " << seed << ", " << p.size() << " vertices");
+    const ConvexPartition partition = convexPartition(p, 1e-12);
+    expectConvexTiling(p, piecePolygons(p, partition), seed);
+    EXPECT_LE(partition.pieces.size(), optimalConvexPartition(p, 1e-12).size());
+    for (const auto& e : partition.added) {
+      EXPECT_LT(e.edge, p.size());
+      EXPECT_GT(e.t, 0.0);
+      EXPECT_LT(e.t, 1.0);
+    }
   }
 }
 
@@ -199,9 +282,10 @@ TEST(PlanarPolygon, HertelMehlhornStaysWithinItsBounds) {
   }
   // Above kOptimalPartitionMaxVertices the partition is Hertel–Mehlhorn's.
   const Poly big = starPolygon(7, 200);
-  const auto pieces = convexPartition(big, 1e-12);
-  expectConvexTiling(big, pieces, 7);
-  EXPECT_EQ(pieces, hertelMehlhorn(big, 1e-12));
+  const ConvexPartition partition = convexPartition(big, 1e-12);
+  expectConvexTiling(big, partition.pieces, 7);
+  EXPECT_TRUE(partition.added.empty());
+  EXPECT_EQ(partition.pieces, hertelMehlhorn(big, 1e-12));
 }
 
 TEST(PlanarPolygon, OptimalPartitionOfTheLargestPolygonIsQuick) {
@@ -211,11 +295,14 @@ TEST(PlanarPolygon, OptimalPartitionOfTheLargestPolygonIsQuick) {
   Poly p;
   for (size_t i = 0; i < n; ++i) p.push_back((i == 0 ? 0.9 : 1.0) * DVec2(std::cos(2.0 * kPiD * i / n), std::sin(2.0 * kPiD * i / n)));
   Timer timer;
-  const auto pieces = convexPartition(p, 1e-12);
+  const auto pieces = optimalConvexPartition(p, 1e-12);
   const double ms = timer.elapsedMs();
   expectConvexTiling(p, pieces, 3);
   EXPECT_EQ(pieces.size(), 2u);  // one reflex corner: one diagonal
   EXPECT_LT(ms, 2000.0);
+  // convexPartition adds the two points where the edges at that corner, continued, meet the
+  // boundary: 66 corners, over the limit, so it partitions the polygon alone.
+  EXPECT_EQ(convexPartition(p, 1e-12).pieces, pieces);
 }
 
 TEST(PlanarPolygon, SimplePolygonProblemsNameVerticesAndEdges) {
