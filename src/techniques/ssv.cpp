@@ -1,6 +1,8 @@
 // `ssv`: soft shadow volumes for convex polygonal lights with a double silhouette (Rouf 2007,
 // "Real time soft shadow generation for arbitrary planar lights", Chapters 3 and 4). Software
-// implementation, per camera pixel, of the two phases of Section 3.2.1.
+// implementation, per camera pixel, of the two phases of Section 3.2.1. A concave polygon light is
+// broken up into its fewest convex parts (Section 5.2.5), each run as a light of its own and V
+// combined by area (convex_parts.h); everything below is about one convex light.
 //
 // Phase 1 (prepare): every facet of every occluder is classified against every light vertex as
 // fully lit / partially lit / in shadow (Section 3.2.2); the penumbra silhouette (boundary of the
@@ -104,6 +106,7 @@
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
+#include "techniques/convex_parts.h"
 
 namespace penumbra {
 namespace silhouette {
@@ -112,6 +115,8 @@ LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::s
   if (light.shape() != LightShape::Rect && light.shape() != LightShape::Polygon)
     fail("{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, hexagon, ...)",
          technique, toString(light.shape()), technique);
+  if (!light.convex())
+    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique, technique);
   const std::vector<Vec3>& ws = light.vertices();
   if (ws.size() > static_cast<size_t>(kMaxLightVertices))
     fail("{}: the polygon light has {} vertices; at most {} are supported", technique, ws.size(), kMaxLightVertices);
@@ -926,7 +931,7 @@ class SsvTechnique final : public ShadowTechnique {
 TechniqueInfo ssvTechniqueInfo() {
   TechniqueInfo info;
   info.name = "ssv";
-  info.summary = "soft shadow volumes with a double (penumbra + umbra) silhouette, for convex polygonal lights";
+  info.summary = "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its fewest convex parts)";
   info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
   ParamSpec integration;
   integration.name = "integration";
@@ -964,7 +969,8 @@ TechniqueInfo ssvTechniqueInfo() {
     o.mergeTolerance = static_cast<float>(p.getFloat("merge_tolerance"));
     o.grid = static_cast<int>(p.getInt("grid"));
     o.areaEdgeVisibility = p.getString("edge_visibility") == "area";
-    return std::make_unique<SsvTechnique>(o);
+    // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
+    return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
   };
   return info;
 }

@@ -55,7 +55,8 @@ struct LightPlane {
 };
 
 // Rect and polygon lights (triangles, rects, thin rects, any convex polygon of at most
-// kMaxLightVertices vertices); other shapes throw Error naming the shape and the supported ones.
+// kMaxLightVertices vertices); other shapes throw Error naming the shape and the supported ones, and
+// so does a concave polygon (the techniques get its convex parts: convex_parts.h).
 // Planar lights emit from both faces: `back` gives the light space of the other face (z reversed),
 // for receivers behind the light's plane.
 LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back = false);

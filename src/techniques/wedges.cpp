@@ -1,6 +1,7 @@
 // `wedges`: penumbra wedges / soft shadow volumes (Assarsson & Akenine-Moeller 2003, "A
 // geometry-based soft shadow volume algorithm using graphics hardware"), the baseline of Rouf 2007
-// (Sections 2.4.1, 2.5 and 4.4.1.1), in software, per camera pixel.
+// (Sections 2.4.1, 2.5 and 4.4.1.1), in software, per camera pixel. A concave polygon light runs as
+// its fewest convex parts, V combined by area, as for ssv (convex_parts.h).
 //
 // The silhouette is computed once, from the light's centre only (the boundary of the facets that
 // face the centre, mesh_topology.h), and split into rings. For a receiver p every silhouette edge is
@@ -45,6 +46,7 @@
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
+#include "techniques/convex_parts.h"
 #include "techniques/ssv.h"
 
 namespace penumbra {
@@ -241,7 +243,7 @@ class WedgesTechnique final : public ShadowTechnique {
 TechniqueInfo wedgesTechniqueInfo() {
   TechniqueInfo info;
   info.name = "wedges";
-  info.summary = "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added";
+  info.summary = "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a concave polygonal light in its fewest convex parts)";
   info.source = "baseline in Rouf 2007 (Assarsson & Akenine-Moeller 2003)";
   ParamSpec grid;
   grid.name = "grid";
@@ -253,7 +255,9 @@ TechniqueInfo wedgesTechniqueInfo() {
   grid.help = "resolution of the light-space (direction from the light's centre) grid that bins the silhouette rings";
   info.params = {grid};
   info.create = [](const Params& p) -> std::unique_ptr<ShadowTechnique> {
-    return std::make_unique<WedgesTechnique>(static_cast<int>(p.getInt("grid")));
+    const int grid = static_cast<int>(p.getInt("grid"));
+    // A concave light runs as its convex parts, V combined by area (convex_parts.h).
+    return overConvexParts("wedges", [grid] { return std::make_unique<WedgesTechnique>(grid); });
   };
   return info;
 }

@@ -182,6 +182,21 @@ TEST(BuiltinScenes, EveryOneLoadsAndIsSane) {
   }
 }
 
+TEST(BuiltinScenes, ConcaveHasFourConvexLightsAndAnL) {
+  const Scene s = loadScene("concave");
+  ASSERT_EQ(s.lights.size(), 5u);
+  for (size_t i = 0; i < 4; ++i) EXPECT_TRUE(s.lights[i].convex()) << "light " << i;
+  // Light 4: the 1.2 square of light 0 without its +x +z quarter, at the same height.
+  const Light& l = s.lights[4];
+  EXPECT_EQ(l.shape(), LightShape::Polygon);
+  EXPECT_FALSE(l.convex());
+  EXPECT_NEAR(l.area(), 0.75f * s.lights[0].area(), 1e-6f);
+  EXPECT_NEAR(l.center().y, 4.0f, 1e-6f);
+  EXPECT_NEAR(l.center().x, -0.1f, 1e-6f);  // the three quarters' centres (+-0.3) averaged
+  EXPECT_NEAR(l.center().z, -0.1f, 1e-6f);
+  EXPECT_EQ(l.convexParts().size(), 2u);
+}
+
 TEST(BuiltinScenes, ConcaveOccluderIsClosedAndOutward) {
   const Scene s = loadScene("concave");
   const Object* slab = s.findObject(1);

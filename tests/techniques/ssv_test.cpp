@@ -348,7 +348,7 @@ TEST(Ssv, ConcaveUnderEveryLightShapeAgainstTheReference) {
   // Rouf Fig. 4-4 (light far: the built-in scene; near: the same square 2.0 above the ground,
   // 0.5 above the slab) and the scene's other convex polygonal lights over the same slab.
   Scene scene = loadScene("concave");
-  ASSERT_EQ(scene.lights.size(), 4u);
+  ASSERT_GE(scene.lights.size(), 4u);
   const std::vector<LightCase> cases = {
       {"concave far (square 1.2 at 4)", scene.lights[0], 9, 16, 4.5, 8.5},
       {"concave near (square 1.2 at 2)", Light::polygon({Vec3(-0.6f, 2, -0.6f), Vec3(0.6f, 2, -0.6f), Vec3(0.6f, 2, 0.6f), Vec3(-0.6f, 2, 0.6f)}), 20.5, 21.5, 8.2, 8.6},
