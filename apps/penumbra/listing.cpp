@@ -33,7 +33,7 @@ std::string describeSpec(const ParamSpec& spec) {
 
 int runTechniques() {
   for (const TechniqueInfo& info : techniqueRegistry()) {
-    fmt::print("{}  {}\n  source: {}\n", info.name, info.summary, info.source);
+    fmt::print("{}  {}\n  source: {}\n  lights: {}\n", info.name, info.summary, info.source, info.lights);
     if (info.params.empty()) fmt::print("  parameters: none\n");
     for (const ParamSpec& spec : info.params) fmt::print("  --param {} ({}): {}\n", spec.name, describeSpec(spec), spec.help);
     fmt::print("\n");

@@ -16,6 +16,7 @@ struct TechniqueInfo {
   std::string name;     //!< "reference", "hard", ...
   std::string summary;  //!< one line
   std::string source;   //!< paper or "baseline"
+  std::string lights;   //!< the light shapes it takes and how it treats them, a concave polygon included
   std::vector<ParamSpec> params;
   std::function<std::unique_ptr<ShadowTechnique>(const Params&)> create;
 

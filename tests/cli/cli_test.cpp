@@ -204,6 +204,9 @@ TEST_F(CliTest, TechniquesListsParameters) {
     EXPECT_NE(r.output.find("\n" + name), std::string::npos) << name << "\n" << r.output;
   EXPECT_NE(r.output.find("--param spp (int, default"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("samples"), std::string::npos);
+  // Each technique says how it treats the light shapes, a concave polygon included.
+  for (const TechniqueInfo& info : techniqueRegistry())
+    EXPECT_NE(r.output.find("\n  lights: " + info.lights + "\n"), std::string::npos) << info.name << "\n" << r.output;
 }
 
 TEST_F(CliTest, RenderWritesPngAndExr) {

@@ -1,6 +1,7 @@
-// The registry and the harness around it: every registered technique has a valid schema, and every
-// one survives the inputs the foundation promises not to crash on (an empty scene, degenerate
-// triangles, a camera inside an object, every light shape) with a finite V in [0, 1].
+// The registry and the harness around it: every registered technique has a valid schema and says how
+// it treats the light shapes, and every one survives the inputs the foundation promises not to crash
+// on (an empty scene, degenerate triangles, a camera inside an object, every light shape, concave
+// polygons included) with a finite V in [0, 1], or refuses a light with an Error naming its shape.
 #include "penumbra/registry.h"
 
 #include <cmath>
@@ -39,7 +40,12 @@ std::vector<Light> everyLightShape() {
           Light::rect(Vec3(0.5f, 5.0f, 0.0f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f)),
           Light::segment(Vec3(-0.5f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f)),
           Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(0.5f, 5.0f, 0.8f), Vec3(1.0f, 5.0f, 0.0f)}),
-          Light::directional(Vec3(0.1f, 1.0f, 0.0f), radians(5.0f), LightProfile::LimbDarkened)};
+          Light::directional(Vec3(0.1f, 1.0f, 0.0f), radians(5.0f), LightProfile::LimbDarkened),
+          // A concave polygon: an L (its centroid on the emitter) and a U (its centroid off it).
+          Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.4f), Vec3(0.4f, 5.0f, 0.4f),
+                          Vec3(0.4f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)}),
+          Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 1.0f), Vec3(0.9f, 5.0f, 1.0f),
+                          Vec3(0.9f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)})};
 }
 
 // Runs a technique with cheap settings; returns V. Techniques that reject a light shape must say
@@ -131,6 +137,15 @@ TEST(Registry, EveryTechniqueHandlesEveryLightShape) {
         expectValidVisibility(info.name + " with a " + std::string(toString(light.shape())) + " light", gbuffer, v);
       }
     }
+  }
+}
+
+TEST(Registry, EveryTechniqueSaysHowItTreatsAConcavePolygonLight) {
+  // The line `penumbra techniques` shows; EveryTechniqueHandlesEveryLightShape checks that the
+  // technique does run on L- and U-shaped lights, or refuses them naming the shape.
+  for (const TechniqueInfo& info : techniqueRegistry()) {
+    EXPECT_FALSE(info.lights.empty()) << info.name << " has no line in registry.cpp's lightHandling";
+    EXPECT_NE(info.lights.find("polygon"), std::string::npos) << info.name << ": " << info.lights;
   }
 }
 
