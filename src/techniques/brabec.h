@@ -116,8 +116,11 @@
 // receiver, and at small maps), and its steps of 1/3 or 1/2 made specks in contact shadows that the
 // interpolation could not follow. The interpolation refines a group whose borders differ in whether
 // the bound raised V (the kink of the max). V' >= V everywhere; f ~ 1 in an umbra, so V' = V there.
-// Cost: a count over about pi w_tex^2 texels per searched pixel. docs/small-occluders.md has the
-// measurements: RMSE8 and umbra leaks per scene and light with and without, and the time.
+// Cost: a count over the footprint's texels per searched pixel (about pi w_tex^2 for a disk); a
+// footprint of more than `coverage_samples` texels (default 256, f to about one 8-bit step) is
+// counted on a lattice of every k-th texel in s and t, fixed in the map, with the smallest k that
+// keeps the count within it. docs/small-occluders.md has the measurements: RMSE8 and umbra leaks per
+// scene and light with and without, and the time.
 #pragma once
 
 #include <cstdint>
@@ -152,6 +155,7 @@ struct BrabecOptions {
   bool accelerate = true;        //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
   bool coverageBound = true;     //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
   int coverageMinTexels = 32;    //!< coverage bound: smallest footprint applied at, texels (segment: samples), >= 1
+  int coverageSamples = 256;     //!< coverage bound: most texels counted per footprint (wider: a sparser lattice), >= 16
 };
 
 namespace brabec {
@@ -212,12 +216,13 @@ struct Coverage {
   int total = 0;
 };
 // Footprint: the texel centres within `radius` of (s, t), row by row (a disk, sphere or directional
-// light).
-Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, float radius);
+// light). With stride k > 1 only the texels whose s and t are multiples of k (total: of those).
+Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, float radius,
+                      int stride = 1);
 // Footprint: the texel centres in the convex polygon (s, t) + scale * vertices[k] (either winding): a
 // rect or polygon light.
 Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt,
-                               const std::vector<Vec2>& vertices, float scale);
+                               const std::vector<Vec2>& vertices, float scale, int stride = 1);
 // Footprint: the segment from (s, t) - half to (s, t) + half, sampled once per texel of its length
 // (nearest texel): a segment light.
 Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half);
@@ -264,6 +269,7 @@ class BrabecTechnique final : public ShadowTechnique {
   bool segmentLight_ = false;
   Vec2 segmentAxis_{0.0f};
   std::vector<Vec2> polygon_;
+  float polygonArea_ = 0.0f;  //!< of polygon_
   PassTimings timings_;
   double searches_ = 0.0;
   double hitPixels_ = 0.0;
