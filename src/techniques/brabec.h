@@ -91,6 +91,36 @@
 //
 // Jitter (Sec. 4.3): texel positions offset by up to `jitter` texels in s and t, a deterministic hash
 // of the texel. Units: map coordinates and radii in texels, depths in world units.
+//
+// Coverage bound (option `coverage_bound`, on by default): our extension, not the paper's. The
+// method darkens P from the distance to one blocker edge as if the blocker covered the whole light
+// wherever it covers the centre; the paper says as much of Parker's scheme it builds on (Sec. 3.1:
+// good "as long as the occluder objects aren't too small compared to the simulated light source
+// area"). Under an occluder smaller than the light the true shadow is faint, and the method draws a
+// dark blob (V <= meet inside the hard shadow, a meet-to-1 ramp around it). The bound: seen from P,
+// the light through a blocker plane at depth z_b covers in the map the light's own shape around P',
+// scaled so that radius R becomes the penumbra width w_tex(z_b) above (the physical r_max, also under
+// the paper's knobs); so the blockers at z_b hide about the fraction
+//     f = (footprint texels in front of P's receiver plane, the hard test's compare) / (footprint texels)
+// of the light, and V' = max(V, 1 - f). The footprint's shape: a polygon for rect and polygon lights
+// (their corners; a planar light lies in light space's z = 0 plane), a segment for a segment light
+// (its component across the light's axis, sampled once per texel of its length), a disk for
+// spheres, disks and directional lights. z_b is the depth of the blocker's silhouette: the texel
+// the outer search found (it lies on the edge), or, inside the hard shadow, the deepest blocker
+// texel next to the lit texel the inner search found (the texel over P is the blocker's top, whose
+// footprint is wider). The bound is not applied inside the shadow of P's own object (blocker id =
+// P's id): the part of an object below its silhouette from the light's centre is missing from the
+// map and reaches down towards P, so one plane at z_b undercounts it. Nor where the footprint holds
+// fewer than `coverage_min_texels` texels (default 32; samples along a segment): a few texels
+// cannot resolve the covered fraction (the footprint shrinks to nothing where a blocker touches the
+// receiver, and at small maps), and its steps of 1/3 or 1/2 made specks in contact shadows that the
+// interpolation could not follow. The interpolation refines a group whose borders differ in whether
+// the bound raised V (the kink of the max). V' >= V everywhere; f ~ 1 in an umbra, so V' = V there.
+// Cost: a count over the footprint's texels per searched pixel (about pi w_tex^2 for a disk); a
+// footprint of more than `coverage_samples` texels (default 256, f to about one 8-bit step) is
+// counted on a lattice of every k-th texel in s and t, fixed in the map, with the smallest k that
+// keeps the count within it. docs/small-occluders.md has the measurements: RMSE8 and umbra leaks per
+// scene and light with and without, and the time.
 #pragma once
 
 #include <cstdint>
@@ -123,6 +153,9 @@ struct BrabecOptions {
   bool idTest = true;            //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
   bool scalarSearch = false;     //!< use the scalar oracle search (tests)
   bool accelerate = true;        //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
+  bool coverageBound = true;     //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
+  int coverageMinTexels = 32;    //!< coverage bound: smallest footprint applied at, texels (segment: samples), >= 1
+  int coverageSamples = 256;     //!< coverage bound: most texels counted per footprint (wider: a sparser lattice), >= 16
 };
 
 namespace brabec {
@@ -174,6 +207,26 @@ SearchHit searchScalar(const SearchMap& map, const SearchQuery& query);
 // Per-texel jitter offset in [-amplitude, amplitude], a deterministic hash of (s, t, axis).
 float texelJitter(int s, int t, int axis, float amplitude);
 
+// The coverage bound's count (brabec.h, "Coverage bound"): of the texels in a light's footprint
+// around P' = (s, t), how many hold a blocker for P's receiver plane: depth < zLayer + dzds (s_c - s)
+// + dzdt (t_c - t), the compare of the hard test (shadow_map.h), without the id test. Texels outside
+// the map count as lit.
+struct Coverage {
+  int blocked = 0;
+  int total = 0;
+};
+// Footprint: the texel centres within `radius` of (s, t), row by row (a disk, sphere or directional
+// light). With stride k > 1 only the texels whose s and t are multiples of k (total: of those).
+Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, float radius,
+                      int stride = 1);
+// Footprint: the texel centres in the convex polygon (s, t) + scale * vertices[k] (either winding): a
+// rect or polygon light.
+Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt,
+                               const std::vector<Vec2>& vertices, float scale, int stride = 1);
+// Footprint: the segment from (s, t) - half to (s, t) + half, sampled once per texel of its length
+// (nearest texel): a segment light.
+Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half);
+
 }  // namespace brabec
 
 class BrabecTechnique final : public ShadowTechnique {
@@ -194,8 +247,12 @@ class BrabecTechnique final : public ShadowTechnique {
   struct Pixel;
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
   // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
-  // the texel the search found, (0, 0) when it found none.
-  float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr) const;
+  // the texel the search found, (0, 0) when it found none; `raised` (optional) whether the coverage
+  // bound raised V.
+  float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr, bool* raised = nullptr) const;
+  // The coverage bound (our extension): max(v, 1 - the blocked fraction of the light's footprint at
+  // blocker depth zb around the pixel's P').
+  float boundByCoverage(const Pixel& pixel, float v, float zb) const;
 
   BrabecOptions options_;
   LightMap map_;
@@ -206,6 +263,13 @@ class BrabecTechnique final : public ShadowTechnique {
   std::optional<Light> light_;
   float minDepth_ = kInfinity;
   float lightRadius_ = 0.0f;
+  // The light's shape in map directions, in units of lightRadius_ (the footprint of the coverage
+  // bound at a blocker depth is this shape scaled by the penumbra width there): a segment's half
+  // axis, or a polygon's vertices; a disk when neither.
+  bool segmentLight_ = false;
+  Vec2 segmentAxis_{0.0f};
+  std::vector<Vec2> polygon_;
+  float polygonArea_ = 0.0f;  //!< of polygon_
   PassTimings timings_;
   double searches_ = 0.0;
   double hitPixels_ = 0.0;
