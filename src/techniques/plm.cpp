@@ -282,7 +282,7 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
 }
 
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
-                      float marginTexels, const Image<int32_t>* coverage, const Image<float>& farthest, Image<RibbonTexel>& out) {
+                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
   out.reset(mapSize, mapSize, RibbonTexel{});
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
@@ -334,11 +334,24 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float endSide = along <= 0.0f ? e.endSideA : along >= 1.0f ? e.endSideB : 0.0f;
             const bool outer = endSide != 0.0f ? endSide > 0.0f : glm::dot(aq, e.outward) >= 0.0f;
             if (outer ? !wantOuter : !wantInner) continue;
-            if (!outer && coverage && (*coverage)(i, j) != e.objectId) continue;
+            const Image<int32_t>* coverage = filter.coverage;
+            const bool ownObject = !coverage || (*coverage)(i, j) == e.objectId;
+            if (!outer && !ownObject) continue;
+            // The texel kHiddenProbeTexels beyond the edge's nearest point; outside the map nothing is seen.
+            const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
+            const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+            const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
+            if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId) continue;
             const float c = along <= 0.0f ? e.zetaA : along >= 1.0f ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA);
             if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
+            if (const Image<float>* top = filter.topDepth) {
+              // Depths as zeta; an empty texel (infinite depth) lies below everything.
+              const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
+              if ((outer || !ownObject) && above((*top)(i, j))) continue;
+              if (probeInMap && above((*top)(pi, pj))) continue;
+            }
             const float p = priority == RibbonPriority::PenumbraLimit ? c + distance * space.ratePerTexel : c;
-            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId};
+            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
           }
         }
       }
@@ -378,7 +391,7 @@ class PlmTechnique final : public ShadowTechnique {
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
-                          &map_.objectId, farthest_, ribbons_);
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;
     limits_.reset(n, n, PlmTexel{});
@@ -390,9 +403,7 @@ class PlmTechnique final : public ShadowTechnique {
         const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
         PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f};
         const plm::RibbonTexel& r = ribbons(i, j);
-        // Fig. 7 C's clamp: another object's surface above the edge hides this ribbon's shadow.
-        const bool hidden = (r.w > 0.0f || map_.objectId(i, j) != r.objectId) && g < r.c;
-        if (r.covered() && !hidden) {
+        if (r.covered()) {
           texel.c = r.c;
           texel.pi = r.w * space_.ratePerTexel;
           if (r.w > 0.0f)  // raise g (step 2; see the file comment)

@@ -57,7 +57,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Outer,
-                          plm::RibbonPriority::EdgeDepth, options_.marginTexels, nullptr, farthest_, smoothies_);
+                          plm::RibbonPriority::EdgeDepth, options_.marginTexels, plm::RibbonFilter{}, farthest_, smoothies_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
