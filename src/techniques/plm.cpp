@@ -12,12 +12,18 @@
 //      penumbra to 1 (measured 3.3/255 on a straight edge at 32^2); and at the ribbon's border g
 //      still meets the depth of the map's far end, so the interpolation into texels without a ribbon
 //      (c = zetaNone) happens where every receiver lies above g,
-//  b   the geometry lower limit: the first back-facing surface below c (step 3: "throw away
-//      geometry above or near the occluder depth c"). What lies "near c" is the surface attached to
-//      the edge, on its inner side: there we discard the edge's own object, on the outer side (where
-//      the own object can only be another part of it, the far side of a torus seen through its hole)
-//      nothing; and anything less than a texel below c. The surface is found with Embree rays along
-//      the texel's light ray instead of a second depth-tested pass with discard,
+//  b   the geometry lower limit: below it the receivers are in shadow whatever the ribbon says
+//      ("when below deeper geometry, we must clamp to black", Sec. 2.1). Deviation: Sec. 3.1 step 3
+//      renders the back faces below c, "but throw away geometry above or near the occluder depth c
+//      to prevent a surface from occluding its own soft shadow". Which back face is "near" cannot be
+//      told from depth alone: the far side of a sphere lies up to its diameter below its outline and
+//      must not cut its inner penumbra, while the underside of a body below an arm lying on it (one
+//      closed mesh, no surface in between) must cut the arm's. We fit b instead, as Sec. 3 names
+//      the most reliable approach ("first calculate the true shadow profile (e.g., by dense sampling
+//      along each shadow ray) and then choose shadowing-function parameters to best fit this known
+//      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
+//      light (a receiver) is probed with 16 rays to the light, and b is put just above the first one
+//      that sees less than half of what Equation 1 predicts for it (findLowerLimits),
 //  p_i the signed penumbra limit w s r (Sec. 3), + outside the silhouette, 0 where no ribbon.
 // Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
 // topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
@@ -370,6 +376,16 @@ struct PlmOptions {
   bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
 };
 
+// The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
+// parameter square, one packet), the share of Equation 1's prediction below which a receiver is
+// taken as shadowed by more than the ribbon's edge, and how many surfaces along a texel's ray are
+// looked at.
+constexpr int kProfileGrid = 4;
+constexpr int kProfileSamples = kProfileGrid * kProfileGrid;
+constexpr float kProfileFraction = 0.5f;
+constexpr int kMaxProfileHits = 16;
+static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
+
 // One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
 struct PlmTexel {
   float c, g, b, pi;
@@ -412,7 +428,7 @@ class PlmTechnique final : public ShadowTechnique {
         }
         limits_(i, j) = texel;
       }
-    if (!needLower.empty()) findLowerLimits(scene, light, ribbons, needLower);
+    if (!needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
     // a flag per texel that no ribbon covers it or its right, lower and lower-right neighbours (the
     // 2x2 footprint of a bilinear fetch whose top-left texel it is; clamped at the border as there).
@@ -473,32 +489,56 @@ class PlmTechnique final : public ShadowTechnique {
   PassTimings timings() const override { return timings_; }
 
  private:
-  // b (step 3) for the listed texels: along the texel's light ray from a texel's size below c, the
-  // first surface that faces away from the light and belongs to another object than the edge.
-  void findLowerLimits(const Scene& scene, const Light& light, const Image<plm::RibbonTexel>& ribbons,
-                       const std::vector<int>& texels) {
+  // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
+  // texel's size below c down, each surface that faces the light is a receiver of this texel's
+  // shadow. Its visibility is measured just above it with kProfileSamples rays to the light
+  // (stratified over the emitter, one packet), and b is put there at the first one that sees less
+  // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
+  // more of this one than its edge accounts for, shadows the receivers (see the file comment).
+  void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     const RayScene rays(scene);
     const int n = map_.size;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    Vec2 pattern[kProfileSamples];
+    for (int q = 0; q < kProfileSamples; ++q)
+      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid, (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t k = range.begin(); k < range.end(); ++k) {
         const int i = texels[k] % n, j = texels[k] / n;
+        PlmTexel& texel = limits_(i, j);
         const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
-        const float cDepth = space_.lsDepth(limits_(i, j).c);
+        const float cDepth = space_.lsDepth(texel.c);
         const float start = cDepth + map_.texelWorldSize(cDepth);
         Ray ray;
         ray.origin = map_.unproject(s, t, start);
         ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
-        for (int hop = 0; hop < 16; ++hop) {
-          const std::optional<RayHit> hit = rays.intersect(ray);
-          if (!hit) break;
+        std::optional<RayHit> hit;
+        for (int hop = 0; hop < kMaxProfileHits && (hit = rays.intersect(ray)); ++hop) {
+          ray.tMin = std::nextafter(hit->t, kInfinity);
+          if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
           const Vec3 wsHit = ray.origin + hit->t * ray.direction;
-          const bool facesAway = glm::dot(hit->wsGeometricNormal, -ray.direction) < 0.0f;
-          if (facesAway && (hit->objectId != ribbons(i, j).objectId || ribbons(i, j).w > 0.0f)) {
-            const float depth = map_.lightFromRender(wsHit).z;
-            if (depth > 0.0f) limits_(i, j).b = space_.zeta(depth);
+          const float depth = map_.lightFromRender(wsHit).z;
+          const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+          const float probeDepth = depth - lift;
+          if (!(probeDepth > 0.0f)) continue;
+          const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+          const float predicted = options_.illuminationTable ? table_(l) : l;
+          if (!(predicted > 0.0f)) continue;
+          const Vec3 probe = wsHit - lift * ray.direction;
+          Ray toLight[kProfileSamples];
+          bool blocked[kProfileSamples];
+          for (int q = 0; q < kProfileSamples; ++q) {
+            const LightSample sample = light.sample(probe, pattern[q]);
+            toLight[q].origin = probe;
+            toLight[q].direction = sample.wsDirection;
+            toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+          }
+          rays.occluded16(toLight, kProfileSamples, blocked);
+          int seen = 0;
+          for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
+          if (static_cast<float>(seen) < kProfileFraction * predicted * kProfileSamples) {
+            texel.b = space_.zeta(probeDepth);
             break;
           }
-          ray.tMin = std::nextafter(hit->t, kInfinity);
         }
       }
     });
