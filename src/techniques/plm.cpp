@@ -41,7 +41,15 @@
 // shadow_map.h (a receiver must not shadow itself) and Equation 1 at its true depth; where no ribbon
 // touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
 // V = f(l_g) through the visibility-to-illumination table of Appendix A (penumbra/light_profile.h)
-// when `illumination_table` is on.
+// when `illumination_table` is on. Deviation (Fig. 7 B, "at the transition between the small and
+// large objects' penumbras, the penumbra limit depth p_i crosses over the occluder depth c, which
+// results in a highly visible erroneous shadow transition"): where the four texels do not hold one
+// ribbon (edges that are neither the same nor neighbours on one silhouette, a texel without a ribbon,
+// or b at some of them only), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
+// the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four
+// values are interpolated. Interpolating c and p_i across such a jump drew the white lines across
+// umbrae and the ragged outlines of an interpolated b; the paper's remedy, clamping g and b
+// together at the transition (Fig. 7 C), leaves a hard edge there.
 // Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
 // rasterization and the bias); one occluder per shadow-map ray (the first penumbra wins, Sec. 3);
 // corners are rounded (the ribbon of a segment ends in a half disk); where an occluder is thinner
@@ -239,6 +247,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
         const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
         const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
         ((mine & 1) ? e.endSideB : e.endSideA) = side;
+        ((mine & 1) ? e.neighbourB : e.neighbourA) = static_cast<int32_t>(firstEdge + other / 2);
       }
     }
   }
@@ -384,11 +393,15 @@ constexpr int kProfileGrid = 4;
 constexpr int kProfileSamples = kProfileGrid * kProfileGrid;
 constexpr float kProfileFraction = 0.5f;
 constexpr int kMaxProfileHits = 16;
+// Fewer samples than Equation 1 predicts by at least this many (2/16 of the light): a prediction
+// below it cannot be told from no light by 16 samples, and is left alone.
+constexpr float kProfileMinDeficit = 2.0f;
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
 // One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
 struct PlmTexel {
   float c, g, b, pi;
+  int32_t edge;  //!< the ribbon's edge (index into edges_); -1 where no ribbon
 };
 
 class PlmTechnique final : public ShadowTechnique {
@@ -404,7 +417,8 @@ class PlmTechnique final : public ShadowTechnique {
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
-    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);
+    edges_ = plm::silhouetteEdges(scene, light, map_, space_);
+    const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
@@ -417,11 +431,12 @@ class PlmTechnique final : public ShadowTechnique {
       for (int i = 0; i < n; ++i) {
         const float depth = map_.lsDepth(i, j);
         const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
-        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f};
+        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
         const plm::RibbonTexel& r = ribbons(i, j);
         if (r.covered()) {
           texel.c = r.c;
           texel.pi = r.w * space_.ratePerTexel;
+          texel.edge = r.edge;
           if (r.w > 0.0f)  // raise g (step 2; see the file comment)
             texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
           needLower.push_back(j * n + i);
@@ -474,13 +489,26 @@ class PlmTechnique final : public ShadowTechnique {
       if (ribbonFree2x2_(i0, j0)) return zc < g ? 1.0f : 0.0f;
       const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
-      const float c = lerp2(t00.c, t10.c, t01.c, t11.c);
-      const float b = lerp2(t00.b, t10.b, t01.b, t11.b);
-      const float pi = lerp2(t00.pi, t10.pi, t01.pi, t11.pi);
       const float z = space_.zeta(r.lsDepth);
-      // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless).
-      const float l = std::clamp(0.5f + 0.5f * pi / std::max(z - c, 1e-30f), 0.0f, 1.0f);
-      const float lg = std::clamp(l + 4.0f * (zc < g) - 2.0f * (zc < c) + (zc < b) - 1.0f, 0.0f, 1.0f);
+      if (!oneRibbon(t00, t10, t01, t11)) {
+        // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
+        // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
+        const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
+        const int is[4] = {i0, i1, i0, i1}, js[4] = {j0, j0, j1, j1};
+        const float weights[4] = {(1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
+        float sum = 0.0f;
+        for (int k = 0; k < 4; ++k) {
+          const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
+          const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
+          const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
+          const float lg = equation2(*texels[k], zk, zck);
+          sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
+        }
+        return sum;
+      }
+      const PlmTexel texel{lerp2(t00.c, t10.c, t01.c, t11.c), g, lerp2(t00.b, t10.b, t01.b, t11.b),
+                           lerp2(t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
+      const float lg = equation2(texel, z, zc);
       return options_.illuminationTable ? table_(lg) : lg;
     });
     timings_.add("visibility", timer.elapsedMs());
@@ -489,6 +517,32 @@ class PlmTechnique final : public ShadowTechnique {
   PassTimings timings() const override { return timings_; }
 
  private:
+  // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
+  // receiver at depth z, compared at zc (z moved towards the light by the bias). A texel without a
+  // ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
+  float equation2(const PlmTexel& t, float z, float zc) const {
+    if (t.c >= space_.zetaNone) return zc < t.g ? 1.0f : 0.0f;
+    const float l = std::clamp(0.5f + 0.5f * t.pi / std::max(z - t.c, 1e-30f), 0.0f, 1.0f);
+    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (zc < t.c) + (zc < t.b) - 1.0f, 0.0f, 1.0f);
+  }
+
+  // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
+  // interpolated (the paper's fetch): every texel's edge is the same as, or shares an end with, every
+  // other's (c and p_i are continuous along a silhouette polyline), and b is present at all four or
+  // at none.
+  bool oneRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11) const {
+    const PlmTexel* t[4] = {&t00, &t10, &t01, &t11};
+    for (int k = 0; k < 4; ++k) {
+      if (t[k]->edge < 0) return false;
+      const plm::Edge& e = edges_[static_cast<size_t>(t[k]->edge)];
+      for (int m = k + 1; m < 4; ++m)
+        if (t[m]->edge != t[k]->edge && t[m]->edge != e.neighbourA && t[m]->edge != e.neighbourB) return false;
+    }
+    const bool anyB = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b)) < space_.zetaNone;
+    const bool allB = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b)) < space_.zetaNone;
+    return anyB == allB;
+  }
+
   // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
   // texel's size below c down, each surface that faces the light is a receiver of this texel's
   // shadow. Its visibility is measured just above it with kProfileSamples rays to the light
@@ -535,7 +589,8 @@ class PlmTechnique final : public ShadowTechnique {
           rays.occluded16(toLight, kProfileSamples, blocked);
           int seen = 0;
           for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
-          if (static_cast<float>(seen) < kProfileFraction * predicted * kProfileSamples) {
+          const float expected = predicted * kProfileSamples;
+          if (static_cast<float>(seen) < kProfileFraction * expected && expected - static_cast<float>(seen) >= kProfileMinDeficit) {
             texel.b = space_.zeta(probeDepth);
             break;
           }
@@ -555,6 +610,7 @@ class PlmTechnique final : public ShadowTechnique {
   // fresh pages.
   Image<float> farthest_;
   Image<plm::RibbonTexel> ribbons_;
+  std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
   PassTimings timings_;
 };

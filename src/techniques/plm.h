@@ -80,6 +80,8 @@ struct Edge {
   // +1 at a convex corner of the silhouette, -1 at a concave one (the corner's other edge decides),
   // 0 where the end meets no single other edge (then the side of the edge's line is used).
   float endSideA = 0.0f, endSideB = 0.0f;
+  // Index (in the list) of the other silhouette edge at each end, where exactly two meet; else -1.
+  int32_t neighbourA = -1, neighbourB = -1;
 };
 
 std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space);
