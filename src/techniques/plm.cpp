@@ -37,8 +37,10 @@
 // Evaluation, per pixel: the bilinear interpolation of the four channels at the pixel's map position
 // (the paper's single bilinear fetch) and Equation 2,
 //     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
-// with the compares made at the receiver's depth moved towards the light by the slope-scaled bias of
-// shadow_map.h (a receiver must not shadow itself) and Equation 1 at its true depth; where no ribbon
+// with the compare with g made at the receiver's depth moved towards the light by the slope-scaled
+// bias of shadow_map.h (a receiver must not shadow itself through its own depth), and Equation 1
+// and the compares with c and b at its true depth (neither is the receiver's own surface); a
+// receiver facing away from the light's centre gets no bias (the map never holds it); where no ribbon
 // touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
 // V = f(l_g) through the visibility-to-illumination table of Appendix A (penumbra/light_profile.h)
 // when `illumination_table` is on. Deviation (Fig. 7 B, "at the transition between the small and
@@ -64,6 +66,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -417,6 +420,7 @@ class PlmTechnique final : public ShadowTechnique {
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
+    light_ = light;
     edges_ = plm::silhouetteEdges(scene, light, map_, space_);
     const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
@@ -468,8 +472,14 @@ class PlmTechnique final : public ShadowTechnique {
     Timer timer;
     const int n = map_.size;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      const Vec3& position = gbuffer.wsPosition(x, y);
+      const Vec3& normal = gbuffer.wsGeometricNormal(x, y);
+      ShadowReceiver r = makeReceiver(map_, position, normal, options_.bias);
       if (!r.inMap) return 1.0f;
+      // A surface that faces away from the light's centre is never the one the map holds at its
+      // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
+      // the compare: the bias would only lift it above the surface that covers it.
+      if (glm::dot(normal, light_->directionToCenter(position)) < 0.0f) r.bias = 0.0f;
       // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
       const float fs = r.s - 0.5f, ft = r.t - 0.5f;
       const float is = std::floor(fs), it = std::floor(ft);
@@ -518,12 +528,15 @@ class PlmTechnique final : public ShadowTechnique {
 
  private:
   // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
-  // receiver at depth z, compared at zc (z moved towards the light by the bias). A texel without a
+  // receiver at depth z. The compare with g is made at zc, z moved towards the light by the bias;
+  // those with c and b at z itself: the bias keeps a surface from shadowing itself through its own
+  // depth in g, and neither the edge nor the lower limit is the receiver's surface (biased, a
+  // receiver just under a part of the occluder rose above the b that clamps it). A texel without a
   // ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
   float equation2(const PlmTexel& t, float z, float zc) const {
     if (t.c >= space_.zetaNone) return zc < t.g ? 1.0f : 0.0f;
     const float l = std::clamp(0.5f + 0.5f * t.pi / std::max(z - t.c, 1e-30f), 0.0f, 1.0f);
-    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (zc < t.c) + (zc < t.b) - 1.0f, 0.0f, 1.0f);
+    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (z < t.c) + (z < t.b) - 1.0f, 0.0f, 1.0f);
   }
 
   // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
@@ -603,6 +616,7 @@ class PlmTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
+  std::optional<Light> light_;      //!< the light of the last prepare()
   Image<PlmTexel> limits_;
   Image<float> g_;                  //!< limits_' g alone, for the lit fast path
   Image<uint8_t> ribbonFree2x2_;    //!< 1: no ribbon in the 2x2 texels whose top-left this is
