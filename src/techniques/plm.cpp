@@ -47,7 +47,7 @@
 // large objects' penumbras, the penumbra limit depth p_i crosses over the occluder depth c, which
 // results in a highly visible erroneous shadow transition"): where the four texels do not hold one
 // ribbon (edges that are neither the same nor neighbours on one silhouette, a texel without a ribbon,
-// or b at some of them only), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
+// or b at some of them only or jumping), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
 // the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four
 // values are interpolated. Interpolating c and p_i across such a jump drew the white lines across
 // umbrae and the ragged outlines of an interpolated b; the paper's remedy, clamping g and b
@@ -401,6 +401,10 @@ constexpr int kMaxProfileHits = 16;
 constexpr float kProfileMinDeficit = 2.0f;
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
+// Beyond this spread of b over the four texels of a fetch, relative to the receiver's distance to
+// it, the texels' b are not interpolated (oneRibbon).
+constexpr float kTransitionSpread = 1.0f / 16.0f;
+
 // One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
 struct PlmTexel {
   float c, g, b, pi;
@@ -500,7 +504,7 @@ class PlmTechnique final : public ShadowTechnique {
       const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
       const float z = space_.zeta(r.lsDepth);
-      if (!oneRibbon(t00, t10, t01, t11)) {
+      if (!oneRibbon(t00, t10, t01, t11, z)) {
         // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
         // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
         const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
@@ -540,10 +544,12 @@ class PlmTechnique final : public ShadowTechnique {
   }
 
   // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
-  // interpolated (the paper's fetch): every texel's edge is the same as, or shares an end with, every
-  // other's (c and p_i are continuous along a silhouette polyline), and b is present at all four or
-  // at none.
-  bool oneRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11) const {
+  // interpolated (the paper's fetch) for a receiver at z: every texel's edge is the same as, or shares
+  // an end with, every other's (c and p_i are continuous along a silhouette polyline), and b is
+  // absent at all four or present at all four within kTransitionSpread of the receiver's distance to
+  // it (the fitted b jumps where the receivers below change; interpolated across the jump, it put
+  // the receiver on either side of it by the sub-texel position alone).
+  bool oneRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11, float z) const {
     const PlmTexel* t[4] = {&t00, &t10, &t01, &t11};
     for (int k = 0; k < 4; ++k) {
       if (t[k]->edge < 0) return false;
@@ -551,9 +557,10 @@ class PlmTechnique final : public ShadowTechnique {
       for (int m = k + 1; m < 4; ++m)
         if (t[m]->edge != t[k]->edge && t[m]->edge != e.neighbourA && t[m]->edge != e.neighbourB) return false;
     }
-    const bool anyB = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b)) < space_.zetaNone;
-    const bool allB = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b)) < space_.zetaNone;
-    return anyB == allB;
+    const float bMin = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b));
+    const float bMax = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b));
+    if (bMin >= space_.zetaNone) return true;
+    return bMax < space_.zetaNone && bMax - bMin <= kTransitionSpread * std::abs(z - bMin);
   }
 
   // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
