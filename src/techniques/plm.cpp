@@ -401,6 +401,9 @@ constexpr int kMaxProfileHits = 16;
 constexpr float kProfileMinDeficit = 2.0f;
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
+// Classes of the 2x2 footprint of a bilinear fetch (PlmTechnique::footprint2x2_).
+constexpr uint8_t kFootprintMixed = 0, kFootprintRibbonFree = 1, kFootprintOneRibbon = 2;
+
 // Beyond this spread of b over the four texels of a fetch, relative to the receiver's distance to
 // it, the texels' b are not interpolated (oneRibbon).
 constexpr float kTransitionSpread = 1.0f / 16.0f;
@@ -453,18 +456,22 @@ class PlmTechnique final : public ShadowTechnique {
       }
     if (!needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
-    // a flag per texel that no ribbon covers it or its right, lower and lower-right neighbours (the
-    // 2x2 footprint of a bilinear fetch whose top-left texel it is; clamped at the border as there).
+    // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
+    // at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without the
+    // depth test of b, which needs the receiver), or neither.
     g_.reset(n, n, 0.0f);
-    ribbonFree2x2_.reset(n, n, 0);
+    footprint2x2_.reset(n, n, kFootprintMixed);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         const int j1 = std::min(j + 1, n - 1);
         for (int i = 0; i < n; ++i) {
           const int i1 = std::min(i + 1, n - 1);
           g_(i, j) = limits_(i, j).g;
-          ribbonFree2x2_(i, j) = std::min(std::min(limits_(i, j).c, limits_(i1, j).c), std::min(limits_(i, j1).c, limits_(i1, j1).c)) >=
-                                 space_.zetaNone;
+          const PlmTexel &t00 = limits_(i, j), &t10 = limits_(i1, j), &t01 = limits_(i, j1), &t11 = limits_(i1, j1);
+          if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone)
+            footprint2x2_(i, j) = kFootprintRibbonFree;
+          else if (continuousRibbon(t00, t10, t01, t11))
+            footprint2x2_(i, j) = kFootprintOneRibbon;
         }
       }
     });
@@ -483,7 +490,7 @@ class PlmTechnique final : public ShadowTechnique {
       // A surface that faces away from the light's centre is never the one the map holds at its
       // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
       // the compare: the bias would only lift it above the surface that covers it.
-      if (glm::dot(normal, light_->directionToCenter(position)) < 0.0f) r.bias = 0.0f;
+      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f) r.bias = 0.0f;
       // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
       const float fs = r.s - 0.5f, ft = r.t - 0.5f;
       const float is = std::floor(fs), it = std::floor(ft);
@@ -500,11 +507,12 @@ class PlmTechnique final : public ShadowTechnique {
       // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
       // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The flag's
       // 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
-      if (ribbonFree2x2_(i0, j0)) return zc < g ? 1.0f : 0.0f;
+      const uint8_t footprint = footprint2x2_(i0, j0);
+      if (footprint == kFootprintRibbonFree) return zc < g ? 1.0f : 0.0f;
       const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
       const float z = space_.zeta(r.lsDepth);
-      if (!oneRibbon(t00, t10, t01, t11, z)) {
+      if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
         // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
         // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
         const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
@@ -544,12 +552,10 @@ class PlmTechnique final : public ShadowTechnique {
   }
 
   // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
-  // interpolated (the paper's fetch) for a receiver at z: every texel's edge is the same as, or shares
-  // an end with, every other's (c and p_i are continuous along a silhouette polyline), and b is
-  // absent at all four or present at all four within kTransitionSpread of the receiver's distance to
-  // it (the fitted b jumps where the receivers below change; interpolated across the jump, it put
-  // the receiver on either side of it by the sub-texel position alone).
-  bool oneRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11, float z) const {
+  // interpolated (the paper's fetch): every texel's edge is the same as, or shares an end with, every
+  // other's (c and p_i are continuous along a silhouette polyline), and b is absent at all four or
+  // present at all four; and, for a receiver at z, bContinuous.
+  bool continuousRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11) const {
     const PlmTexel* t[4] = {&t00, &t10, &t01, &t11};
     for (int k = 0; k < 4; ++k) {
       if (t[k]->edge < 0) return false;
@@ -557,10 +563,19 @@ class PlmTechnique final : public ShadowTechnique {
       for (int m = k + 1; m < 4; ++m)
         if (t[m]->edge != t[k]->edge && t[m]->edge != e.neighbourA && t[m]->edge != e.neighbourB) return false;
     }
+    const bool anyB = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b)) < space_.zetaNone;
+    const bool allB = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b)) < space_.zetaNone;
+    return anyB == allB;
+  }
+
+  // b, where present, spreads over at most kTransitionSpread of the receiver's distance to it: the
+  // fitted b jumps where the receivers below change, and interpolated across the jump it put the
+  // receiver on either side of it by the sub-texel position alone.
+  bool bContinuous(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11, float z) const {
     const float bMin = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b));
-    const float bMax = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b));
     if (bMin >= space_.zetaNone) return true;
-    return bMax < space_.zetaNone && bMax - bMin <= kTransitionSpread * std::abs(z - bMin);
+    const float bMax = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b));
+    return bMax - bMin <= kTransitionSpread * std::abs(z - bMin);
   }
 
   // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
@@ -579,6 +594,9 @@ class PlmTechnique final : public ShadowTechnique {
       for (size_t k = range.begin(); k < range.end(); ++k) {
         const int i = texels[k] % n, j = texels[k] / n;
         PlmTexel& texel = limits_(i, j);
+        // Only receivers below the surface the map sees are probed: none where that is the deepest.
+        const float seenDepth = map_.lsDepth(i, j);
+        if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
         const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
         const float cDepth = space_.lsDepth(texel.c);
         const float start = cDepth + map_.texelWorldSize(cDepth);
@@ -592,6 +610,8 @@ class PlmTechnique final : public ShadowTechnique {
           const Vec3 wsHit = ray.origin + hit->t * ray.direction;
           const float depth = map_.lightFromRender(wsHit).z;
           const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+          // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
+          if (!(depth > map_.lsDepth(i, j) + lift)) continue;
           const float probeDepth = depth - lift;
           if (!(probeDepth > 0.0f)) continue;
           const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
@@ -626,7 +646,7 @@ class PlmTechnique final : public ShadowTechnique {
   std::optional<Light> light_;      //!< the light of the last prepare()
   Image<PlmTexel> limits_;
   Image<float> g_;                  //!< limits_' g alone, for the lit fast path
-  Image<uint8_t> ribbonFree2x2_;    //!< 1: no ribbon in the 2x2 texels whose top-left this is
+  Image<uint8_t> footprint2x2_;     //!< kFootprint* of the 2x2 texels whose top-left this is
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
