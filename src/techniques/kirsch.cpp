@@ -62,7 +62,7 @@ class KirschTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Inner,
-                          plm::RibbonPriority::PenumbraLimit, options_.marginTexels, plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_,
+                          options_.marginTexels, plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_,
                           widths_);
     timings_.add("prepare", timer.elapsedMs());
   }

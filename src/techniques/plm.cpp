@@ -22,18 +22,25 @@
 //      the most reliable approach ("first calculate the true shadow profile (e.g., by dense sampling
 //      along each shadow ray) and then choose shadowing-function parameters to best fit this known
 //      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
-//      light (a receiver) is probed with 16 rays to the light, and b is put just above the first one
-//      that sees less than half of what Equation 1 predicts for it (findLowerLimits),
+//      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light,
+//      and b is put just above the first one that sees less than half of what Equation 1 predicts
+//      for it, by at least 2 of the 16 (findLowerLimits). A receiver the map sees is lit from the
+//      light's centre, so in no umbra, and is not probed,
 //  p_i the signed penumbra limit w s r (Sec. 3), + outside the silhouette, 0 where no ribbon.
 // Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
 // topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
 // "highest penumbra limit wins", taken only where a surface lies below the edge (plm.h's
 // farthestSurface) and, on an edge's inner side, only where the light map sees the edge's object
 // (the inner side of one edge's line must not reach past a thin occluder's other edges). Deviation
-// (the clamp of Fig. 7 C): where the topmost surface of a
-// texel lies above the winning edge and is not the edge's own surface (another object, or anything
-// on the edge's outer side), the texel keeps no ribbon (c = zetaNone): a higher occluder whose own
-// ribbon does not reach the texel hides everything below.
+// (the clamp of Fig. 7 C, applied before the priority): a ribbon whose shadow is hidden from the
+// light's centre does not compete for the texel — on its outer side (or its inner side over another
+// object) where the topmost surface of the texel lies above the edge (a higher occluder hides what
+// lies below it), and wherever the topmost surface 1.5 texels beyond the edge lies above it (the edge
+// is not on the outline seen from the light: a contour behind the object's own front, or a fold of a
+// tessellated silhouette, whose outer side faces into the occluder). The texel goes to the best
+// remaining ribbon, or to none. Clamped after the priority instead, a texel whose winner was hidden
+// fell to the hard compare, which drew black spikes across the inner penumbra of every tessellated
+// curved occluder.
 // Evaluation, per pixel: the bilinear interpolation of the four channels at the pixel's map position
 // (the paper's single bilinear fetch) and Equation 2,
 //     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
@@ -299,8 +306,8 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   });
 }
 
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
-                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
+                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
   out.reset(mapSize, mapSize, RibbonTexel{});
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
@@ -368,7 +375,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               if ((outer || !ownObject) && above((*top)(i, j))) continue;
               if (probeInMap && above((*top)(pi, pj))) continue;
             }
-            const float p = priority == RibbonPriority::PenumbraLimit ? c + distance * space.ratePerTexel : c;
+            const float p = c + distance * space.ratePerTexel;
             if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
           }
         }
@@ -431,7 +438,7 @@ class PlmTechnique final : public ShadowTechnique {
     edges_ = plm::silhouetteEdges(scene, light, map_, space_);
     const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
-    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;

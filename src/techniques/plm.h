@@ -36,8 +36,9 @@
 // (beyond a sharp convex corner a texel can lie on the inner side of one edge's line and still
 // outside the occluder), inner at a concave one; the two edges then tie exactly (the same corner,
 // the same distance) and the first keeps the texel. Overlapping ribbons are resolved per texel
-// like a depth buffer: by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1) or, for
-// smoothies, by the edge nearest the light (priority c). Ties go to the edge listed first, and edges
+// like a depth buffer, by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1), among the
+// candidates a RibbonFilter lets through (hidden shadows, kirsch's footprint border). Ties go to the
+// edge listed first, and edges
 // are binned to tiles processed in parallel in edge order, so the result is the same for any thread
 // count.
 #pragma once
@@ -89,7 +90,6 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
 inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
-enum class RibbonPriority { PenumbraLimit, EdgeDepth };
 
 struct RibbonTexel {
   float c = 0.0f;       //!< zeta of the winning edge at its nearest point
@@ -132,8 +132,8 @@ struct RibbonFilter {
 inline constexpr float kHiddenProbeTexels = 1.5f;
 
 // Into `out`, which keeps its storage where it is large enough.
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
-                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out);
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
+                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm
 

@@ -63,7 +63,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Outer,
-                          plm::RibbonPriority::PenumbraLimit, options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
+                          options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
