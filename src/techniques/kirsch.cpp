@@ -16,7 +16,11 @@
 // in texels. The shadow-width map is the inner halves of the silhouette ribbons of plm.h (distance to
 // the nearest silhouette segment, measured at texel centres, "highest penumbra limit wins") instead
 // of the paper's iterative image passes over the depth map, which estimate the same distance in whole
-// texels. Both maps are read at the texel holding the pixel (no filtering), then V goes through
+// texels. Only edges on the border of their object's footprint in the map count (plm::RibbonFilter:
+// beyond the edge the map sees another object or nothing, and nothing above the edge): the paper's
+// distance is the one to the border of the shadow, and the silhouettes inside an object's footprint
+// (a fin over the crankcase, an arm over the body, a contour behind the object's own front) border
+// no lit texel — as widths they faded the middle of an umbra to nearly 1. Both maps are read at the texel holding the pixel (no filtering), then V goes through
 // Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. A
 // blocked texel no ribbon reaches lies deeper in the shadow than any penumbra: V = 0. Lights: as plm
 // (sphere, disk, rect, polygon, directional; segments rejected).
@@ -58,7 +62,8 @@ class KirschTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Inner,
-                          plm::RibbonPriority::PenumbraLimit, options_.marginTexels, &map_.objectId, farthest_, widths_);
+                          options_.marginTexels, plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_,
+                          widths_);
     timings_.add("prepare", timer.elapsedMs());
   }
 

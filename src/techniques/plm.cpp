@@ -12,30 +12,53 @@
 //      penumbra to 1 (measured 3.3/255 on a straight edge at 32^2); and at the ribbon's border g
 //      still meets the depth of the map's far end, so the interpolation into texels without a ribbon
 //      (c = zetaNone) happens where every receiver lies above g,
-//  b   the geometry lower limit: the first back-facing surface below c (step 3: "throw away
-//      geometry above or near the occluder depth c"). What lies "near c" is the surface attached to
-//      the edge, on its inner side: there we discard the edge's own object, on the outer side (where
-//      the own object can only be another part of it, the far side of a torus seen through its hole)
-//      nothing; and anything less than a texel below c. The surface is found with Embree rays along
-//      the texel's light ray instead of a second depth-tested pass with discard,
+//  b   the geometry lower limit: below it the receivers are in shadow whatever the ribbon says
+//      ("when below deeper geometry, we must clamp to black", Sec. 2.1). Deviation: Sec. 3.1 step 3
+//      renders the back faces below c, "but throw away geometry above or near the occluder depth c
+//      to prevent a surface from occluding its own soft shadow". Which back face is "near" cannot be
+//      told from depth alone: the far side of a sphere lies up to its diameter below its outline and
+//      must not cut its inner penumbra, while the underside of a body below an arm lying on it (one
+//      closed mesh, no surface in between) must cut the arm's. We fit b instead, as Sec. 3 names
+//      the most reliable approach ("first calculate the true shadow profile (e.g., by dense sampling
+//      along each shadow ray) and then choose shadowing-function parameters to best fit this known
+//      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
+//      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light,
+//      and b is put just above the first one that sees less than half of what Equation 1 predicts
+//      for it, by at least 2 of the 16 (findLowerLimits). A receiver the map sees is lit from the
+//      light's centre, so in no umbra, and is not probed,
 //  p_i the signed penumbra limit w s r (Sec. 3), + outside the silhouette, 0 where no ribbon.
 // Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
 // topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
 // "highest penumbra limit wins", taken only where a surface lies below the edge (plm.h's
 // farthestSurface) and, on an edge's inner side, only where the light map sees the edge's object
 // (the inner side of one edge's line must not reach past a thin occluder's other edges). Deviation
-// (the clamp of Fig. 7 C): where the topmost surface of a
-// texel lies above the winning edge and is not the edge's own surface (another object, or anything
-// on the edge's outer side), the texel keeps no ribbon (c = zetaNone): a higher occluder whose own
-// ribbon does not reach the texel hides everything below.
+// (the clamp of Fig. 7 C, applied before the priority): a ribbon whose shadow is hidden from the
+// light's centre does not compete for the texel — on its outer side (or its inner side over another
+// object) where the topmost surface of the texel lies above the edge (a higher occluder hides what
+// lies below it), and wherever the topmost surface 1.5 texels beyond the edge lies above it (the edge
+// is not on the outline seen from the light: a contour behind the object's own front, or a fold of a
+// tessellated silhouette, whose outer side faces into the occluder). The texel goes to the best
+// remaining ribbon, or to none. Clamped after the priority instead, a texel whose winner was hidden
+// fell to the hard compare, which drew black spikes across the inner penumbra of every tessellated
+// curved occluder.
 // Evaluation, per pixel: the bilinear interpolation of the four channels at the pixel's map position
 // (the paper's single bilinear fetch) and Equation 2,
 //     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
-// with the compares made at the receiver's depth moved towards the light by the slope-scaled bias of
-// shadow_map.h (a receiver must not shadow itself) and Equation 1 at its true depth; where no ribbon
+// with the compare with g made at the receiver's depth moved towards the light by the slope-scaled
+// bias of shadow_map.h (a receiver must not shadow itself through its own depth), and Equation 1
+// and the compares with c and b at its true depth (neither is the receiver's own surface); a
+// receiver facing away from the light's centre gets no bias (the map never holds it); where no ribbon
 // touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
 // V = f(l_g) through the visibility-to-illumination table of Appendix A (penumbra/light_profile.h)
-// when `illumination_table` is on.
+// when `illumination_table` is on. Deviation (Fig. 7 B, "at the transition between the small and
+// large objects' penumbras, the penumbra limit depth p_i crosses over the occluder depth c, which
+// results in a highly visible erroneous shadow transition"): where the four texels do not hold one
+// ribbon (edges that are neither the same nor neighbours on one silhouette, a texel without a ribbon,
+// or b at some of them only or jumping), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
+// the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four
+// values are interpolated. Interpolating c and p_i across such a jump drew the white lines across
+// umbrae and the ragged outlines of an interpolated b; the paper's remedy, clamping g and b
+// together at the transition (Fig. 7 C), leaves a hard edge there.
 // Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
 // rasterization and the bias); one occluder per shadow-map ray (the first penumbra wins, Sec. 3);
 // corners are rounded (the ribbon of a segment ends in a half disk); where an occluder is thinner
@@ -50,6 +73,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -233,6 +257,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
         const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
         const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
         ((mine & 1) ? e.endSideB : e.endSideA) = side;
+        ((mine & 1) ? e.neighbourB : e.neighbourA) = static_cast<int32_t>(firstEdge + other / 2);
       }
     }
   }
@@ -281,8 +306,8 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   });
 }
 
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
-                      float marginTexels, const Image<int32_t>* coverage, const Image<float>& farthest, Image<RibbonTexel>& out) {
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
+                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
   out.reset(mapSize, mapSize, RibbonTexel{});
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
@@ -334,11 +359,24 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float endSide = along <= 0.0f ? e.endSideA : along >= 1.0f ? e.endSideB : 0.0f;
             const bool outer = endSide != 0.0f ? endSide > 0.0f : glm::dot(aq, e.outward) >= 0.0f;
             if (outer ? !wantOuter : !wantInner) continue;
-            if (!outer && coverage && (*coverage)(i, j) != e.objectId) continue;
+            const Image<int32_t>* coverage = filter.coverage;
+            const bool ownObject = !coverage || (*coverage)(i, j) == e.objectId;
+            if (!outer && !ownObject) continue;
+            // The texel kHiddenProbeTexels beyond the edge's nearest point; outside the map nothing is seen.
+            const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
+            const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+            const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
+            if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId) continue;
             const float c = along <= 0.0f ? e.zetaA : along >= 1.0f ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA);
             if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
-            const float p = priority == RibbonPriority::PenumbraLimit ? c + distance * space.ratePerTexel : c;
-            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId};
+            if (const Image<float>* top = filter.topDepth) {
+              // Depths as zeta; an empty texel (infinite depth) lies below everything.
+              const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
+              if ((outer || !ownObject) && above((*top)(i, j))) continue;
+              if (probeInMap && above((*top)(pi, pj))) continue;
+            }
+            const float p = c + distance * space.ratePerTexel;
+            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
           }
         }
       }
@@ -357,9 +395,30 @@ struct PlmOptions {
   bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
 };
 
+// The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
+// parameter square, one packet), the share of Equation 1's prediction below which a receiver is
+// taken as shadowed by more than the ribbon's edge, and how many surfaces along a texel's ray are
+// looked at.
+constexpr int kProfileGrid = 4;
+constexpr int kProfileSamples = kProfileGrid * kProfileGrid;
+constexpr float kProfileFraction = 0.5f;
+constexpr int kMaxProfileHits = 16;
+// Fewer samples than Equation 1 predicts by at least this many (2/16 of the light): a prediction
+// below it cannot be told from no light by 16 samples, and is left alone.
+constexpr float kProfileMinDeficit = 2.0f;
+static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
+
+// Classes of the 2x2 footprint of a bilinear fetch (PlmTechnique::footprint2x2_).
+constexpr uint8_t kFootprintMixed = 0, kFootprintRibbonFree = 1, kFootprintOneRibbon = 2;
+
+// Beyond this spread of b over the four texels of a fetch, relative to the receiver's distance to
+// it, the texels' b are not interpolated (oneRibbon).
+constexpr float kTransitionSpread = 1.0f / 16.0f;
+
 // One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
 struct PlmTexel {
   float c, g, b, pi;
+  int32_t edge;  //!< the ribbon's edge (index into edges_); -1 where no ribbon
 };
 
 class PlmTechnique final : public ShadowTechnique {
@@ -375,10 +434,12 @@ class PlmTechnique final : public ShadowTechnique {
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
-    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_);
+    light_ = light;
+    edges_ = plm::silhouetteEdges(scene, light, map_, space_);
+    const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
-    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, plm::RibbonPriority::PenumbraLimit, options_.marginTexels,
-                          &map_.objectId, farthest_, ribbons_);
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;
     limits_.reset(n, n, PlmTexel{});
@@ -388,33 +449,36 @@ class PlmTechnique final : public ShadowTechnique {
       for (int i = 0; i < n; ++i) {
         const float depth = map_.lsDepth(i, j);
         const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
-        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f};
+        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
         const plm::RibbonTexel& r = ribbons(i, j);
-        // Fig. 7 C's clamp: another object's surface above the edge hides this ribbon's shadow.
-        const bool hidden = (r.w > 0.0f || map_.objectId(i, j) != r.objectId) && g < r.c;
-        if (r.covered() && !hidden) {
+        if (r.covered()) {
           texel.c = r.c;
           texel.pi = r.w * space_.ratePerTexel;
+          texel.edge = r.edge;
           if (r.w > 0.0f)  // raise g (step 2; see the file comment)
             texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
           needLower.push_back(j * n + i);
         }
         limits_(i, j) = texel;
       }
-    if (!needLower.empty()) findLowerLimits(scene, light, ribbons, needLower);
+    if (!needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
-    // a flag per texel that no ribbon covers it or its right, lower and lower-right neighbours (the
-    // 2x2 footprint of a bilinear fetch whose top-left texel it is; clamped at the border as there).
+    // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
+    // at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without the
+    // depth test of b, which needs the receiver), or neither.
     g_.reset(n, n, 0.0f);
-    ribbonFree2x2_.reset(n, n, 0);
+    footprint2x2_.reset(n, n, kFootprintMixed);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         const int j1 = std::min(j + 1, n - 1);
         for (int i = 0; i < n; ++i) {
           const int i1 = std::min(i + 1, n - 1);
           g_(i, j) = limits_(i, j).g;
-          ribbonFree2x2_(i, j) = std::min(std::min(limits_(i, j).c, limits_(i1, j).c), std::min(limits_(i, j1).c, limits_(i1, j1).c)) >=
-                                 space_.zetaNone;
+          const PlmTexel &t00 = limits_(i, j), &t10 = limits_(i1, j), &t01 = limits_(i, j1), &t11 = limits_(i1, j1);
+          if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone)
+            footprint2x2_(i, j) = kFootprintRibbonFree;
+          else if (continuousRibbon(t00, t10, t01, t11))
+            footprint2x2_(i, j) = kFootprintOneRibbon;
         }
       }
     });
@@ -426,8 +490,14 @@ class PlmTechnique final : public ShadowTechnique {
     Timer timer;
     const int n = map_.size;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      const Vec3& position = gbuffer.wsPosition(x, y);
+      const Vec3& normal = gbuffer.wsGeometricNormal(x, y);
+      ShadowReceiver r = makeReceiver(map_, position, normal, options_.bias);
       if (!r.inMap) return 1.0f;
+      // A surface that faces away from the light's centre is never the one the map holds at its
+      // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
+      // the compare: the bias would only lift it above the surface that covers it.
+      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f) r.bias = 0.0f;
       // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
       const float fs = r.s - 0.5f, ft = r.t - 0.5f;
       const float is = std::floor(fs), it = std::floor(ft);
@@ -444,16 +514,30 @@ class PlmTechnique final : public ShadowTechnique {
       // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
       // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The flag's
       // 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
-      if (ribbonFree2x2_(i0, j0)) return zc < g ? 1.0f : 0.0f;
+      const uint8_t footprint = footprint2x2_(i0, j0);
+      if (footprint == kFootprintRibbonFree) return zc < g ? 1.0f : 0.0f;
       const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
-      const float c = lerp2(t00.c, t10.c, t01.c, t11.c);
-      const float b = lerp2(t00.b, t10.b, t01.b, t11.b);
-      const float pi = lerp2(t00.pi, t10.pi, t01.pi, t11.pi);
       const float z = space_.zeta(r.lsDepth);
-      // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless).
-      const float l = std::clamp(0.5f + 0.5f * pi / std::max(z - c, 1e-30f), 0.0f, 1.0f);
-      const float lg = std::clamp(l + 4.0f * (zc < g) - 2.0f * (zc < c) + (zc < b) - 1.0f, 0.0f, 1.0f);
+      if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
+        // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
+        // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
+        const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
+        const int is[4] = {i0, i1, i0, i1}, js[4] = {j0, j0, j1, j1};
+        const float weights[4] = {(1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
+        float sum = 0.0f;
+        for (int k = 0; k < 4; ++k) {
+          const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
+          const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
+          const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
+          const float lg = equation2(*texels[k], zk, zck);
+          sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
+        }
+        return sum;
+      }
+      const PlmTexel texel{lerp2(t00.c, t10.c, t01.c, t11.c), g, lerp2(t00.b, t10.b, t01.b, t11.b),
+                           lerp2(t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
+      const float lg = equation2(texel, z, zc);
       return options_.illuminationTable ? table_(lg) : lg;
     });
     timings_.add("visibility", timer.elapsedMs());
@@ -462,32 +546,101 @@ class PlmTechnique final : public ShadowTechnique {
   PassTimings timings() const override { return timings_; }
 
  private:
-  // b (step 3) for the listed texels: along the texel's light ray from a texel's size below c, the
-  // first surface that faces away from the light and belongs to another object than the edge.
-  void findLowerLimits(const Scene& scene, const Light& light, const Image<plm::RibbonTexel>& ribbons,
-                       const std::vector<int>& texels) {
+  // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
+  // receiver at depth z. The compare with g is made at zc, z moved towards the light by the bias;
+  // those with c and b at z itself: the bias keeps a surface from shadowing itself through its own
+  // depth in g, and neither the edge nor the lower limit is the receiver's surface (biased, a
+  // receiver just under a part of the occluder rose above the b that clamps it). A texel without a
+  // ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
+  float equation2(const PlmTexel& t, float z, float zc) const {
+    if (t.c >= space_.zetaNone) return zc < t.g ? 1.0f : 0.0f;
+    const float l = std::clamp(0.5f + 0.5f * t.pi / std::max(z - t.c, 1e-30f), 0.0f, 1.0f);
+    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (z < t.c) + (z < t.b) - 1.0f, 0.0f, 1.0f);
+  }
+
+  // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
+  // interpolated (the paper's fetch): every texel's edge is the same as, or shares an end with, every
+  // other's (c and p_i are continuous along a silhouette polyline), and b is absent at all four or
+  // present at all four; and, for a receiver at z, bContinuous.
+  bool continuousRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11) const {
+    const PlmTexel* t[4] = {&t00, &t10, &t01, &t11};
+    for (int k = 0; k < 4; ++k) {
+      if (t[k]->edge < 0) return false;
+      const plm::Edge& e = edges_[static_cast<size_t>(t[k]->edge)];
+      for (int m = k + 1; m < 4; ++m)
+        if (t[m]->edge != t[k]->edge && t[m]->edge != e.neighbourA && t[m]->edge != e.neighbourB) return false;
+    }
+    const bool anyB = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b)) < space_.zetaNone;
+    const bool allB = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b)) < space_.zetaNone;
+    return anyB == allB;
+  }
+
+  // b, where present, spreads over at most kTransitionSpread of the receiver's distance to it: the
+  // fitted b jumps where the receivers below change, and interpolated across the jump it put the
+  // receiver on either side of it by the sub-texel position alone.
+  bool bContinuous(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11, float z) const {
+    const float bMin = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b));
+    if (bMin >= space_.zetaNone) return true;
+    const float bMax = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b));
+    return bMax - bMin <= kTransitionSpread * std::abs(z - bMin);
+  }
+
+  // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
+  // texel's size below c down, each surface that faces the light is a receiver of this texel's
+  // shadow. Its visibility is measured just above it with kProfileSamples rays to the light
+  // (stratified over the emitter, one packet), and b is put there at the first one that sees less
+  // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
+  // more of this one than its edge accounts for, shadows the receivers (see the file comment).
+  void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     const RayScene rays(scene);
     const int n = map_.size;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    Vec2 pattern[kProfileSamples];
+    for (int q = 0; q < kProfileSamples; ++q)
+      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid, (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t k = range.begin(); k < range.end(); ++k) {
         const int i = texels[k] % n, j = texels[k] / n;
+        PlmTexel& texel = limits_(i, j);
+        // Only receivers below the surface the map sees are probed: none where that is the deepest.
+        const float seenDepth = map_.lsDepth(i, j);
+        if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
         const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
-        const float cDepth = space_.lsDepth(limits_(i, j).c);
+        const float cDepth = space_.lsDepth(texel.c);
         const float start = cDepth + map_.texelWorldSize(cDepth);
         Ray ray;
         ray.origin = map_.unproject(s, t, start);
         ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
-        for (int hop = 0; hop < 16; ++hop) {
-          const std::optional<RayHit> hit = rays.intersect(ray);
-          if (!hit) break;
+        std::optional<RayHit> hit;
+        for (int hop = 0; hop < kMaxProfileHits && (hit = rays.intersect(ray)); ++hop) {
+          ray.tMin = std::nextafter(hit->t, kInfinity);
+          if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
           const Vec3 wsHit = ray.origin + hit->t * ray.direction;
-          const bool facesAway = glm::dot(hit->wsGeometricNormal, -ray.direction) < 0.0f;
-          if (facesAway && (hit->objectId != ribbons(i, j).objectId || ribbons(i, j).w > 0.0f)) {
-            const float depth = map_.lightFromRender(wsHit).z;
-            if (depth > 0.0f) limits_(i, j).b = space_.zeta(depth);
+          const float depth = map_.lightFromRender(wsHit).z;
+          const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+          // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
+          if (!(depth > map_.lsDepth(i, j) + lift)) continue;
+          const float probeDepth = depth - lift;
+          if (!(probeDepth > 0.0f)) continue;
+          const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+          const float predicted = options_.illuminationTable ? table_(l) : l;
+          if (!(predicted > 0.0f)) continue;
+          const Vec3 probe = wsHit - lift * ray.direction;
+          Ray toLight[kProfileSamples];
+          bool blocked[kProfileSamples];
+          for (int q = 0; q < kProfileSamples; ++q) {
+            const LightSample sample = light.sample(probe, pattern[q]);
+            toLight[q].origin = probe;
+            toLight[q].direction = sample.wsDirection;
+            toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+          }
+          rays.occluded16(toLight, kProfileSamples, blocked);
+          int seen = 0;
+          for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
+          const float expected = predicted * kProfileSamples;
+          if (static_cast<float>(seen) < kProfileFraction * expected && expected - static_cast<float>(seen) >= kProfileMinDeficit) {
+            texel.b = space_.zeta(probeDepth);
             break;
           }
-          ray.tMin = std::nextafter(hit->t, kInfinity);
         }
       }
     });
@@ -497,13 +650,15 @@ class PlmTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
+  std::optional<Light> light_;      //!< the light of the last prepare()
   Image<PlmTexel> limits_;
   Image<float> g_;                  //!< limits_' g alone, for the lit fast path
-  Image<uint8_t> ribbonFree2x2_;    //!< 1: no ribbon in the 2x2 texels whose top-left this is
+  Image<uint8_t> footprint2x2_;     //!< kFootprint* of the 2x2 texels whose top-left this is
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
   Image<plm::RibbonTexel> ribbons_;
+  std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
   PassTimings timings_;
 };

@@ -36,8 +36,9 @@
 // (beyond a sharp convex corner a texel can lie on the inner side of one edge's line and still
 // outside the occluder), inner at a concave one; the two edges then tie exactly (the same corner,
 // the same distance) and the first keeps the texel. Overlapping ribbons are resolved per texel
-// like a depth buffer: by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1) or, for
-// smoothies, by the edge nearest the light (priority c). Ties go to the edge listed first, and edges
+// like a depth buffer, by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1), among the
+// candidates a RibbonFilter lets through (hidden shadows, kirsch's footprint border). Ties go to the
+// edge listed first, and edges
 // are binned to tiles processed in parallel in edge order, so the result is the same for any thread
 // count.
 #pragma once
@@ -80,6 +81,8 @@ struct Edge {
   // +1 at a convex corner of the silhouette, -1 at a concave one (the corner's other edge decides),
   // 0 where the end meets no single other edge (then the side of the edge's line is used).
   float endSideA = 0.0f, endSideB = 0.0f;
+  // Index (in the list) of the other silhouette edge at each end, where exactly two meet; else -1.
+  int32_t neighbourA = -1, neighbourB = -1;
 };
 
 std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space);
@@ -87,13 +90,13 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
 inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
-enum class RibbonPriority { PenumbraLimit, EdgeDepth };
 
 struct RibbonTexel {
   float c = 0.0f;       //!< zeta of the winning edge at its nearest point
   float w = 0.0f;       //!< signed distance to it, texels, + outside the silhouette
   float priority = kInfinity;  //!< kInfinity: no ribbon covers this texel
   int32_t objectId = kNoObject;
+  int32_t edge = -1;    //!< index of the winning edge in the list given to rasterizeRibbons
   bool covered() const { return priority != kInfinity; }
 };
 
@@ -105,12 +108,32 @@ struct RibbonTexel {
 // Into `far`, which keeps its storage where it is large enough.
 void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far);
 
-// `coverage` (the light map's object ids, or nullptr): a texel on an edge's inner side is only taken
-// where the light map sees the edge's own object — the inner side of one edge's line reaches past
-// the other edges of a thin occluder, where the texel lies outside it.
+// Which candidate texels of a ribbon may compete for a texel at all (before the priority decides
+// among them); every test is made per edge and texel, so a dropped candidate leaves the texel to the
+// next one rather than to no ribbon.
+struct RibbonFilter {
+  // The light map's object ids, or nullptr: a texel on an edge's inner side is only taken where the
+  // light map sees the edge's own object — the inner side of one edge's line reaches past the other
+  // edges of a thin occluder, where the texel lies outside it.
+  const Image<int32_t>* coverage = nullptr;
+  // The light map's depths (light-space z), or nullptr: a candidate whose shadow is hidden from the
+  // light's centre is dropped — on the outer side (or the inner side over another object) where the
+  // topmost surface of the texel lies above the edge (Fig. 7 C: a higher occluder hides what lies
+  // below it), and on both sides where the topmost surface kHiddenProbeTexels beyond the edge lies
+  // above it (the edge is not on the outline seen from the light: a contour behind the object's own
+  // front, or a fold of a tessellated silhouette, whose outer side faces into the occluder).
+  const Image<float>* topDepth = nullptr;
+  // With coverage: the inner side only of edges on the border of their object's footprint in the map
+  // (kHiddenProbeTexels beyond the edge the map sees another object or nothing): the distance to the
+  // edge is then the distance to the border of the object's hard shadow (kirsch's shadow width).
+  bool footprintBorderOnly = false;
+};
+
+inline constexpr float kHiddenProbeTexels = 1.5f;
+
 // Into `out`, which keeps its storage where it is large enough.
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, RibbonPriority priority,
-                      float marginTexels, const Image<int32_t>* coverage, const Image<float>& farthest, Image<RibbonTexel>& out);
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
+                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm
 

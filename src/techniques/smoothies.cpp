@@ -10,12 +10,18 @@
 // distance to the occluder; V = 1 elsewhere. The hard shadow stays the umbra: the shadow only grows
 // outwards, never into the umbra, which is why this row sees half of every penumbra.
 //
-// Our implementation: the smoothies are the outer halves of the silhouette ribbons of plm.h, kept by
-// the edge nearest the light (priority c). With the strip as wide as the widest physical penumbra,
-// the remapped alpha is the distance from the edge over the penumbra's width at the receiver's depth,
+// Our implementation: the smoothies are the outer halves of the silhouette ribbons of plm.h. With the
+// strip as wide as the widest physical penumbra, the remapped alpha is the distance from the edge
+// over the penumbra's width at the receiver's depth,
 //     V = sat(w s r / (z - c))    (in plm.h's zeta and depth rate: the disk light's outer penumbra),
 // which is Chan & Durand's remap with the strip width set from the light's size instead of a user
-// knob. The smoothie buffer and the hard map are read at the texel holding the pixel (no filtering:
+// knob. Deviation that follows from it: per texel the buffer keeps the strip whose penumbra begins
+// highest on the texel's light ray (priority c + w s r, plm's "highest penumbra limit wins"), not the
+// strip nearest the light. A strip as wide as the widest penumbra in the map reaches far beyond a
+// raised object's own penumbra, and kept by depth it covered the strips of every lower object
+// around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's penumbra);
+// with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden
+// from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at the texel holding the pixel (no filtering:
 // the 2003 hardware filtered no float textures), then V goes through Appendix A's table of Lawlor
 // 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm (sphere, disk,
 // rect, polygon, directional; segments rejected).
@@ -57,7 +63,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Outer,
-                          plm::RibbonPriority::EdgeDepth, options_.marginTexels, nullptr, farthest_, smoothies_);
+                          options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
