@@ -143,13 +143,13 @@ LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::s
   return plane;
 }
 
-std::vector<Occluder> makeOccluders(const Scene& scene, std::string_view technique) {
+std::vector<Occluder> makeOccluders(const Scene& scene) {
   std::vector<Occluder> occluders;
   for (const Object& object : scene.objects) {
     Occluder o;
     o.objectId = object.id;
     o.name = object.name;
-    o.topology = occluderTopology(object.mesh, object.name, technique);
+    o.topology = occluderTopology(object.mesh);
     if (o.topology.triangles.empty()) continue;
     o.sheet = o.topology.twoSidedSheet;
     occluders.push_back(std::move(o));
@@ -364,13 +364,13 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[1] = Side{};
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
-    const std::vector<Occluder> occluders = makeOccluders(scene, "ssv");
+    const std::vector<Occluder> occluders = makeOccluders(scene);
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
     facets_ = 0;
-    for (const Occluder& o : occluders) facets_ += o.sheet ? o.topology.triangleCount() / 2 : o.topology.triangleCount();
+    for (const Occluder& o : occluders) facets_ += o.topology.surfaceTriangles;
     for (Side& side : sides_) {
       side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
       for (const Occluder& o : occluders) buildRings(side, toLightSpace(o, side.plane));

@@ -67,8 +67,9 @@ struct Occluder {
   bool sheet = false;             //!< a two-sided planar sheet (cannot shadow itself)
 };
 
-// The scene's objects as occluders, checked (Rouf Section 1.3, see mesh_topology.h), in world space.
-std::vector<Occluder> makeOccluders(const Scene& scene, std::string_view technique);
+// The scene's objects as occluders in world space: closed oriented surfaces (mesh_topology.h: a solid
+// as given or repaired, any other mesh as a doubled shell; Rouf Section 1.3 asks for solids).
+std::vector<Occluder> makeOccluders(const Scene& scene);
 // The same occluder with positions and normals in the light space of `plane`.
 Occluder toLightSpace(const Occluder& o, const LightPlane& plane);
 

@@ -83,7 +83,7 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back] = Side{};
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
     }
-    const std::vector<Occluder> occluders = makeOccluders(scene, "wedges");
+    const std::vector<Occluder> occluders = makeOccluders(scene);
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
