@@ -100,7 +100,10 @@ std::vector<uint32_t> weldVertices(const std::vector<Vec3>& positions, std::vect
   return id;
 }
 
-MeshTopology buildMeshTopology(const Mesh& mesh) {
+namespace {
+
+// Welds, drops degenerate triangles and finds whether the rest lie in one plane (no adjacency).
+MeshTopology weldAndDrop(const Mesh& mesh) {
   MeshTopology m;
   const std::vector<uint32_t> remap = weldVertices(mesh.positions, m.positions);
   const Bounds3 bounds = mesh.bounds();
@@ -124,7 +127,6 @@ MeshTopology buildMeshTopology(const Mesh& mesh) {
     m.triangles.push_back(w);
     m.faceNormals.push_back(cross / len);
   }
-  buildAdjacency(m);
   m.planar = !m.triangles.empty();
   if (m.planar) {
     const Vec3 n0 = m.faceNormals[0];
@@ -134,6 +136,14 @@ MeshTopology buildMeshTopology(const Mesh& mesh) {
       for (int i = 0; i < 3; ++i) m.planar = m.planar && std::abs(glm::dot(m.positions[m.triangles[t][i]] - p0, n0)) <= 1e-5f * scale;
     }
   }
+  return m;
+}
+
+}  // namespace
+
+MeshTopology buildMeshTopology(const Mesh& mesh) {
+  MeshTopology m = weldAndDrop(mesh);
+  buildAdjacency(m);
   return m;
 }
 
@@ -158,9 +168,9 @@ std::tuple<uint32_t, uint32_t, uint32_t> sortedCorners(glm::uvec3 c) {
 }  // namespace
 
 MeshTopology occluderTopology(const Mesh& mesh) {
-  const MeshTopology in = buildMeshTopology(mesh);
+  MeshTopology in = weldAndDrop(mesh);
   MeshTopology m;
-  m.positions = in.positions;
+  m.positions = std::move(in.positions);
   m.droppedDegenerate = in.droppedDegenerate;
   m.planar = in.planar;
   if (in.triangles.empty()) return m;
@@ -267,15 +277,15 @@ MeshTopology occluderTopology(const Mesh& mesh) {
   std::vector<double> volume(components, 0.0);
   std::vector<Bounds3> box(components);
   std::vector<Vec3> origin(components);
-  for (uint32_t i = n; i-- > 0;) origin[component[i]] = in.positions[input(i).x];
+  for (uint32_t i = n; i-- > 0;) origin[component[i]] = m.positions[input(i).x];
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t c = component[i];
     const glm::uvec3 t = flip[i] ? reversed(input(i)) : input(i);
     const glm::dvec3 o(origin[c]);
-    const glm::dvec3 p0 = glm::dvec3(in.positions[t.x]) - o, p1 = glm::dvec3(in.positions[t.y]) - o,
-                     p2 = glm::dvec3(in.positions[t.z]) - o;
+    const glm::dvec3 p0 = glm::dvec3(m.positions[t.x]) - o, p1 = glm::dvec3(m.positions[t.y]) - o,
+                     p2 = glm::dvec3(m.positions[t.z]) - o;
     volume[c] += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
-    for (int k = 0; k < 3; ++k) box[c].extend(in.positions[t[k]]);
+    for (int k = 0; k < 3; ++k) box[c].extend(m.positions[t[k]]);
   }
   // solid[c]: 0 a shell, 1 a solid as propagated, 2 a solid flipped as a whole.
   std::vector<uint8_t> solid(components, 0);

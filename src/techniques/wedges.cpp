@@ -30,7 +30,8 @@
 // projected edge, and V would jump there.) a two-sided planar
 // sheet (mesh_topology.h) does not shadow its own pixels; receivers behind the light's plane are
 // handled in the light space of its other face; rings are binned in the light-space grid of ssv.h
-// by their u-space boxes grown by R / z_min.
+// by their regions of influence (their u-space boxes grown by R (1/z_min - 1/z_p), z_p the deepest
+// receiver of a cell).
 //
 // Parameters: grid (cells per side of the binning grid).
 #include <algorithm>
@@ -53,15 +54,17 @@ namespace {
 using namespace silhouette;
 
 struct WedgeRing {
-  std::vector<Vec3> vertices;  //!< ring vertices in order, light space
+  uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
   int32_t objectId = 0;
   bool sheet = false;
-  Vec2 uLower{kInfinity}, uUpper{-kInfinity};
+  Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
+  float zMin = kInfinity;                        //!< its smallest depth there
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
 struct Side {
   LightPlane plane;
+  std::vector<Vec3> vertices;
   std::vector<WedgeRing> rings;
   UGrid grid;
   bool binned = false;
@@ -83,43 +86,13 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back] = Side{};
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
     }
-    const std::vector<Occluder> occluders = makeOccluders(scene);
+    occluders_ = makeOccluders(scene);
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
-    for (int back = 0; back < 2; ++back) {
-      Side& side = sides_[back];
-      for (const Occluder& world : occluders) {
-        const Occluder o = toLightSpace(world, side.plane);
-        const MeshTopology& m = o.topology;
-        // Facets facing the light's centre (the origin of light space): the single silhouette.
-        std::vector<uint8_t> facing(m.triangles.size());
-        for (size_t t = 0; t < m.triangles.size(); ++t)
-          facing[t] = glm::dot(m.faceNormals[t], -m.positions[m.triangles[t].x]) > 0.0f;
-        for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, facing))) {
-          WedgeRing ring;
-          ring.objectId = o.objectId;
-          ring.sheet = o.sheet;
-          float zMin = kInfinity;
-          for (const SilhouetteEdge& e : ringEdges) ring.vertices.push_back(m.positions[e.a]);
-          for (size_t i = 0; i < ring.vertices.size(); ++i) {
-            Vec3 a = ring.vertices[i], b = ring.vertices[(i + 1) % ring.vertices.size()];
-            if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
-            for (const Vec3& q : {a, b}) {
-              zMin = std::min(zMin, q.z);
-              ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
-              ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
-            }
-          }
-          if (back == 0) edges_ += ringEdges.size();
-          if (zMin == kInfinity) continue;  // entirely behind this face of the light
-          const float grow = side.plane.extent / zMin;
-          ring.uLower -= grow;
-          ring.uUpper += grow;
-          side.rings.push_back(std::move(ring));
-        }
-      }
-    }
+    // The other face of the light is built when a receiver lies behind the light's plane.
+    buildSide(sides_[0]);
+    backBuilt_ = false;
     timings_.add("silhouette+wedges", timer.elapsedMs());
     prepared_ = true;
   }
@@ -127,21 +100,30 @@ class WedgesTechnique final : public ShadowTechnique {
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("wedges: visibility() called before prepare(); call prepare(scene, light) first");
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "silhouette+wedges"; }),
+                                         [](const auto& p) { return p.first != "silhouette+wedges" && p.first != "back face silhouette"; }),
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
+    if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
+      buildSide(sides_[1]);
+      backBuilt_ = true;
+      timings_.add("back face silhouette", timer.elapsedMs());
+      timer = Timer();
+    }
     for (Side& side : sides_) {
       Vec2 lower, upper;
       side.binned = !side.rings.empty() && receiverRange(gbuffer, side.plane, zNear_, lower, upper);
       if (!side.binned) continue;
       std::vector<Vec2> lo, hi;
+      std::vector<float> near;
       for (const WedgeRing& r : side.rings) {
         lo.push_back(r.uLower);
         hi.push_back(r.uUpper);
+        near.push_back(side.plane.extent / r.zMin);
       }
-      side.grid.build(lower, upper, grid_, lo, hi);
+      // A ring's region of influence: its hard shadow (its box) and its edges' penumbrae (ssv.h).
+      side.grid.buildInfluence(lower, upper, grid_, lo, hi, near, receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, grid_), {});
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       std::vector<Vec3> clipped, tmp;
@@ -171,6 +153,40 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
  private:
+  void buildSide(Side& side) {
+    const bool front = &side == &sides_[0];
+    for (const Occluder& o : occluders_) {
+      const LightSpaceGeometry ls = toLightSpace(o, side.plane);
+      const MeshTopology& m = o.topology;
+      // Facets facing the light's centre (the origin of light space): the single silhouette.
+      std::vector<uint8_t> facing(m.triangles.size());
+      for (size_t t = 0; t < m.triangles.size(); ++t) facing[t] = glm::dot(ls.normals[t], -ls.positions[m.triangles[t].x]) > 0.0f;
+      for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, facing))) {
+        WedgeRing ring;
+        ring.objectId = o.objectId;
+        ring.sheet = o.sheet;
+        ring.first = static_cast<uint32_t>(side.vertices.size());
+        ring.count = static_cast<uint32_t>(ringEdges.size());
+        for (const SilhouetteEdge& e : ringEdges) side.vertices.push_back(ls.positions[e.a]);
+        for (uint32_t i = 0; i < ring.count; ++i) {
+          Vec3 a = side.vertices[ring.first + i], b = side.vertices[ring.first + (i + 1) % ring.count];
+          if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
+          for (const Vec3& q : {a, b}) {
+            ring.zMin = std::min(ring.zMin, q.z);
+            ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
+            ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
+          }
+        }
+        if (front) edges_ += ringEdges.size();
+        if (ring.zMin == kInfinity) {  // entirely behind this face of the light
+          side.vertices.resize(ring.first);
+          continue;
+        }
+        side.rings.push_back(ring);
+      }
+    }
+  }
+
   template <typename Blocker>
   float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped, std::vector<Vec3>& tmp,
                      Blocker& blocker) const {
@@ -186,7 +202,7 @@ class WedgesTechnique final : public ShadowTechnique {
       // the plane just in front of p, whose projection runs far outside the light, as the part of
       // the loop "at infinity" seen from p would; clipping edge by edge would leave the loop open
       // and its winding undefined.
-      clipped.assign(r.vertices.begin(), r.vertices.end());
+      clipped.assign(side.vertices.begin() + r.first, side.vertices.begin() + r.first + r.count);
       bool cut = false;
       for (const float bound : {zNear_, zMax}) {
         const bool low = bound == zNear_;
@@ -226,6 +242,8 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
   int grid_;
+  std::vector<Occluder> occluders_;
+  bool backBuilt_ = false;
   std::unique_ptr<RayScene> rays_;  //!< the hard shadow of the light's centre
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
