@@ -31,7 +31,7 @@
 //     and orientable, with non-zero volume, is a solid: used once, flipped as a whole if its signed
 //     volume is negative (normals point outwards).
 //  4. Every other component (open, non-orientable, or enclosing no volume) becomes a doubled shell:
-//     each triangle as given and its reversed copy (appended after the surface's triangles,
+//     each triangle, wound as repaired, and its reversed copy (appended after the surface's triangles,
 //     MeshTopology::copyOf), a closed surface of zero thickness that blocks light as the ray
 //     tracer's two-sided triangles do. At each edge the shell triangles are sorted by angle around
 //     it and, for each sector between two consecutive ones, the two sides facing the sector are
@@ -77,7 +77,7 @@ struct MeshTopology {
   // occluderTopology only:
   size_t surfaceTriangles = 0;             //!< triangles [0, surfaceTriangles): the surface, each once
   std::vector<uint32_t> copyOf;            //!< triangle surfaceTriangles + i is the reverse of copyOf[i] (shells)
-  size_t flippedTriangles = 0;             //!< triangles of solids whose winding was repaired
+  size_t flippedTriangles = 0;             //!< surface triangles wound against the input (repaired, or a solid turned outwards)
   size_t solidComponents = 0;              //!< closed components used once
   size_t shellComponents = 0;              //!< components doubled into shells
   bool twoSidedSheet = false;              //!< planar and all shell: cannot shadow itself

@@ -302,14 +302,14 @@ MeshTopology occluderTopology(const Mesh& mesh) {
     m.shellComponents += solid[c] == 0;
   }
 
-  // 4. The surface: solids as repaired, shells as given; then the reversed copies of the shells'
-  // triangles. reversedOut[i]: surface triangle i runs against the input; copy[i]: its reversed copy.
+  // 4. The surface, wound as repaired (solids turned outwards); then the reversed copies of the
+  // shells' triangles. reversedOut[i]: surface triangle i runs against the input; copy[i]: its copy.
   std::vector<uint8_t> reversedOut(n, 0);
   std::vector<uint32_t> copy(n, kNoNeighbour);
   m.triangles.reserve(2 * size_t(n));
   for (uint32_t i = 0; i < n; ++i) {
     const uint8_t s = solid[component[i]];
-    reversedOut[i] = s == 0 ? 0 : uint8_t(flip[i] ^ (s == 2 ? 1 : 0));
+    reversedOut[i] = uint8_t(flip[i] ^ (s == 2 ? 1 : 0));
     m.flippedTriangles += reversedOut[i];
     m.triangles.push_back(reversedOut[i] ? reversed(input(i)) : input(i));
   }
@@ -318,12 +318,12 @@ MeshTopology occluderTopology(const Mesh& mesh) {
     if (solid[component[i]] == 0) {
       copy[i] = static_cast<uint32_t>(m.triangles.size());
       m.copyOf.push_back(i);
-      m.triangles.push_back(reversed(input(i)));
+      m.triangles.push_back(reversed(m.triangles[i]));
     }
   m.faceNormals.resize(m.triangles.size());
   for (uint32_t i = 0; i < n; ++i) {
-    const Vec3 normal = in.faceNormals[tris[i]];
-    m.faceNormals[i] = reversedOut[i] ? -normal : normal;
+    const Vec3 normal = reversedOut[i] ? -in.faceNormals[tris[i]] : in.faceNormals[tris[i]];
+    m.faceNormals[i] = normal;
     if (copy[i] != kNoNeighbour) m.faceNormals[copy[i]] = -normal;
   }
   m.twoSidedSheet = m.planar;  // every component of a planar mesh is a shell (no volume)
@@ -381,12 +381,18 @@ MeshTopology occluderTopology(const Mesh& mesh) {
     }
     // The sector from shell[s] to shell[s + 1] (increasing angle, turning about u -> v) is faced by
     // the side of shell[s] that runs u -> v and the side of shell[s + 1] that runs v -> u. A
-    // triangle as given runs u -> v when its half-edge is forward; its reversed copy the other way.
+    // surface triangle runs u -> v when its half-edge (as given) is forward and it was not
+    // reversed, or the other way round; its copy runs the other way.
+    auto side = [&](const ShellSide& e, bool uToV) -> std::pair<uint32_t, uint8_t> {
+      const bool surfaceUToV = e.forward != (reversedOut[e.i] != 0);
+      if (surfaceUToV == uToV) return {e.i, reversedOut[e.i] ? kReverseOf[e.k] : e.k};
+      return {copy[e.i], reversedOut[e.i] ? e.k : kReverseOf[e.k]};
+    };
     const size_t count = shell.size();
     for (size_t s = 0; s < count; ++s) {
-      const ShellSide &x = shell[s], &y = shell[(s + 1) % count];
-      link(x.forward ? x.i : copy[x.i], x.forward ? x.k : kReverseOf[x.k],  //
-           y.forward ? copy[y.i] : y.i, y.forward ? kReverseOf[y.k] : y.k);
+      const auto [xt, xk] = side(shell[s], true);
+      const auto [yt, yk] = side(shell[(s + 1) % count], false);
+      link(xt, xk, yt, yk);
     }
   }
   return m;

@@ -78,6 +78,16 @@
 //    lists per cell the rings with an edge whose region of influence reaches a receiver of the
 //    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
 //    it; a pixel combines the rings listed in its cell.
+//  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
+//    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
+//    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
+//    rings and windings above need nothing more. One thing a shell changes: a shell triangle whose
+//    plane the light straddles has both sides partially lit, both sides are in the umbra
+//    silhouette's facet set, and their projections cancel (as a thin solid plate's two faces do in
+//    Rouf's method, where the plate's rims carry its shadow): the walls of an open box or a cup,
+//    which a large light straddles, would shadow nothing where they alone block the light. A
+//    third silhouette, competing with the other two, bounds one side of each such triangle (the
+//    side facing the light's centre); its winding counts the walls crossed.
 //  - A two-sided planar sheet (an open planar mesh, e.g. the ground; mesh_topology.h) does not
 //    shadow its own pixels.
 //
@@ -597,10 +607,21 @@ class SsvTechnique final : public ShadowTechnique {
       // One silhouette is both (e.g. a sheet, or a thin plate seen by the whole light), or there is
       // no facet in shadow (an object against the light): one set of rings.
       addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), true);
-      return;
+    } else {
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), false);
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
     }
-    addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), false);
-    addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
+    // The straddled shell triangles' silhouette (header): one side of each, the one facing the
+    // light's centre.
+    std::vector<uint8_t> straddled(n, 0);
+    bool anyStraddled = false;
+    for (size_t i = 0; i < m.copyOf.size(); ++i) {
+      const uint32_t front = m.copyOf[i], back = static_cast<uint32_t>(m.surfaceTriangles + i);
+      if (!notShadow[front] || !notShadow[back]) continue;
+      straddled[facing[back] && !facing[front] ? back : front] = 1;
+      anyStraddled = true;
+    }
+    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true);
   }
 
   void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,

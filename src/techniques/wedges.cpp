@@ -18,6 +18,17 @@
 // single-silhouette artifact (the silhouette seen from the centre is used for every point of the
 // light, Fig. 2-15 / 4-10) and the overlap approximation (Fig. 2-12 / 4-13).
 //
+// Occluders that are not closed 2-manifolds (our extension; the paper assumes solids): any mesh
+// becomes a closed oriented surface (mesh_topology.h), its closed components solids, the rest
+// doubled shells (each triangle and its reversed copy). A shell's facets facing the centre are
+// its front sides in one place and its back sides in another (the outside of a bowl's far wall,
+// the inside of its near one), and where the shell encloses space (a sphere with a hole, an open
+// box) both layers cover the same part of the light: added, the coverage would count that part
+// twice. So the silhouette is taken per layer, the solids', the shells' front sides' and their
+// back sides', and an object's coverage is its solids' plus the larger of its two shell layers'.
+// Two layers of one object that cover different parts of the light from p (two separate open
+// pieces, one seen from each side) are then counted as the larger one only.
+//
 // Other choices: each ring is clipped as a closed polygon to z < z_p (1 - 1e-4) (only occluder parts
 // nearer to the light than p can occlude it) and to the light's plane. Where the ring passes beyond
 // p (p on or beside an occluder) or behind the light's plane, the cut is closed along that plane;
@@ -27,8 +38,8 @@
 // ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h): the ring hides the
 // centre when the first thing the ray meets is the ring's object. (For whole rings the winding is
 // kept: the ray and the winding could disagree in the last bit where the centre lies on a
-// projected edge, and V would jump there.) a two-sided planar
-// sheet (mesh_topology.h) does not shadow its own pixels; receivers behind the light's plane are
+// projected edge, and V would jump there.) A two-sided planar sheet (mesh_topology.h) does not
+// shadow its own pixels; receivers behind the light's plane are
 // handled in the light space of its other face; rings are binned in the light-space grid of ssv.h
 // by their regions of influence (their u-space boxes grown by R (1/z_min - 1/z_p), z_p the deepest
 // receiver of a cell).
@@ -56,6 +67,8 @@ using namespace silhouette;
 struct WedgeRing {
   uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
   int32_t objectId = 0;
+  uint32_t occluder = 0;  //!< index of its occluder
+  uint8_t layer = 0;      //!< 0: solids; shells: 1 the front sides, 2 the back sides
   bool sheet = false;
   Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
   float zMin = kInfinity;                        //!< its smallest depth there
@@ -161,28 +174,37 @@ class WedgesTechnique final : public ShadowTechnique {
       // Facets facing the light's centre (the origin of light space): the single silhouette.
       std::vector<uint8_t> facing(m.triangles.size());
       for (size_t t = 0; t < m.triangles.size(); ++t) facing[t] = glm::dot(ls.normals[t], -ls.positions[m.triangles[t].x]) > 0.0f;
-      for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, facing))) {
-        WedgeRing ring;
-        ring.objectId = o.objectId;
-        ring.sheet = o.sheet;
-        ring.first = static_cast<uint32_t>(side.vertices.size());
-        ring.count = static_cast<uint32_t>(ringEdges.size());
-        for (const SilhouetteEdge& e : ringEdges) side.vertices.push_back(ls.positions[e.a]);
-        for (uint32_t i = 0; i < ring.count; ++i) {
-          Vec3 a = side.vertices[ring.first + i], b = side.vertices[ring.first + (i + 1) % ring.count];
-          if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
-          for (const Vec3& q : {a, b}) {
-            ring.zMin = std::min(ring.zMin, q.z);
-            ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
-            ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
+      std::vector<uint8_t> shell(m.triangles.size(), 0);
+      for (size_t i = 0; i < m.copyOf.size(); ++i) shell[m.copyOf[i]] = shell[m.surfaceTriangles + i] = 1;
+      for (uint8_t layer = 0; layer < 3; ++layer) {
+        std::vector<uint8_t> set(m.triangles.size());
+        for (size_t t = 0; t < set.size(); ++t)
+          set[t] = facing[t] && (layer == 0 ? !shell[t] : shell[t] && (layer == 1) == (t < m.surfaceTriangles));
+        for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, set))) {
+          WedgeRing ring;
+          ring.objectId = o.objectId;
+          ring.occluder = static_cast<uint32_t>(&o - occluders_.data());
+          ring.layer = layer;
+          ring.sheet = o.sheet;
+          ring.first = static_cast<uint32_t>(side.vertices.size());
+          ring.count = static_cast<uint32_t>(ringEdges.size());
+          for (const SilhouetteEdge& e : ringEdges) side.vertices.push_back(ls.positions[e.a]);
+          for (uint32_t i = 0; i < ring.count; ++i) {
+            Vec3 a = side.vertices[ring.first + i], b = side.vertices[ring.first + (i + 1) % ring.count];
+            if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
+            for (const Vec3& q : {a, b}) {
+              ring.zMin = std::min(ring.zMin, q.z);
+              ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
+              ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
+            }
           }
+          if (front) edges_ += ringEdges.size();
+          if (ring.zMin == kInfinity) {  // entirely behind this face of the light
+            side.vertices.resize(ring.first);
+            continue;
+          }
+          side.rings.push_back(ring);
         }
-        if (front) edges_ += ringEdges.size();
-        if (ring.zMin == kInfinity) {  // entirely behind this face of the light
-          side.vertices.resize(ring.first);
-          continue;
-        }
-        side.rings.push_back(ring);
       }
     }
   }
@@ -194,6 +216,13 @@ class WedgesTechnique final : public ShadowTechnique {
     const auto [begin, end] = side.grid.cell(Vec2(p.x / p.z, p.y / p.z));
     const float zMax = p.z * (1.0f - 1e-4f);
     float total = 0.0f;
+    // Per occluder: its solids' coverage plus the larger of its shells' front and back sides'.
+    uint32_t current = 0xffffffffu;
+    float layers[3] = {0.0f, 0.0f, 0.0f};
+    auto flush = [&]() {
+      total += layers[0] + std::max(layers[1], layers[2]);
+      layers[0] = layers[1] = layers[2] = 0.0f;
+    };
     for (const uint32_t* it = begin; it != end; ++it) {
       const WedgeRing& r = side.rings[*it];
       if (r.sheet && r.objectId == objectId) continue;
@@ -236,8 +265,13 @@ class WedgesTechnique final : public ShadowTechnique {
       }
       // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
       if (cut) covered += side.plane.area * (static_cast<float>(winding) + (blocker() == r.objectId ? 1.0f : 0.0f));
-      total += covered;
+      if (r.occluder != current) {
+        flush();
+        current = r.occluder;
+      }
+      layers[r.layer] += covered;
     }
+    flush();
     return 1.0f - std::clamp(total / side.plane.area, 0.0f, 1.0f);
   }
 

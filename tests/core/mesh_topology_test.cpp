@@ -10,7 +10,8 @@
 // into closed rings, and whose facing set's boundary, projected from a point, winds around
 // exactly the points of the ground hidden from it by the mesh's triangles (an independent
 // segment-triangle test); for shells the winding equals the number of triangles crossed.
-// Orientation repair makes a closed box with a flipped triangle, and an inside-out box, solids.
+// Orientation repair makes a closed box with a flipped triangle, and an inside-out box, solids,
+// and winds a shell consistently.
 #include "penumbra/mesh_topology.h"
 
 #include <gtest/gtest.h>
@@ -242,6 +243,16 @@ TEST(MeshTopology, BoxWithAHoleIsADoubledShell) {
     for (int k = 0; k < 3; ++k) toOwnCopy += m.neighbours[m.surfaceTriangles + i][k] == m.copyOf[i];
   EXPECT_EQ(toOwnCopy, 3u);
   expectUsableOccluder(hole, "box with a hole");
+
+  // With a flipped triangle too: the shell is wound consistently (as its first triangle), so its
+  // front sides are all outside or all inside (wedges tells a shell's two layers apart by this).
+  Mesh flipped = hole;
+  std::swap(flipped.triangles[4].y, flipped.triangles[4].z);
+  const MeshTopology f = occluderTopology(flipped);
+  EXPECT_EQ(f.shellComponents, 1u);
+  EXPECT_EQ(f.flippedTriangles, 1u);
+  for (size_t t = 0; t < f.surfaceTriangles; ++t) EXPECT_GT(glm::dot(f.faceNormals[t], hole.faceNormal(t)), 0.99f) << t;
+  expectUsableOccluder(flipped, "box with a hole and a flipped triangle");
 }
 
 TEST(MeshTopology, OrientationRepairMakesABoxWithAFlippedTriangleASolid) {
