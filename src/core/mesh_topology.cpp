@@ -1,9 +1,11 @@
-// Mesh topology: welding, edge adjacency, the occluder checks of Rouf 2007 (Section 1.3) and
-// silhouette rings (Section 3.2.3.2). See include/penumbra/mesh_topology.h for the choices.
+// Mesh topology: welding, edge adjacency, any mesh as a closed oriented occluder surface (solids
+// repaired, everything else as doubled shells; our extension of Rouf 2007, Section 1.3) and
+// silhouette rings (Section 3.2.3.2). See include/penumbra/mesh_topology.h for the rule.
 #include "penumbra/mesh_topology.h"
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <tuple>
 
@@ -41,26 +43,16 @@ void buildAdjacency(MeshTopology& m) {
   std::sort(half.begin(), half.end(),
             [](const HalfEdge& x, const HalfEdge& y) { return std::tie(x.key, x.t, x.k) < std::tie(y.key, y.t, y.k); });
   m.boundaryEdges = m.nonManifoldEdges = m.inconsistentEdges = 0;
-  bool noted = false;
-  auto note = [&](uint64_t key) {
-    if (noted) return;
-    noted = true;
-    m.firstDefectA = m.positions[key >> 32];
-    m.firstDefectB = m.positions[key & 0xffffffffu];
-  };
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
     while (j < half.size() && half[j].key == half[i].key) ++j;
     const size_t count = j - i;
     if (count == 1) {
       ++m.boundaryEdges;
-      note(half[i].key);
     } else if (count > 2) {
       ++m.nonManifoldEdges;
-      note(half[i].key);
     } else if (half[i].forward == half[i + 1].forward) {
       ++m.inconsistentEdges;
-      note(half[i].key);
     } else {
       m.neighbours[half[i].t][half[i].k] = half[i + 1].t;
       m.neighbours[half[i + 1].t][half[i + 1].k] = half[i].t;
@@ -68,8 +60,6 @@ void buildAdjacency(MeshTopology& m) {
     i = j;
   }
 }
-
-std::string formatPoint(const Vec3& p) { return fmt::format("({:.4g}, {:.4g}, {:.4g})", p.x, p.y, p.z); }
 
 }  // namespace
 
@@ -110,7 +100,10 @@ std::vector<uint32_t> weldVertices(const std::vector<Vec3>& positions, std::vect
   return id;
 }
 
-MeshTopology buildMeshTopology(const Mesh& mesh) {
+namespace {
+
+// Welds, drops degenerate triangles and finds whether the rest lie in one plane (no adjacency).
+MeshTopology weldAndDrop(const Mesh& mesh) {
   MeshTopology m;
   const std::vector<uint32_t> remap = weldVertices(mesh.positions, m.positions);
   const Bounds3 bounds = mesh.bounds();
@@ -134,7 +127,6 @@ MeshTopology buildMeshTopology(const Mesh& mesh) {
     m.triangles.push_back(w);
     m.faceNormals.push_back(cross / len);
   }
-  buildAdjacency(m);
   m.planar = !m.triangles.empty();
   if (m.planar) {
     const Vec3 n0 = m.faceNormals[0];
@@ -147,73 +139,261 @@ MeshTopology buildMeshTopology(const Mesh& mesh) {
   return m;
 }
 
-MeshTopology twoSidedSheet(const MeshTopology& sheet) {
-  MeshTopology m;
-  const auto n = static_cast<uint32_t>(sheet.triangles.size());
-  m.positions = sheet.positions;
-  m.triangles = sheet.triangles;
-  m.faceNormals = sheet.faceNormals;
-  m.neighbours = sheet.neighbours;
-  m.triangles.reserve(2 * n);
-  for (uint32_t t = 0; t < n; ++t) {
-    const glm::uvec3& tri = sheet.triangles[t];
-    m.triangles.push_back(glm::uvec3(tri.y, tri.x, tri.z));  // reversed
-    m.faceNormals.push_back(-sheet.faceNormals[t]);
-  }
-  m.neighbours.resize(2 * n);
-  // Reversed triangle (y, x, z): its edge 0 is y->x (edge 0 of t reversed), edge 1 is x->z (edge 2
-  // of t), edge 2 is z->y (edge 1 of t).
-  constexpr int kReverseOf[3] = {0, 2, 1};
-  for (uint32_t t = 0; t < n; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t front = sheet.neighbours[t][k];
-      // Across a boundary edge the front face continues as the back face.
-      if (front == kNoNeighbour) m.neighbours[t][k] = n + t;
-      m.neighbours[n + t][kReverseOf[k]] = front == kNoNeighbour ? t : n + front;
-    }
-  m.droppedDegenerate = sheet.droppedDegenerate;
-  m.planar = true;
-  m.twoSidedSheet = true;
+}  // namespace
+
+MeshTopology buildMeshTopology(const Mesh& mesh) {
+  MeshTopology m = weldAndDrop(mesh);
+  buildAdjacency(m);
   return m;
 }
 
-MeshTopology occluderTopology(const Mesh& mesh, std::string_view objectName, std::string_view technique) {
-  MeshTopology m = buildMeshTopology(mesh);
-  if (m.triangles.empty()) return m;
-  const std::string where = fmt::format("{}: object '{}'", technique, objectName);
-  const std::string rule = "occluders must be closed, manifold, consistently wound triangle meshes (Rouf 2007, Section 1.3), or open meshes lying in one plane in one connected piece (treated as two-sided sheets)";
-  if (m.nonManifoldEdges > 0)
-    fail("{}: {} non-manifold edge(s) shared by more than two triangles (e.g. the edge {} - {}); {}: split the mesh into separate objects",
-         where, m.nonManifoldEdges, formatPoint(m.firstDefectA), formatPoint(m.firstDefectB), rule);
-  if (m.inconsistentEdges > 0)
-    fail("{}: inconsistent winding: {} edge(s) run the same way in both of their triangles (e.g. the edge {} - {}); {}: flip the reversed triangles",
-         where, m.inconsistentEdges, formatPoint(m.firstDefectA), formatPoint(m.firstDefectB), rule);
-  if (m.boundaryEdges > 0) {
-    // A sheet is one connected piece (a ground plane, a card); a soup of separate planar pieces
-    // would make every piece's outline a silhouette ring of its own.
-    std::vector<uint32_t> parent(m.triangles.size());
-    for (uint32_t t = 0; t < parent.size(); ++t) parent[t] = t;
-    auto find = [&](uint32_t t) {
-      while (parent[t] != t) t = parent[t] = parent[parent[t]];
-      return t;
-    };
-    size_t pieces = m.triangles.size();
-    for (uint32_t t = 0; t < m.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t u = m.neighbours[t][k];
-        if (u == kNoNeighbour) continue;
-        const uint32_t a = find(t), b = find(u);
-        if (a != b) {
-          parent[a] = b;
-          --pieces;
+namespace {
+
+// Undirected edge key of a -> b.
+uint64_t edgeKey(uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
+
+// Reversed triangle (y, x, z): its edge 0 is y->x (edge 0 of (x, y, z) reversed), edge 1 is x->z
+// (edge 2 reversed), edge 2 is z->y (edge 1 reversed).
+constexpr uint8_t kReverseOf[3] = {0, 2, 1};
+
+glm::uvec3 reversed(const glm::uvec3& t) { return glm::uvec3(t.y, t.x, t.z); }
+
+std::tuple<uint32_t, uint32_t, uint32_t> sortedCorners(glm::uvec3 c) {
+  if (c.x > c.y) std::swap(c.x, c.y);
+  if (c.y > c.z) std::swap(c.y, c.z);
+  if (c.x > c.y) std::swap(c.x, c.y);
+  return {c.x, c.y, c.z};
+}
+
+}  // namespace
+
+MeshTopology occluderTopology(const Mesh& mesh) {
+  MeshTopology in = weldAndDrop(mesh);
+  MeshTopology m;
+  m.positions = std::move(in.positions);
+  m.droppedDegenerate = in.droppedDegenerate;
+  m.planar = in.planar;
+  if (in.triangles.empty()) return m;
+
+  // 1. One triangle per set of three corners: the first in input order is kept.
+  std::vector<uint32_t> tris;  // the kept triangles (indices into in.triangles), in input order
+  {
+    std::vector<std::pair<std::tuple<uint32_t, uint32_t, uint32_t>, uint32_t>> order(in.triangles.size());
+    for (uint32_t t = 0; t < order.size(); ++t) order[t] = {sortedCorners(in.triangles[t]), t};
+    std::sort(order.begin(), order.end());
+    std::vector<uint8_t> keep(in.triangles.size(), 1);
+    for (size_t i = 1; i < order.size(); ++i)
+      if (order[i].first == order[i - 1].first) keep[order[i].second] = 0;
+    for (uint32_t t = 0; t < keep.size(); ++t)
+      if (keep[t]) tris.push_back(t);
+    m.droppedDuplicates = in.triangles.size() - tris.size();
+  }
+  const auto n = static_cast<uint32_t>(tris.size());
+  auto input = [&](uint32_t i) { return in.triangles[tris[i]]; };
+
+  // Half-edges of the kept triangles, grouped by undirected edge.
+  std::vector<HalfEdge> half;
+  half.reserve(3 * size_t(n));
+  for (uint32_t i = 0; i < n; ++i)
+    for (uint8_t k = 0; k < 3; ++k) {
+      const uint32_t a = input(i)[k], b = input(i)[(k + 1) % 3];
+      half.push_back({edgeKey(a, b), i, k, a < b});
+    }
+  std::sort(half.begin(), half.end(),
+            [](const HalfEdge& x, const HalfEdge& y) { return std::tie(x.key, x.t, x.k) < std::tie(y.key, y.t, y.k); });
+  std::vector<size_t> groupStart;  // half-edges [groupStart[g], groupStart[g + 1]) share an edge
+  for (size_t i = 0; i < half.size(); ++i)
+    if (i == 0 || half[i].key != half[i - 1].key) groupStart.push_back(i);
+  groupStart.push_back(half.size());
+  const size_t groups = groupStart.size() - 1;
+
+  // 2. Orientation repair across the edges with exactly two triangles: flip[i] makes each such edge
+  // run opposite ways in its two triangles, where the component allows it.
+  std::vector<std::array<uint32_t, 3>> across(n, {kNoNeighbour, kNoNeighbour, kNoNeighbour});
+  std::vector<std::array<uint8_t, 3>> sameWay(n, {0, 0, 0});
+  for (size_t g = 0; g < groups; ++g) {
+    const size_t i = groupStart[g];
+    const size_t count = groupStart[g + 1] - i;
+    if (count == 1) ++m.boundaryEdges;
+    if (count > 2) ++m.nonManifoldEdges;
+    if (count != 2) continue;
+    const HalfEdge &x = half[i], &y = half[i + 1];
+    m.inconsistentEdges += x.forward == y.forward;
+    across[x.t][x.k] = y.t;
+    across[y.t][y.k] = x.t;
+    sameWay[x.t][x.k] = sameWay[y.t][y.k] = x.forward == y.forward;
+  }
+  constexpr uint32_t kUnset = 0xffffffffu;
+  std::vector<uint32_t> component(n, kUnset);
+  std::vector<uint8_t> flip(n, 0);
+  std::vector<uint8_t> closedComponent;  // per component: orientable and closed (so far)
+  {
+    std::vector<uint32_t> stack;
+    for (uint32_t seed = 0; seed < n; ++seed) {
+      if (component[seed] != kUnset) continue;
+      const auto c = static_cast<uint32_t>(closedComponent.size());
+      closedComponent.push_back(1);
+      component[seed] = c;
+      stack.push_back(seed);
+      while (!stack.empty()) {
+        const uint32_t t = stack.back();
+        stack.pop_back();
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t u = across[t][k];
+          if (u == kNoNeighbour) continue;
+          const uint8_t want = flip[t] ^ sameWay[t][k];
+          if (component[u] == kUnset) {
+            component[u] = c;
+            flip[u] = want;
+            stack.push_back(u);
+          } else if (flip[u] != want) {
+            closedComponent[c] = 0;  // not orientable (a Moebius strip): a shell
+          }
         }
       }
-    if (m.planar && pieces == 1) return twoSidedSheet(m);
-    if (m.planar)
-      fail("{}: the mesh is open and lies in one plane but falls into {} separate pieces; {}: make each piece its own object, or close the mesh",
-           where, pieces, rule);
-    fail("{}: the mesh is not closed: {} boundary edge(s) with a triangle on one side only (a hole, e.g. at the edge {} - {}); {}: close the hole",
-         where, m.boundaryEdges, formatPoint(m.firstDefectA), formatPoint(m.firstDefectB), rule);
+    }
+  }
+  const size_t components = closedComponent.size();
+  // Whether half-edge h runs from the smaller vertex id to the larger once its triangle is flipped.
+  auto forwardAfterFlip = [&](const HalfEdge& h) -> uint8_t { return h.forward != (flip[h.t] != 0); };
+
+  // 3. Closed components: at every edge each component has no triangle or exactly two, running
+  // opposite ways.
+  {
+    std::vector<std::pair<uint32_t, uint8_t>> at;  // (component, forward after flip) of one edge's half-edges
+    for (size_t g = 0; g < groups; ++g) {
+      at.clear();
+      for (size_t i = groupStart[g]; i < groupStart[g + 1]; ++i) at.push_back({component[half[i].t], forwardAfterFlip(half[i])});
+      std::sort(at.begin(), at.end());
+      for (size_t i = 0; i < at.size();) {
+        size_t j = i;
+        while (j < at.size() && at[j].first == at[i].first) ++j;
+        if (j - i != 2 || at[i].second == at[i + 1].second) closedComponent[at[i].first] = 0;
+        i = j;
+      }
+    }
+  }
+  // Signed volumes (divergence theorem, about each component's first corner, in double) and sizes.
+  std::vector<double> volume(components, 0.0);
+  std::vector<Bounds3> box(components);
+  std::vector<Vec3> origin(components);
+  for (uint32_t i = n; i-- > 0;) origin[component[i]] = m.positions[input(i).x];
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t c = component[i];
+    const glm::uvec3 t = flip[i] ? reversed(input(i)) : input(i);
+    const glm::dvec3 o(origin[c]);
+    const glm::dvec3 p0 = glm::dvec3(m.positions[t.x]) - o, p1 = glm::dvec3(m.positions[t.y]) - o,
+                     p2 = glm::dvec3(m.positions[t.z]) - o;
+    volume[c] += glm::dot(p0, glm::cross(p1, p2)) / 6.0;
+    for (int k = 0; k < 3; ++k) box[c].extend(m.positions[t[k]]);
+  }
+  // solid[c]: 0 a shell, 1 a solid as propagated, 2 a solid flipped as a whole.
+  std::vector<uint8_t> solid(components, 0);
+  for (size_t c = 0; c < components; ++c) {
+    if (!closedComponent[c] || m.planar) continue;
+    // A closed surface enclosing (almost) no volume has no outside for its normals to point to;
+    // as a shell it blocks the same light whatever its winding.
+    const double size = glm::length(glm::dvec3(box[c].diagonal()));
+    if (!(std::abs(volume[c]) > 1e-9 * size * size * size)) continue;
+    solid[c] = volume[c] > 0.0 ? 1 : 2;
+  }
+  for (size_t c = 0; c < components; ++c) {
+    m.solidComponents += solid[c] != 0;
+    m.shellComponents += solid[c] == 0;
+  }
+
+  // 4. The surface, wound as repaired (solids turned outwards); then the reversed copies of the
+  // shells' triangles. reversedOut[i]: surface triangle i runs against the input; copy[i]: its copy.
+  std::vector<uint8_t> reversedOut(n, 0);
+  std::vector<uint32_t> copy(n, kNoNeighbour);
+  m.triangles.reserve(2 * size_t(n));
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint8_t s = solid[component[i]];
+    reversedOut[i] = uint8_t(flip[i] ^ (s == 2 ? 1 : 0));
+    m.flippedTriangles += reversedOut[i];
+    m.triangles.push_back(reversedOut[i] ? reversed(input(i)) : input(i));
+  }
+  m.surfaceTriangles = n;
+  for (uint32_t i = 0; i < n; ++i)
+    if (solid[component[i]] == 0) {
+      copy[i] = static_cast<uint32_t>(m.triangles.size());
+      m.copyOf.push_back(i);
+      m.triangles.push_back(reversed(m.triangles[i]));
+    }
+  m.faceNormals.resize(m.triangles.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    const Vec3 normal = reversedOut[i] ? -in.faceNormals[tris[i]] : in.faceNormals[tris[i]];
+    m.faceNormals[i] = normal;
+    if (copy[i] != kNoNeighbour) m.faceNormals[copy[i]] = -normal;
+  }
+  m.twoSidedSheet = m.planar;  // every component of a planar mesh is a shell (no volume)
+
+  // 5. Pairing, edge by edge.
+  m.neighbours.assign(m.triangles.size(), {kNoNeighbour, kNoNeighbour, kNoNeighbour});
+  auto link = [&](uint32_t t, uint8_t k, uint32_t u, uint8_t j) {
+    m.neighbours[t][k] = u;
+    m.neighbours[u][j] = t;
+  };
+  struct ShellSide {
+    double angle;
+    uint32_t i;  // surface triangle
+    uint8_t k;   // its edge, as given
+    bool forward;
+  };
+  std::vector<ShellSide> shell;
+  std::vector<std::pair<uint32_t, size_t>> solidAt;  // (component, half-edge)
+  for (size_t g = 0; g < groups; ++g) {
+    shell.clear();
+    solidAt.clear();
+    for (size_t h = groupStart[g]; h < groupStart[g + 1]; ++h) {
+      const HalfEdge& e = half[h];
+      if (solid[component[e.t]]) solidAt.push_back({component[e.t], h});
+      else shell.push_back({0.0, e.t, e.k, e.forward});
+    }
+    // Solids: each component's two half-edges here, which run opposite ways (step 3).
+    std::sort(solidAt.begin(), solidAt.end());
+    for (size_t s = 0; s + 1 < solidAt.size(); s += 2) {
+      const HalfEdge &x = half[solidAt[s].second], &y = half[solidAt[s + 1].second];
+      link(x.t, reversedOut[x.t] ? kReverseOf[x.k] : x.k, y.t, reversedOut[y.t] ? kReverseOf[y.k] : y.k);
+    }
+    if (shell.empty()) continue;
+    if (shell.size() > 2) {
+      // Radial order around the edge u -> v (u the smaller vertex id), from the first triangle's
+      // far corner. One or two triangles need no order: either way round pairs the same sides.
+      const auto u = static_cast<uint32_t>(half[groupStart[g]].key >> 32);
+      const auto v = static_cast<uint32_t>(half[groupStart[g]].key & 0xffffffffu);
+      const glm::dvec3 pu(m.positions[u]);
+      const glm::dvec3 axis = glm::normalize(glm::dvec3(m.positions[v]) - pu);
+      glm::dvec3 e1(0.0), e2(0.0);
+      for (size_t s = 0; s < shell.size(); ++s) {
+        const uint32_t far = input(shell[s].i)[(shell[s].k + 2) % 3];
+        glm::dvec3 r = glm::dvec3(m.positions[far]) - pu;
+        r -= axis * glm::dot(r, axis);
+        if (s == 0) {
+          e1 = glm::normalize(r);
+          e2 = glm::cross(axis, e1);
+        }
+        const double angle = std::atan2(glm::dot(r, e2), glm::dot(r, e1));
+        shell[s].angle = std::isfinite(angle) ? angle : 0.0;
+      }
+      std::sort(shell.begin(), shell.end(),
+                [](const ShellSide& x, const ShellSide& y) { return std::tie(x.angle, x.i, x.k) < std::tie(y.angle, y.i, y.k); });
+    }
+    // The sector from shell[s] to shell[s + 1] (increasing angle, turning about u -> v) is faced by
+    // the side of shell[s] that runs u -> v and the side of shell[s + 1] that runs v -> u. A
+    // surface triangle runs u -> v when its half-edge (as given) is forward and it was not
+    // reversed, or the other way round; its copy runs the other way.
+    auto side = [&](const ShellSide& e, bool uToV) -> std::pair<uint32_t, uint8_t> {
+      const bool surfaceUToV = e.forward != (reversedOut[e.i] != 0);
+      if (surfaceUToV == uToV) return {e.i, reversedOut[e.i] ? kReverseOf[e.k] : e.k};
+      return {copy[e.i], reversedOut[e.i] ? e.k : kReverseOf[e.k]};
+    };
+    const size_t count = shell.size();
+    for (size_t s = 0; s < count; ++s) {
+      const auto [xt, xk] = side(shell[s], true);
+      const auto [yt, yk] = side(shell[(s + 1) % count], false);
+      link(xt, xk, yt, yk);
+    }
   }
   return m;
 }
@@ -255,7 +435,8 @@ std::vector<std::vector<SilhouetteEdge>> silhouetteRings(const MeshTopology& top
       uint32_t& c = cursor[v];
       while (c < start[v + 1] && used[out[c]]) ++c;
       if (c == start[v + 1])
-        fail("silhouette: the boundary does not close at vertex {} ({:.4g}, {:.4g}, {:.4g}): the mesh is not closed", v,
+        fail("silhouette: the boundary does not close at vertex {} ({:.4g}, {:.4g}, {:.4g}): the topology is not a closed "
+             "oriented surface (build it with occluderTopology)", v,
              topology.positions[v].x, topology.positions[v].y, topology.positions[v].z);
       current = out[c];
     }

@@ -40,7 +40,9 @@
 // The visible fraction is measured by slicing (3.2.4.4, Fig. 3-22): the square is cut at every
 // distinct coordinate of the curves (two within `merge_tolerance`, 0.01 in the thesis, count as
 // one, Section 4.2.6) and one point per cell is tested, weighted by its area; or by fixed 8x8 /
-// 16x16 sampling (`integration`, Fig. 4-8). The hard shadow (3.2.5): a ring none of whose edge
+// 16x16 sampling (`integration`, Fig. 4-8). The points are tested row by row (each piece of a curve
+// only on the rows it spans, its crossings by bisection), which gives what testing every piece at
+// every point gives. The hard shadow (3.2.5): a ring none of whose edge
 // shadows contains p (p behind all its back planes or in front of some front plane) hides the
 // whole light when p lies in its shadow, tested in 2D by the angle sweep (winding) of p's
 // direction from the light's centre around the ring's projection, which works for concave and
@@ -75,8 +77,19 @@
 //    lights emit from both). An edge seen (nearly) end-on from the centre has no direction: its
 //    curve piece is dropped and its neighbours meet at its projection.
 //  - Binning: a light-space grid over directions from the light's centre (ssv.h, which says why)
-//    holds the edges' regions of influence and the rings' hard-shadow boxes; a pixel combines the
-//    rings with an edge or a hard-shadow box in its cell.
+//    lists per cell the rings with an edge whose region of influence reaches a receiver of the
+//    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
+//    it; a pixel combines the rings listed in its cell.
+//  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
+//    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
+//    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
+//    rings and windings above need nothing more. One thing a shell changes: a shell triangle whose
+//    plane the light straddles has both sides partially lit, both sides are in the umbra
+//    silhouette's facet set, and their projections cancel (as a thin solid plate's two faces do in
+//    Rouf's method, where the plate's rims carry its shadow): the walls of an open box or a cup,
+//    which a large light straddles, would shadow nothing where they alone block the light. A
+//    third silhouette, competing with the other two, bounds one side of each such triangle (the
+//    side facing the light's centre); its winding counts the walls crossed.
 //  - A two-sided planar sheet (an open planar mesh, e.g. the ground; mesh_topology.h) does not
 //    shadow its own pixels.
 //
@@ -148,13 +161,13 @@ LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::s
   return plane;
 }
 
-std::vector<Occluder> makeOccluders(const Scene& scene, std::string_view technique) {
+std::vector<Occluder> makeOccluders(const Scene& scene) {
   std::vector<Occluder> occluders;
   for (const Object& object : scene.objects) {
     Occluder o;
     o.objectId = object.id;
     o.name = object.name;
-    o.topology = occluderTopology(object.mesh, object.name, technique);
+    o.topology = occluderTopology(object.mesh);
     if (o.topology.triangles.empty()) continue;
     o.sheet = o.topology.twoSidedSheet;
     occluders.push_back(std::move(o));
@@ -162,11 +175,13 @@ std::vector<Occluder> makeOccluders(const Scene& scene, std::string_view techniq
   return occluders;
 }
 
-Occluder toLightSpace(const Occluder& world, const LightPlane& plane) {
-  Occluder o = world;
-  for (Vec3& p : o.topology.positions) p = plane.toLight(p);
-  for (Vec3& n : o.topology.faceNormals) n = plane.lsFromWs.toLocal(n);
-  return o;
+LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
+  LightSpaceGeometry g;
+  g.positions.reserve(o.topology.positions.size());
+  g.normals.reserve(o.topology.faceNormals.size());
+  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.toLight(p));
+  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFromWs.toLocal(n));
+  return g;
 }
 
 namespace {
@@ -208,12 +223,25 @@ float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& 
   return (cross > 0.0f ? 0.5f : -0.5f) * twice;
 }
 
+namespace {
+// The cell of u in a grid of res x res cells over lower + [0, res / scale]: -1 outside.
+int cellOf(const Vec2& lower, const Vec2& scale, int res, const Vec2& u) {
+  const Vec2 g = (u - lower) * scale;
+  if (!(g.x >= 0.0f && g.y >= 0.0f && g.x <= res && g.y <= res) || res == 0) return -1;
+  const int x = std::min(res - 1, static_cast<int>(g.x)), y = std::min(res - 1, static_cast<int>(g.y));
+  return y * res + x;
+}
+
+Vec2 gridScale(const Vec2& lower, const Vec2& upper, int res) {
+  return Vec2(static_cast<float>(res)) / glm::max(upper - lower, Vec2(1e-20f));
+}
+}  // namespace
+
 void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
                   const std::vector<Vec2>& itemUpper) {
   res_ = resolution;
   lower_ = lower;
-  const Vec2 size = glm::max(upper - lower, Vec2(1e-20f));
-  scale_ = Vec2(static_cast<float>(res_)) / size;
+  scale_ = gridScale(lower, upper, res_);
   start_.assign(size_t(res_) * res_ + 1, 0);
   auto range = [&](size_t i, int& x0, int& y0, int& x1, int& y1) {
     const Vec2 lo = (itemLower[i] - lower_) * scale_, hi = (itemUpper[i] - lower_) * scale_;
@@ -238,12 +266,74 @@ void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const st
         for (int x = x0; x <= x1; ++x) items_[fill[size_t(y) * res_ + x]++] = static_cast<uint32_t>(i);
 }
 
+void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
+                           const std::vector<uint32_t>& keys) {
+  res_ = resolution;
+  lower_ = lower;
+  scale_ = gridScale(lower, upper, res_);
+  const size_t cells = size_t(res_) * res_;
+  start_.assign(cells + 1, 0);
+  items_.clear();
+  float nearestFar = kInfinity;
+  for (const float f : cellFar) nearestFar = std::min(nearestFar, f);
+  if (!(nearestFar < kInfinity)) return;  // no receivers
+  const Vec2 cellSize = Vec2(1.0f) / scale_;
+  // A cell's rectangle, padded by a little of its size so float rounding of cellOf cannot put a
+  // receiver just outside the rectangle of its own cell.
+  const Vec2 pad = 1e-3f * cellSize;
+  auto visit = [&](size_t i, auto&& add) {
+    const float growMost = itemNear[i] - nearestFar;
+    if (!(growMost >= 0.0f)) return;
+    const Vec2 lo = (itemLower[i] - growMost - lower_) * scale_, hi = (itemUpper[i] + growMost - lower_) * scale_;
+    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return;
+    const int x0 = std::max(0, static_cast<int>(lo.x)), y0 = std::max(0, static_cast<int>(lo.y));
+    const int x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
+    const int y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const size_t c = size_t(y) * res_ + x;
+        const float grow = itemNear[i] - cellFar[c];
+        if (!(grow >= 0.0f)) continue;
+        const Vec2 cellLo = lower_ + Vec2(float(x), float(y)) * cellSize - pad, cellHi = cellLo + cellSize + 2.0f * pad;
+        const Vec2 gap = glm::max(Vec2(0.0f), glm::max(itemLower[i] - cellHi, cellLo - itemUpper[i]));
+        if (gap.x <= grow && gap.y <= grow) add(c);
+      }
+  };
+  constexpr uint32_t kNone = 0xffffffffu;
+  std::vector<uint32_t> last(cells, kNone);
+  auto keyOf = [&](size_t i) { return keys.empty() ? static_cast<uint32_t>(i) : keys[i]; };
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      ++start_[c + 1];
+    });
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  items_.resize(start_.back());
+  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
+  std::fill(last.begin(), last.end(), kNone);
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      items_[fill[c]++] = keyOf(i);
+    });
+}
+
+int UGrid::cellIndex(const Vec2& u) const { return cellOf(lower_, scale_, res_, u); }
+
 std::pair<const uint32_t*, const uint32_t*> UGrid::cell(const Vec2& u) const {
-  const Vec2 g = (u - lower_) * scale_;
-  if (!(g.x >= 0.0f && g.y >= 0.0f && g.x <= res_ && g.y <= res_) || res_ == 0) return {nullptr, nullptr};
-  const int x = std::min(res_ - 1, static_cast<int>(g.x)), y = std::min(res_ - 1, static_cast<int>(g.y));
-  const size_t c = size_t(y) * res_ + x;
+  const int c = cellIndex(u);
+  if (c < 0) return {nullptr, nullptr};
   return {items_.data() + start_[c], items_.data() + start_[c + 1]};
+}
+
+bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane) {
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x)
+      if (gbuffer.hit(x, y) && !(plane.toLight(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
+  return false;
 }
 
 bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper) {
@@ -259,6 +349,23 @@ bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, 
       upper = glm::max(upper, u);
     }
   return lower.x <= upper.x;
+}
+
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
+                                   int resolution) {
+  const Vec2 scale = gridScale(lower, upper, resolution);
+  std::vector<float> deepest(size_t(resolution) * resolution, 0.0f);
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x) {
+      if (!gbuffer.hit(x, y)) continue;
+      const Vec3 p = plane.toLight(gbuffer.wsPosition(x, y));
+      if (!(p.z > zMin)) continue;
+      const int c = cellOf(lower, scale, resolution, Vec2(p.x / p.z, p.y / p.z));
+      if (c >= 0) deepest[size_t(c)] = std::max(deepest[size_t(c)], p.z);
+    }
+  std::vector<float> far(deepest.size());
+  for (size_t c = 0; c < far.size(); ++c) far[c] = deepest[c] > 0.0f ? plane.extent / deepest[c] : kInfinity;
+  return far;
 }
 
 int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
@@ -341,6 +448,12 @@ struct Scratch {
   std::vector<Piece> pieces;
   std::vector<uint32_t> rings;
   std::vector<float> xs, ys;
+  // Integration: cell centres, pieces per row, per-row winding events and marks, the result.
+  std::vector<float> cx, cy;
+  std::vector<uint32_t> rowStart, rowFill, rowPieces;
+  std::vector<std::pair<uint32_t, int>> events;
+  std::vector<int> diff;
+  std::vector<uint8_t> hidden;
 };
 
 // Everything about one face of the light: its light space, silhouettes and edge shadows.
@@ -350,8 +463,8 @@ struct Side {
   std::vector<Edge> edges;
   std::vector<Ring> rings;
   std::vector<Group> groups;
-  UGrid edgeGrid, ringGrid;
-  std::vector<uint32_t> gridEdge;  //!< edgeGrid item -> edge
+  UGrid edgeGrid;  //!< per cell: the rings with an edge whose region of influence reaches it
+  UGrid ringGrid;  //!< per cell: the rings whose u-space box (hard shadow) overlaps it
   bool binned = false;
 };
 
@@ -369,17 +482,16 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[1] = Side{};
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
-    const std::vector<Occluder> occluders = makeOccluders(scene, "ssv");
+    occluders_ = makeOccluders(scene);
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
     facets_ = 0;
-    for (const Occluder& o : occluders) facets_ += o.sheet ? o.topology.triangleCount() / 2 : o.topology.triangleCount();
-    for (Side& side : sides_) {
-      side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
-      for (const Occluder& o : occluders) buildRings(side, toLightSpace(o, side.plane));
-    }
+    for (const Occluder& o : occluders_) facets_ += o.topology.surfaceTriangles;
+    // The other face of the light is built when a receiver lies behind the light's plane.
+    buildSide(sides_[0]);
+    backBuilt_ = false;
     timings_.add("silhouettes+edge shadows", timer.elapsedMs());
     prepared_ = true;
   }
@@ -387,11 +499,17 @@ class SsvTechnique final : public ShadowTechnique {
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("ssv: visibility() called before prepare(); call prepare(scene, light) first");
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "silhouettes+edge shadows"; }),
+                                         [](const auto& p) { return p.first != "silhouettes+edge shadows" && p.first != "back face silhouettes"; }),
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
+    if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
+      buildSide(sides_[1]);
+      backBuilt_ = true;
+      timings_.add("back face silhouettes", timer.elapsedMs());
+      timer = Timer();
+    }
     for (Side& side : sides_) bin(side, gbuffer);
     timings_.add("binning", timer.elapsedMs());
     Timer pixelTimer;
@@ -438,17 +556,19 @@ class SsvTechnique final : public ShadowTechnique {
     side.binned = false;
     Vec2 lower, upper;
     if (side.rings.empty() || !receiverRange(gbuffer, side.plane, zNear_, lower, upper)) return;
+    const std::vector<float> cellFar = receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, options_.grid);
     std::vector<Vec2> lo, hi;
-    side.gridEdge.clear();
-    for (uint32_t i = 0; i < side.edges.size(); ++i) {
-      const Edge& e = side.edges[i];
+    std::vector<float> near;
+    std::vector<uint32_t> ring;
+    for (const Edge& e : side.edges) {
       if (!e.inFront) continue;
-      const float grow = side.plane.extent / std::max(std::min(e.a.z, e.b.z), zNear_);
-      lo.push_back(glm::min(e.uA, e.uB) - grow);
-      hi.push_back(glm::max(e.uA, e.uB) + grow);
-      side.gridEdge.push_back(i);
+      lo.push_back(glm::min(e.uA, e.uB));
+      hi.push_back(glm::max(e.uA, e.uB));
+      near.push_back(side.plane.extent / std::max(std::min(e.a.z, e.b.z), zNear_));
+      ring.push_back(e.ring);
     }
-    side.edgeGrid.build(lower, upper, options_.grid, lo, hi);
+    // Each cell lists the rings (once, in order) with an edge whose region of influence reaches it.
+    side.edgeGrid.buildInfluence(lower, upper, options_.grid, lo, hi, near, cellFar, ring);
     lo.clear();
     hi.clear();
     for (const Ring& r : side.rings) {
@@ -459,7 +579,12 @@ class SsvTechnique final : public ShadowTechnique {
     side.binned = true;
   }
 
-  void buildRings(Side& side, const Occluder& o) const {
+  void buildSide(Side& side) const {
+    side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
+    for (const Occluder& o : occluders_) buildRings(side, o, toLightSpace(o, side.plane));
+  }
+
+  void buildRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls) const {
     const MeshTopology& m = o.topology;
     const size_t n = m.triangles.size();
     // Section 3.2.2: fully lit (every light vertex in front of the facet's plane), in shadow (none
@@ -468,12 +593,12 @@ class SsvTechnique final : public ShadowTechnique {
     std::vector<uint8_t> lit(n), notShadow(n), facing(n);
     size_t litCount = 0, notShadowCount = 0;
     for (size_t t = 0; t < n; ++t) {
-      const Vec3 p0 = m.positions[m.triangles[t].x];
+      const Vec3 p0 = ls.positions[m.triangles[t].x];
       int front = 0;
-      for (const Vec2& l : side.plane.vertices) front += glm::dot(m.faceNormals[t], Vec3(l, 0.0f) - p0) > 0.0f;
+      for (const Vec2& l : side.plane.vertices) front += glm::dot(ls.normals[t], Vec3(l, 0.0f) - p0) > 0.0f;
       lit[t] = front == static_cast<int>(side.plane.vertices.size());
       notShadow[t] = front > 0;
-      facing[t] = glm::dot(m.faceNormals[t], -p0) > 0.0f;
+      facing[t] = glm::dot(ls.normals[t], -p0) > 0.0f;
       litCount += lit[t];
       notShadowCount += notShadow[t];
     }
@@ -486,15 +611,26 @@ class SsvTechnique final : public ShadowTechnique {
     if (lit == notShadow || noUmbra) {
       // One silhouette is both (e.g. a sheet, or a thin plate seen by the whole light), or there is
       // no facet in shadow (an object against the light): one set of rings.
-      addRings(side, o, silhouetteRings(m, boundaryEdges(m, lit)), true);
-      return;
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), true);
+    } else {
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), false);
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
     }
-    addRings(side, o, silhouetteRings(m, boundaryEdges(m, lit)), false);
-    addRings(side, o, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
+    // The straddled shell triangles' silhouette (header): one side of each, the one facing the
+    // light's centre.
+    std::vector<uint8_t> straddled(n, 0);
+    bool anyStraddled = false;
+    for (size_t i = 0; i < m.copyOf.size(); ++i) {
+      const uint32_t front = m.copyOf[i], back = static_cast<uint32_t>(m.surfaceTriangles + i);
+      if (!notShadow[front] || !notShadow[back]) continue;
+      straddled[facing[back] && !facing[front] ? back : front] = 1;
+      anyStraddled = true;
+    }
+    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true);
   }
 
-  void addRings(Side& side, const Occluder& o, const std::vector<std::vector<SilhouetteEdge>>& rings, bool umbra) const {
-    const MeshTopology& m = o.topology;
+  void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,
+                bool umbra) const {
     auto uOf = [&](const Vec3& p) {
       const float z = std::max(p.z, zNear_);
       return Vec2(p.x / z, p.y / z);
@@ -514,8 +650,8 @@ class SsvTechnique final : public ShadowTechnique {
       const auto ringId = static_cast<uint32_t>(side.rings.size());
       for (const SilhouetteEdge& s : ringEdges) {
         Edge e;
-        e.a = m.positions[s.a];
-        e.b = m.positions[s.b];
+        e.a = ls.positions[s.a];
+        e.b = ls.positions[s.b];
         e.ring = ringId;
         ring.crossesLightPlane = ring.crossesLightPlane || e.a.z < zNear_;
         Vec3 ca = e.a, cb = e.b;
@@ -793,6 +929,84 @@ class SsvTechnique final : public ShadowTechnique {
     return centreWinding;
   }
 
+  // s.hidden[iy * nx + ix]: whether the point (cx[ix], cy[iy]) of the light square is hidden, i.e.
+  // some group's pieces (runs of equal group in s.pieces) wind around it, exactly as summing
+  // crossing() over every piece would say. Row by row: a piece crosses the ray from (x, cy)
+  // towards +x only on the rows within its y-range, and there for a prefix of the columns
+  // (crossing()'s side test, in float, is monotone in x), found by bisection. O(pieces x rows
+  // spanned x log columns + rows x columns) instead of O(pieces x rows x columns).
+  static void hiddenCells(Scratch& s) {
+    const size_t nx = s.cx.size(), ny = s.cy.size();
+    s.hidden.assign(nx * ny, 0);
+    // Pieces per row, in piece order (counting sort): rows with min(a.y, b.y) <= cy < max(a.y, b.y).
+    s.rowStart.assign(ny + 1, 0);
+    auto rowsOf = [&](const Piece& piece, size_t& r0, size_t& r1) {
+      const float lo = std::min(piece.a.y, piece.b.y), hi = std::max(piece.a.y, piece.b.y);
+      r0 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), lo) - s.cy.begin());
+      r1 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), hi) - s.cy.begin());
+    };
+    size_t r0, r1;
+    for (const Piece& piece : s.pieces) {
+      rowsOf(piece, r0, r1);
+      for (size_t r = r0; r < r1; ++r) ++s.rowStart[r + 1];
+    }
+    for (size_t r = 1; r <= ny; ++r) s.rowStart[r] += s.rowStart[r - 1];
+    s.rowPieces.resize(s.rowStart[ny]);
+    s.rowFill.assign(s.rowStart.begin(), s.rowStart.end() - 1);
+    for (uint32_t i = 0; i < s.pieces.size(); ++i) {
+      rowsOf(s.pieces[i], r0, r1);
+      for (size_t r = r0; r < r1; ++r) s.rowPieces[s.rowFill[r]++] = i;
+    }
+    s.diff.resize(nx + 1);
+    for (size_t iy = 0; iy < ny; ++iy) {
+      const float y = s.cy[iy];
+      std::fill(s.diff.begin(), s.diff.end(), 0);
+      auto flush = [&]() {
+        // The group's winding is constant between consecutive prefix ends: mark where it is not 0.
+        std::sort(s.events.begin(), s.events.end());
+        int winding = 0;
+        for (const auto& e : s.events) winding += e.second;
+        size_t column = 0;
+        for (size_t i = 0; i < s.events.size();) {
+          const uint32_t end = s.events[i].first;
+          if (winding != 0 && end > column) {
+            ++s.diff[column];
+            --s.diff[end];
+          }
+          for (; i < s.events.size() && s.events[i].first == end; ++i) winding -= s.events[i].second;
+          column = end;
+        }
+        s.events.clear();
+      };
+      uint32_t group = 0;
+      bool any = false;
+      for (size_t k = s.rowStart[iy]; k < s.rowStart[iy + 1]; ++k) {
+        const Piece& piece = s.pieces[s.rowPieces[k]];
+        if (any && piece.group != group) flush();
+        group = piece.group;
+        any = true;
+        const int w = crossing(piece.a, piece.b, Vec2(s.cx[0], y)) != 0 ? 1 : 0;
+        // Bisection for the first column whose point the piece does not cross.
+        size_t lo = 0, hi = nx;
+        if (w) {
+          lo = 1;
+          while (lo < hi) {
+            const size_t mid = (lo + hi) / 2;
+            if (crossing(piece.a, piece.b, Vec2(s.cx[mid], y)) != 0) lo = mid + 1;
+            else hi = mid;
+          }
+          s.events.push_back({static_cast<uint32_t>(lo), piece.a.y <= y ? 1 : -1});
+        }
+      }
+      if (any) flush();
+      int open = 0;
+      for (size_t ix = 0; ix < nx; ++ix) {
+        open += s.diff[ix];
+        s.hidden[iy * nx + ix] = open > 0;
+      }
+    }
+  }
+
   template <typename Blocker>
   float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, Scratch& s, Blocker& blocker) const {
     if (!side.binned || !(p.z > zNear_)) return 1.0f;
@@ -802,17 +1016,21 @@ class SsvTechnique final : public ShadowTechnique {
     // hides the whole light).
     s.rings.clear();
     {
+      // Both cells list ring ids in increasing order: merged, each ring once, in order (the rings
+      // of a group are consecutive).
       const auto [begin, end] = side.edgeGrid.cell(u);
-      for (const uint32_t* it = begin; it != end; ++it) s.rings.push_back(side.edges[side.gridEdge[*it]].ring);
       const auto [rBegin, rEnd] = side.ringGrid.cell(u);
+      const uint32_t* e = begin;
       for (const uint32_t* it = rBegin; it != rEnd; ++it) {
         const Ring& r = side.rings[*it];
-        if (u.x >= r.uLower.x && u.y >= r.uLower.y && u.x <= r.uUpper.x && u.y <= r.uUpper.y) s.rings.push_back(*it);
+        if (!(u.x >= r.uLower.x && u.y >= r.uLower.y && u.x <= r.uUpper.x && u.y <= r.uUpper.y)) continue;
+        for (; e != end && *e < *it; ++e) s.rings.push_back(*e);
+        if (e != end && *e == *it) ++e;
+        s.rings.push_back(*it);
       }
+      for (; e != end; ++e) s.rings.push_back(*e);
     }
     if (s.rings.empty()) return 1.0f;
-    std::sort(s.rings.begin(), s.rings.end());
-    s.rings.erase(std::unique(s.rings.begin(), s.rings.end()), s.rings.end());
     s.pieces.clear();
     const float zMax = p.z * (1.0f - 1e-4f);
     for (size_t i = 0; i < s.rings.size();) {
@@ -848,20 +1066,6 @@ class SsvTechnique final : public ShadowTechnique {
     if (s.pieces.empty()) return 1.0f;
     // Competitive combination (3.2.4.2, 3.2.4.4): a point of the light square is hidden when any
     // ring's curve winds around it (the visibilities AND-ed).
-    auto hiddenAt = [&](float sx, float sy) {
-      const Vec2 q(sx, sy);
-      uint32_t group = s.pieces.front().group;
-      int winding = 0;
-      for (const Piece& piece : s.pieces) {
-        if (piece.group != group) {
-          if (winding != 0) return true;
-          group = piece.group;
-          winding = 0;
-        }
-        winding += crossing(piece.a, piece.b, q);
-      }
-      return winding != 0;
-    };
     double visible = 0.0;
     if (options_.integration == Integration::Slicing) {
       // Slicing (3.2.4.4, Fig. 3-22): the light square cut at every distinct coordinate of the
@@ -887,16 +1091,24 @@ class SsvTechnique final : public ShadowTechnique {
       };
       merge(s.xs);
       merge(s.ys);
-      for (size_t iy = 0; iy + 1 < s.ys.size(); ++iy)
-        for (size_t ix = 0; ix + 1 < s.xs.size(); ++ix) {
+      s.cx.resize(s.xs.size() - 1);
+      s.cy.resize(s.ys.size() - 1);
+      for (size_t ix = 0; ix < s.cx.size(); ++ix) s.cx[ix] = 0.5f * (s.xs[ix] + s.xs[ix + 1]);
+      for (size_t iy = 0; iy < s.cy.size(); ++iy) s.cy[iy] = 0.5f * (s.ys[iy] + s.ys[iy + 1]);
+      hiddenCells(s);
+      for (size_t iy = 0; iy < s.cy.size(); ++iy)
+        for (size_t ix = 0; ix < s.cx.size(); ++ix) {
           const float w = (s.xs[ix + 1] - s.xs[ix]) * (s.ys[iy + 1] - s.ys[iy]);
-          if (w > 0.0f && !hiddenAt(0.5f * (s.xs[ix] + s.xs[ix + 1]), 0.5f * (s.ys[iy] + s.ys[iy + 1]))) visible += w;
+          if (w > 0.0f && !s.hidden[iy * s.cx.size() + ix]) visible += w;
         }
     } else {
       const int n = options_.integration == Integration::Fixed8 ? 8 : 16;
+      s.cx.resize(size_t(n));
+      for (int i = 0; i < n; ++i) s.cx[size_t(i)] = (static_cast<float>(i) + 0.5f) / static_cast<float>(n);
+      s.cy = s.cx;
+      hiddenCells(s);
       int count = 0;
-      for (int iy = 0; iy < n; ++iy)
-        for (int ix = 0; ix < n; ++ix) count += !hiddenAt((ix + 0.5f) / n, (iy + 0.5f) / n);
+      for (const uint8_t h : s.hidden) count += !h;
       visible = double(count) / (n * n);
     }
     return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
@@ -916,6 +1128,8 @@ class SsvTechnique final : public ShadowTechnique {
   }
 
   SsvOptions options_;
+  std::vector<Occluder> occluders_;
+  bool backBuilt_ = false;
   std::unique_ptr<RayScene> rays_;  //!< the light's centre seen from receivers beside an occluder
   std::optional<Light> light_;
   float epsilon_ = 0.0f;

@@ -12,8 +12,9 @@
 // its direction from the light's centre, u = (x/z, y/z). A point of an occluder edge at depth z_e can
 // change the light's visibility from p only if p sees it in front of the light, and then
 // |u_p - u_e| <= R (1/z_e - 1/z_p) < R / z_e, R the light's extent (the projection of the point from
-// p onto the light's plane lies within R of the centre). So an edge's influence lies in its u-space
-// bounding box grown by R / min z_e: conservative, exact in the limit of a small light.
+// p onto the light's plane lies within R of the centre). So an edge's influence on the receivers of
+// a cell lies in its u-space bounding box grown by R (1/min z_e - 1/z_c), z_c the deepest receiver
+// of the cell (none if z_c <= min z_e): conservative, exact in the limit of a small light.
 #pragma once
 
 #include <cstdint>
@@ -64,14 +65,20 @@ LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::s
 struct Occluder {
   int32_t objectId = 0;
   std::string name;
-  MeshTopology topology;          //!< positions in light space
+  MeshTopology topology;          //!< world space
   bool sheet = false;             //!< a two-sided planar sheet (cannot shadow itself)
 };
 
-// The scene's objects as occluders, checked (Rouf Section 1.3, see mesh_topology.h), in world space.
-std::vector<Occluder> makeOccluders(const Scene& scene, std::string_view technique);
-// The same occluder with positions and normals in the light space of `plane`.
-Occluder toLightSpace(const Occluder& o, const LightPlane& plane);
+// An occluder's vertex positions and face normals in the light space of one face of the light.
+struct LightSpaceGeometry {
+  std::vector<Vec3> positions, normals;
+};
+
+// The scene's objects as occluders in world space: closed oriented surfaces (mesh_topology.h: a solid
+// as given or repaired, any other mesh as a doubled shell; Rouf Section 1.3 asks for solids).
+std::vector<Occluder> makeOccluders(const Scene& scene);
+// The occluder's positions and normals in the light space of `plane`.
+LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane);
 
 // Clips segment a-b to zMin <= z <= zMax; false if nothing is left.
 inline bool clipToSlab(Vec3& a, Vec3& b, float zMin, float zMax) {
@@ -115,8 +122,20 @@ class UGrid {
  public:
   void build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
              const std::vector<Vec2>& itemUpper);
+  // Regions of influence (ssv.h's bound, per cell): an item at least `itemNear` = R / z_item deep
+  // (z_item its smallest depth) can change the light's visibility only from receivers deeper than
+  // it, and there within R (1/z_item - 1/z_p) of its box; a cell lists it when some receiver of
+  // the cell can be such a receiver: cellFar[c] = R / (the deepest receiver in cell c), +infinity
+  // for a cell without receivers. Items with equal consecutive `keys` are listed once per cell, as
+  // their key (empty keys: the item's index).
+  void buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                      const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
+                      const std::vector<uint32_t>& keys);
   // The items of the cell holding u ([begin, end) into items()); empty outside the grid.
   std::pair<const uint32_t*, const uint32_t*> cell(const Vec2& u) const;
+  // The cell holding u, or -1 outside the grid.
+  int cellIndex(const Vec2& u) const;
+  int resolution() const { return res_; }
 
  private:
   Vec2 lower_{0.0f}, scale_{0.0f};
@@ -124,8 +143,15 @@ class UGrid {
   std::vector<uint32_t> start_, items_;
 };
 
+// Whether some G-buffer hit point lies behind the light's plane (z <= 0 in the light space of
+// `plane`): only then is the light's other face needed.
+bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane);
 // The u-space rectangle of the G-buffer's hit points in front of the light (z > zMin).
 bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper);
+// cellFar of UGrid::buildInfluence for a grid of `resolution` cells over [lower, upper]: R / the
+// deepest receiver (z > zMin) in each cell, +infinity where there is none.
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
+                                   int resolution);
 
 // The object that hides the light's centre from G-buffer pixel (x, y) (kNoObject: none): one ray,
 // offset and clipped as raytraced-hard's. ssv and wedges trace it only where their silhouettes

@@ -19,6 +19,17 @@
 // single-silhouette artifact (the silhouette seen from the centre is used for every point of the
 // light, Fig. 2-15 / 4-10) and the overlap approximation (Fig. 2-12 / 4-13).
 //
+// Occluders that are not closed 2-manifolds (our extension; the paper assumes solids): any mesh
+// becomes a closed oriented surface (mesh_topology.h), its closed components solids, the rest
+// doubled shells (each triangle and its reversed copy). A shell's facets facing the centre are
+// its front sides in one place and its back sides in another (the outside of a bowl's far wall,
+// the inside of its near one), and where the shell encloses space (a sphere with a hole, an open
+// box) both layers cover the same part of the light: added, the coverage would count that part
+// twice. So the silhouette is taken per layer, the solids', the shells' front sides' and their
+// back sides', and an object's coverage is its solids' plus the larger of its two shell layers'.
+// Two layers of one object that cover different parts of the light from p (two separate open
+// pieces, one seen from each side) are then counted as the larger one only.
+//
 // Other choices: each ring is clipped as a closed polygon to z < z_p (1 - 1e-4) (only occluder parts
 // nearer to the light than p can occlude it) and to the light's plane. Where the ring passes beyond
 // p (p on or beside an occluder) or behind the light's plane, the cut is closed along that plane;
@@ -28,10 +39,11 @@
 // ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h): the ring hides the
 // centre when the first thing the ray meets is the ring's object. (For whole rings the winding is
 // kept: the ray and the winding could disagree in the last bit where the centre lies on a
-// projected edge, and V would jump there.) a two-sided planar
-// sheet (mesh_topology.h) does not shadow its own pixels; receivers behind the light's plane are
+// projected edge, and V would jump there.) A two-sided planar sheet (mesh_topology.h) does not
+// shadow its own pixels; receivers behind the light's plane are
 // handled in the light space of its other face; rings are binned in the light-space grid of ssv.h
-// by their u-space boxes grown by R / z_min.
+// by their regions of influence (their u-space boxes grown by R (1/z_min - 1/z_p), z_p the deepest
+// receiver of a cell).
 //
 // Parameters: grid (cells per side of the binning grid).
 #include <algorithm>
@@ -55,15 +67,19 @@ namespace {
 using namespace silhouette;
 
 struct WedgeRing {
-  std::vector<Vec3> vertices;  //!< ring vertices in order, light space
+  uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
   int32_t objectId = 0;
+  uint32_t occluder = 0;  //!< index of its occluder
+  uint8_t layer = 0;      //!< 0: solids; shells: 1 the front sides, 2 the back sides
   bool sheet = false;
-  Vec2 uLower{kInfinity}, uUpper{-kInfinity};
+  Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
+  float zMin = kInfinity;                        //!< its smallest depth there
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
 struct Side {
   LightPlane plane;
+  std::vector<Vec3> vertices;
   std::vector<WedgeRing> rings;
   UGrid grid;
   bool binned = false;
@@ -85,43 +101,13 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back] = Side{};
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
     }
-    const std::vector<Occluder> occluders = makeOccluders(scene, "wedges");
+    occluders_ = makeOccluders(scene);
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
-    for (int back = 0; back < 2; ++back) {
-      Side& side = sides_[back];
-      for (const Occluder& world : occluders) {
-        const Occluder o = toLightSpace(world, side.plane);
-        const MeshTopology& m = o.topology;
-        // Facets facing the light's centre (the origin of light space): the single silhouette.
-        std::vector<uint8_t> facing(m.triangles.size());
-        for (size_t t = 0; t < m.triangles.size(); ++t)
-          facing[t] = glm::dot(m.faceNormals[t], -m.positions[m.triangles[t].x]) > 0.0f;
-        for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, facing))) {
-          WedgeRing ring;
-          ring.objectId = o.objectId;
-          ring.sheet = o.sheet;
-          float zMin = kInfinity;
-          for (const SilhouetteEdge& e : ringEdges) ring.vertices.push_back(m.positions[e.a]);
-          for (size_t i = 0; i < ring.vertices.size(); ++i) {
-            Vec3 a = ring.vertices[i], b = ring.vertices[(i + 1) % ring.vertices.size()];
-            if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
-            for (const Vec3& q : {a, b}) {
-              zMin = std::min(zMin, q.z);
-              ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
-              ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
-            }
-          }
-          if (back == 0) edges_ += ringEdges.size();
-          if (zMin == kInfinity) continue;  // entirely behind this face of the light
-          const float grow = side.plane.extent / zMin;
-          ring.uLower -= grow;
-          ring.uUpper += grow;
-          side.rings.push_back(std::move(ring));
-        }
-      }
-    }
+    // The other face of the light is built when a receiver lies behind the light's plane.
+    buildSide(sides_[0]);
+    backBuilt_ = false;
     timings_.add("silhouette+wedges", timer.elapsedMs());
     prepared_ = true;
   }
@@ -129,21 +115,30 @@ class WedgesTechnique final : public ShadowTechnique {
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("wedges: visibility() called before prepare(); call prepare(scene, light) first");
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "silhouette+wedges"; }),
+                                         [](const auto& p) { return p.first != "silhouette+wedges" && p.first != "back face silhouette"; }),
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
+    if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
+      buildSide(sides_[1]);
+      backBuilt_ = true;
+      timings_.add("back face silhouette", timer.elapsedMs());
+      timer = Timer();
+    }
     for (Side& side : sides_) {
       Vec2 lower, upper;
       side.binned = !side.rings.empty() && receiverRange(gbuffer, side.plane, zNear_, lower, upper);
       if (!side.binned) continue;
       std::vector<Vec2> lo, hi;
+      std::vector<float> near;
       for (const WedgeRing& r : side.rings) {
         lo.push_back(r.uLower);
         hi.push_back(r.uUpper);
+        near.push_back(side.plane.extent / r.zMin);
       }
-      side.grid.build(lower, upper, grid_, lo, hi);
+      // A ring's region of influence: its hard shadow (its box) and its edges' penumbrae (ssv.h).
+      side.grid.buildInfluence(lower, upper, grid_, lo, hi, near, receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, grid_), {});
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       std::vector<Vec3> clipped, tmp;
@@ -173,6 +168,49 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
  private:
+  void buildSide(Side& side) {
+    const bool front = &side == &sides_[0];
+    for (const Occluder& o : occluders_) {
+      const LightSpaceGeometry ls = toLightSpace(o, side.plane);
+      const MeshTopology& m = o.topology;
+      // Facets facing the light's centre (the origin of light space): the single silhouette.
+      std::vector<uint8_t> facing(m.triangles.size());
+      for (size_t t = 0; t < m.triangles.size(); ++t) facing[t] = glm::dot(ls.normals[t], -ls.positions[m.triangles[t].x]) > 0.0f;
+      std::vector<uint8_t> shell(m.triangles.size(), 0);
+      for (size_t i = 0; i < m.copyOf.size(); ++i) shell[m.copyOf[i]] = shell[m.surfaceTriangles + i] = 1;
+      for (uint8_t layer = 0; layer < 3; ++layer) {
+        std::vector<uint8_t> set(m.triangles.size());
+        for (size_t t = 0; t < set.size(); ++t)
+          set[t] = facing[t] && (layer == 0 ? !shell[t] : shell[t] && (layer == 1) == (t < m.surfaceTriangles));
+        for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, set))) {
+          WedgeRing ring;
+          ring.objectId = o.objectId;
+          ring.occluder = static_cast<uint32_t>(&o - occluders_.data());
+          ring.layer = layer;
+          ring.sheet = o.sheet;
+          ring.first = static_cast<uint32_t>(side.vertices.size());
+          ring.count = static_cast<uint32_t>(ringEdges.size());
+          for (const SilhouetteEdge& e : ringEdges) side.vertices.push_back(ls.positions[e.a]);
+          for (uint32_t i = 0; i < ring.count; ++i) {
+            Vec3 a = side.vertices[ring.first + i], b = side.vertices[ring.first + (i + 1) % ring.count];
+            if (!clipToSlab(a, b, zNear_, kInfinity)) continue;
+            for (const Vec3& q : {a, b}) {
+              ring.zMin = std::min(ring.zMin, q.z);
+              ring.uLower = glm::min(ring.uLower, Vec2(q.x / q.z, q.y / q.z));
+              ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
+            }
+          }
+          if (front) edges_ += ringEdges.size();
+          if (ring.zMin == kInfinity) {  // entirely behind this face of the light
+            side.vertices.resize(ring.first);
+            continue;
+          }
+          side.rings.push_back(ring);
+        }
+      }
+    }
+  }
+
   template <typename Blocker>
   float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped, std::vector<Vec3>& tmp,
                      Blocker& blocker) const {
@@ -180,6 +218,13 @@ class WedgesTechnique final : public ShadowTechnique {
     const auto [begin, end] = side.grid.cell(Vec2(p.x / p.z, p.y / p.z));
     const float zMax = p.z * (1.0f - 1e-4f);
     float total = 0.0f;
+    // Per occluder: its solids' coverage plus the larger of its shells' front and back sides'.
+    uint32_t current = 0xffffffffu;
+    float layers[3] = {0.0f, 0.0f, 0.0f};
+    auto flush = [&]() {
+      total += layers[0] + std::max(layers[1], layers[2]);
+      layers[0] = layers[1] = layers[2] = 0.0f;
+    };
     for (const uint32_t* it = begin; it != end; ++it) {
       const WedgeRing& r = side.rings[*it];
       if (r.sheet && r.objectId == objectId) continue;
@@ -188,7 +233,7 @@ class WedgesTechnique final : public ShadowTechnique {
       // the plane just in front of p, whose projection runs far outside the light, as the part of
       // the loop "at infinity" seen from p would; clipping edge by edge would leave the loop open
       // and its winding undefined.
-      clipped.assign(r.vertices.begin(), r.vertices.end());
+      clipped.assign(side.vertices.begin() + r.first, side.vertices.begin() + r.first + r.count);
       bool cut = false;
       for (const float bound : {zNear_, zMax}) {
         const bool low = bound == zNear_;
@@ -222,12 +267,19 @@ class WedgesTechnique final : public ShadowTechnique {
       }
       // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
       if (cut) covered += side.plane.area * (static_cast<float>(winding) + (blocker() == r.objectId ? 1.0f : 0.0f));
-      total += covered;
+      if (r.occluder != current) {
+        flush();
+        current = r.occluder;
+      }
+      layers[r.layer] += covered;
     }
+    flush();
     return 1.0f - std::clamp(total / side.plane.area, 0.0f, 1.0f);
   }
 
   int grid_;
+  std::vector<Occluder> occluders_;
+  bool backBuilt_ = false;
   std::unique_ptr<RayScene> rays_;  //!< the hard shadow of the light's centre
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
