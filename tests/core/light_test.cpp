@@ -67,13 +67,8 @@ TEST(LightSample, RectSamplesLieOnTheRectAndAverageToItsCentre) {
   EXPECT_NEAR(glm::length(light.vertices()[2] - (c + u + v)), 0.0f, 1e-6f);
 }
 
-TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
-  // An irregular convex pentagon in the plane z = 2.
-  const std::vector<Vec2> q = {Vec2(-1.0f, -0.6f), Vec2(0.8f, -0.8f), Vec2(1.2f, 0.2f), Vec2(0.3f, 0.9f), Vec2(-0.9f, 0.5f)};
-  std::vector<Vec3> vs;
-  for (const Vec2& p : q) vs.push_back(Vec3(p.x, p.y, 2.0f));
-  const Light light = Light::polygon(vs);
-  // Area centroid by the shoelace formula (independent of the light's fan triangulation).
+// Area centroid by the shoelace formula.
+Vec2 shoelaceCentroid(const std::vector<Vec2>& q, double* area = nullptr) {
   double a = 0.0, cx = 0.0, cy = 0.0;
   for (size_t i = 0; i < q.size(); ++i) {
     const Vec2 p0 = q[i], p1 = q[(i + 1) % q.size()];
@@ -82,10 +77,20 @@ TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
     cx += (p0.x + p1.x) * cr;
     cy += (p0.y + p1.y) * cr;
   }
-  cx /= 3.0 * a;
-  cy /= 3.0 * a;
-  EXPECT_NEAR(light.center().x, cx, 1e-5);
-  EXPECT_NEAR(light.center().y, cy, 1e-5);
+  if (area) *area = 0.5 * std::abs(a);
+  return Vec2(static_cast<float>(cx / (3.0 * a)), static_cast<float>(cy / (3.0 * a)));
+}
+
+TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
+  // An irregular convex pentagon in the plane z = 2.
+  const std::vector<Vec2> q = {Vec2(-1.0f, -0.6f), Vec2(0.8f, -0.8f), Vec2(1.2f, 0.2f), Vec2(0.3f, 0.9f), Vec2(-0.9f, 0.5f)};
+  std::vector<Vec3> vs;
+  for (const Vec2& p : q) vs.push_back(Vec3(p.x, p.y, 2.0f));
+  const Light light = Light::polygon(vs);
+  // The area centroid, independent of the light's fan triangulation.
+  const Vec2 centroid = shoelaceCentroid(q);
+  EXPECT_NEAR(light.center().x, centroid.x, 1e-5);
+  EXPECT_NEAR(light.center().y, centroid.y, 1e-5);
   DVec3 mean(0.0);
   const auto ss = samples(light, kP, 4096);
   for (const LightSample& s : ss) {
@@ -98,8 +103,8 @@ TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
     mean += DVec3(x);
   }
   mean /= static_cast<double>(ss.size());
-  EXPECT_NEAR(mean.x, cx, 2e-3);
-  EXPECT_NEAR(mean.y, cy, 2e-3);
+  EXPECT_NEAR(mean.x, centroid.x, 2e-3);
+  EXPECT_NEAR(mean.y, centroid.y, 2e-3);
 }
 
 // An L (three unit squares: [0,2] x [0,1] and [0,1] x [1,2]) and a U (a 3 x 2 block with a 1 x 1.5
@@ -119,20 +124,6 @@ bool insidePolygon(const std::vector<Vec2>& q, const Vec2& x) {
   for (size_t i = 0, j = q.size() - 1; i < q.size(); j = i++)
     if ((q[i].y > x.y) != (q[j].y > x.y) && x.x < (q[j].x - q[i].x) * (x.y - q[i].y) / (q[j].y - q[i].y) + q[i].x) in = !in;
   return in;
-}
-
-// Area centroid by the shoelace formula.
-Vec2 shoelaceCentroid(const std::vector<Vec2>& q, double* area = nullptr) {
-  double a = 0.0, cx = 0.0, cy = 0.0;
-  for (size_t i = 0; i < q.size(); ++i) {
-    const Vec2 p0 = q[i], p1 = q[(i + 1) % q.size()];
-    const double cr = static_cast<double>(p0.x) * p1.y - static_cast<double>(p1.x) * p0.y;
-    a += cr;
-    cx += (p0.x + p1.x) * cr;
-    cy += (p0.y + p1.y) * cr;
-  }
-  if (area) *area = 0.5 * std::abs(a);
-  return Vec2(static_cast<float>(cx / (3.0 * a)), static_cast<float>(cy / (3.0 * a)));
 }
 
 TEST(LightSample, ConcavePolygonSamplesAreUniformInsideAndAverageToTheAreaCentroid) {

@@ -428,6 +428,18 @@ TEST(Brabec, ObjectIdTestKeepsATiltedPlaneLit) {
   EXPECT_LT(static_cast<double>(physicalWithoutIds), 0.01 * lit);
 }
 
+// Calls f(x, y, nx, ny) for each pair of neighbouring floor pixels (right or below) on either side of
+// the exact hard shadow's edge.
+template <class F>
+void forEachHardEdgePair(const SmallScene& s, F&& f) {
+  const int w = s.gbuffer.width(), h = s.gbuffer.height();
+  auto floorPixel = [&](int x, int y) { return x < w && y < h && s.mask(x, y) && s.gbuffer.objectId(x, y) == 0; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}})
+        if (floorPixel(x, y) && floorPixel(nx, ny) && s.hardTruth(x, y) != s.hardTruth(nx, ny)) f(x, y, nx, ny);
+}
+
 // A straight edge: a wide slab 1.2 above the floor covering x < 0, the light right above the edge.
 // On the hard-shadow edge the exact V is 1/2 (half of the light's disk is hidden); brabec's inner
 // and outer penumbrae meet there at `meet`.
@@ -453,23 +465,18 @@ TEST(Brabec, InnerAndOuterPenumbraMeetOnTheHardEdge) {
     const Image<float> v = runBrabec(s.scene, s.gbuffer, o);
     int edges = 0;
     float worst = 0.0f, worstReference = 0.0f;
-    const int w = s.gbuffer.width(), h = s.gbuffer.height();
-    auto floorPixel = [&](int x, int y) { return x < w && y < h && s.mask(x, y) && s.gbuffer.objectId(x, y) == 0; };
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}}) {
-          if (!floorPixel(x, y) || !floorPixel(nx, ny) || s.hardTruth(x, y) == s.hardTruth(nx, ny)) continue;
-          // The last shadowed and the first lit pixel of the exact hard shadow.
-          const bool firstInside = s.hardTruth(x, y) == 0.0f;
-          const float inner = firstInside ? v(x, y) : v(nx, ny), outer = firstInside ? v(nx, ny) : v(x, y);
-          const float refInner = firstInside ? s.reference(x, y) : s.reference(nx, ny);
-          const float refOuter = firstInside ? s.reference(nx, ny) : s.reference(x, y);
-          ++edges;
-          worst = std::max({worst, std::abs(inner - meet), std::abs(outer - meet)});
-          worstReference = std::max({worstReference, std::abs(refInner - 0.5f), std::abs(refOuter - 0.5f)});
-          EXPECT_LE(inner, meet + 1e-6f) << x << "," << y;
-          EXPECT_GE(outer, meet - 1e-6f) << x << "," << y;
-        }
+    forEachHardEdgePair(s, [&](int x, int y, int nx, int ny) {
+      // The last shadowed and the first lit pixel of the exact hard shadow.
+      const bool firstInside = s.hardTruth(x, y) == 0.0f;
+      const float inner = firstInside ? v(x, y) : v(nx, ny), outer = firstInside ? v(nx, ny) : v(x, y);
+      const float refInner = firstInside ? s.reference(x, y) : s.reference(nx, ny);
+      const float refOuter = firstInside ? s.reference(nx, ny) : s.reference(x, y);
+      ++edges;
+      worst = std::max({worst, std::abs(inner - meet), std::abs(outer - meet)});
+      worstReference = std::max({worstReference, std::abs(refInner - 0.5f), std::abs(refOuter - 0.5f)});
+      EXPECT_LE(inner, meet + 1e-6f) << x << "," << y;
+      EXPECT_GE(outer, meet - 1e-6f) << x << "," << y;
+    });
     std::printf("[brabec] straight edge, meet %.1f: %d edge pixel pairs, max |V - meet| %.3f (reference: max "
                 "|V - 0.5| %.3f)\n",
                 meet, edges, worst, worstReference);
@@ -495,19 +502,14 @@ TEST(Brabec, InnerAndOuterPenumbraMeetOnTheHardEdge) {
   const Image<float> bounded = runBrabec(s.scene, s.gbuffer, o);
   double errorPaper = 0.0, errorBounded = 0.0;
   int pairs = 0;
-  const int w = s.gbuffer.width(), h = s.gbuffer.height();
-  auto floorPixel = [&](int x, int y) { return x < w && y < h && s.mask(x, y) && s.gbuffer.objectId(x, y) == 0; };
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}}) {
-        if (!floorPixel(x, y) || !floorPixel(nx, ny) || s.hardTruth(x, y) == s.hardTruth(nx, ny)) continue;
-        ++pairs;
-        for (const auto& [px, py] : {std::pair{x, y}, std::pair{nx, ny}}) {
-          errorPaper += std::abs(paper(px, py) - 0.5f);
-          errorBounded += std::abs(bounded(px, py) - 0.5f);
-          EXPECT_GE(bounded(px, py), paper(px, py)) << px << "," << py;
-        }
-      }
+  forEachHardEdgePair(s, [&](int x, int y, int nx, int ny) {
+    ++pairs;
+    for (const auto& [px, py] : {std::pair{x, y}, std::pair{nx, ny}}) {
+      errorPaper += std::abs(paper(px, py) - 0.5f);
+      errorBounded += std::abs(bounded(px, py) - 0.5f);
+      EXPECT_GE(bounded(px, py), paper(px, py)) << px << "," << py;
+    }
+  });
   errorPaper /= 2.0 * pairs;
   errorBounded /= 2.0 * pairs;
   std::printf("[brabec] straight edge, meet 0.3: mean |V - 1/2| on %d edge pairs: paper %.3f, coverage bound %.3f\n",
