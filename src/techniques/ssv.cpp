@@ -246,8 +246,8 @@ void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const st
   auto range = [&](size_t i, int& x0, int& y0, int& x1, int& y1) {
     const Vec2 lo = (itemLower[i] - lower_) * scale_, hi = (itemUpper[i] - lower_) * scale_;
     if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return false;
-    x0 = std::max(0, static_cast<int>(lo.x));
-    y0 = std::max(0, static_cast<int>(lo.y));
+    x0 = static_cast<int>(std::max(lo.x, 0.0f));  // clamped before the conversion: lo can be far below 0
+    y0 = static_cast<int>(std::max(lo.y, 0.0f));
     x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
     y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
     return true;
@@ -287,7 +287,7 @@ void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution,
     if (!(growMost >= 0.0f)) return;
     const Vec2 lo = (itemLower[i] - growMost - lower_) * scale_, hi = (itemUpper[i] + growMost - lower_) * scale_;
     if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return;
-    const int x0 = std::max(0, static_cast<int>(lo.x)), y0 = std::max(0, static_cast<int>(lo.y));
+    const int x0 = static_cast<int>(std::max(lo.x, 0.0f)), y0 = static_cast<int>(std::max(lo.y, 0.0f));
     const int x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
     const int y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
     for (int y = y0; y <= y1; ++y)
@@ -492,14 +492,14 @@ class SsvTechnique final : public ShadowTechnique {
     // The other face of the light is built when a receiver lies behind the light's plane.
     buildSide(sides_[0]);
     backBuilt_ = false;
-    timings_.add("silhouettes+edge shadows", timer.elapsedMs());
+    timings_.add("prepare", timer.elapsedMs());
     prepared_ = true;
   }
 
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("ssv: visibility() called before prepare(); call prepare(scene, light) first");
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "silhouettes+edge shadows" && p.first != "back face silhouettes"; }),
+                                         [](const auto& p) { return p.first != "prepare" && p.first != "back face silhouettes"; }),
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();

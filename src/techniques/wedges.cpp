@@ -21,11 +21,11 @@
 //
 // Occluders that are not closed 2-manifolds (our extension; the paper assumes solids): any mesh
 // becomes a closed oriented surface (mesh_topology.h), its closed components solids, the rest
-// doubled shells (each triangle and its reversed copy). A shell's facets facing the centre are
-// its front sides in one place and its back sides in another (the outside of a bowl's far wall,
-// the inside of its near one), and where the shell encloses space (a sphere with a hole, an open
-// box) both layers cover the same part of the light: added, the coverage would count that part
-// twice. So the silhouette is taken per layer, the solids', the shells' front sides' and their
+// doubled shells (each triangle and its reversed copy, the shell wound consistently where it can
+// be). The facets of a shell that face the centre are its front sides in one place and its back
+// sides in another (a sphere with a hole, wound outwards: the outside of its upper half, the
+// inside of its lower half), and where the shell encloses space (that sphere, an open box) both
+// layers cover the same part of the light: added, the coverage would count that part twice. So the silhouette is taken per layer, the solids', the shells' front sides' and their
 // back sides', and an object's coverage is its solids' plus the larger of its two shell layers'.
 // Two layers of one object that cover different parts of the light from p (two separate open
 // pieces, one seen from each side) are then counted as the larger one only.
@@ -108,14 +108,14 @@ class WedgesTechnique final : public ShadowTechnique {
     // The other face of the light is built when a receiver lies behind the light's plane.
     buildSide(sides_[0]);
     backBuilt_ = false;
-    timings_.add("silhouette+wedges", timer.elapsedMs());
+    timings_.add("prepare", timer.elapsedMs());
     prepared_ = true;
   }
 
   void visibility(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("wedges: visibility() called before prepare(); call prepare(scene, light) first");
     timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "silhouette+wedges" && p.first != "back face silhouette"; }),
+                                         [](const auto& p) { return p.first != "prepare" && p.first != "back face silhouette"; }),
                           timings_.passes.end());
     Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
