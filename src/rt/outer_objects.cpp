@@ -144,6 +144,7 @@ struct RayGroup {
   float mu;      //!< largest |v_i - v0|
   float bsMin, bsMax;
   float h;       //!< largest bScale_i h_i
+  float hMin;    //!< smallest bScale_i h_i
   float gLimit;  //!< largest tLimit_i - h_i
   float slack;   //!< the group's rounding slack
 
@@ -153,7 +154,8 @@ struct RayGroup {
 // For each child of `node`: its group bound where the child can hold, for some ray of the group,
 // a capsule with tau below `limit`; +infinity where it cannot (or the child is unused: radius
 // -infinity makes every test false).
-[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound) {
+[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound,
+                                               float* __restrict spread) {
   for (int k = 0; k < kWidth; ++k) {
     const float x0 = c.p0x[k] - g.ax, y0 = c.p0y[k] - g.ay, z0 = c.p0z[k] - g.az;
     const float ex = c.ex[k], ey = c.ey[k], ez = c.ez[k];
@@ -176,15 +178,20 @@ struct RayGroup {
     const float b = num / den * kBoundShrink;
     const bool visit = (den > 0.0f) & (alongMin < g.gLimit) & (b < limit);
     bound[k] = visit ? b : kInfinity;
+    // Whether the group's spread (rho, kappa) is what lets the child in: then each ray's own
+    // bound may still leave it out.
+    spread[k] = 1.0f;
   }
 }
 
-// Which rays of the group read the leaf bounded by `c` (its first capsule): ray i's own bound
-// (the top of the file) is below best[i].
-[[gnu::always_inline]] inline void leafReaders(const CapsuleView& c, const RayGroup& g, const float* __restrict best,
-                                               uint32_t* __restrict read) {
+// Whether one of the rays [first, first + 8) of the group can find, within the bound `c` (its
+// first capsule), a capsule with tau below its minimum best[i] (each ray's own bound, the top of
+// the file). Rays in the vector lanes.
+[[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best, int first) {
   const float p0x = c.p0x[0], p0y = c.p0y[0], p0z = c.p0z[0], ex = c.ex[0], ey = c.ey[0], ez = c.ez[0], radius = c.radius[0];
-  for (int i = 0; i < kGroup; ++i) {
+  alignas(32) float reads[8];
+  for (int k = 0; k < 8; ++k) {
+    const int i = first + k;
     const float wx = p0x - g.ox[i], wy = p0y - g.oy[i], wz = p0z - g.oz[i];
     const float wv = wx * g.vx[i] + wy * g.vy[i] + wz * g.vz[i];
     const float ev = ex * g.vx[i] + ey * g.vy[i] + ez * g.vz[i];
@@ -199,8 +206,11 @@ struct RayGroup {
     const float t0max = std::max(wv, wv + ev) + y;
     const float t0min = std::min(wv, wv + ev) - y;
     const float b = (d - y) / (g.bScale[i] * t0max) * kBoundShrink;
-    read[i] = ((t0max > 0.0f) & (t0min < g.tLimit[i]) & (b < best[i])) ? 1u : 0u;
+    reads[k] = ((t0max > 0.0f) & (t0min < g.tLimit[i]) & (b < best[i])) ? 1.0f : 0.0f;
   }
+  float any = 0.0f;
+  for (int k = 0; k < 8; ++k) any = std::max(any, reads[k]);
+  return any > 0.0f;
 }
 
 // What the per-ray code reads of the hierarchy, gathered once per call.
@@ -235,7 +245,7 @@ struct TreeView {
   g.ax = anchor.x, g.ay = anchor.y, g.az = anchor.z;
   g.v0x = v0.x, g.v0y = v0.y, g.v0z = v0.z;
   g.rho = g.kappa = g.mu = 0.0f;
-  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.gLimit = -kInfinity;
+  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.hMin = kInfinity, g.gLimit = -kInfinity;
   float magnitude = std::max({view.sceneMagnitude, std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)});
   for (int i = 0; i < kGroup; ++i) {
     const int k = i < count ? i : 0;
@@ -255,6 +265,7 @@ struct TreeView {
     g.bsMin = std::min(g.bsMin, g.bScale[i]);
     g.bsMax = std::max(g.bsMax, g.bScale[i]);
     g.h = std::max(g.h, g.bScale[i] * h);
+    g.hMin = std::min(g.hMin, g.bScale[i] * h);
     g.gLimit = std::max(g.gLimit, g.tLimit[i] - h);
   }
   g.slack = kBoundSlack * magnitude;
@@ -263,18 +274,19 @@ struct TreeView {
 struct StackItem {
   int32_t ref;  //!< >= 0 a node, < 0 the leaf ~ref
   float bound;  //!< the child's bound when it was pushed
+  int32_t parent, slot;  //!< where its bound is: child `slot` of node `parent` (-1: the root)
 };
 
 // Pushes the children of `node` whose bound is below `limit`, the smallest bound on top (read
 // first, so that the rays' minima fall early and prune more).
-[[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, const RayGroup& g, float limit, StackItem* stack,
-                                                int& top) {
-  alignas(32) float bound[kWidth];
-  childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound);
+[[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, int32_t parent, const RayGroup& g, float limit,
+                                                StackItem* stack, int& top) {
+  alignas(32) float bound[kWidth], spread[kWidth];
+  childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound, spread);
   const int base = top;
   for (int k = 0; k < kWidth; ++k) {
     if (!(bound[k] < kInfinity)) continue;
-    const StackItem item{node.child[k], bound[k]};
+    const StackItem item{node.child[k], bound[k], spread[k] > 0.0f ? parent : -1, k};
     int j = top++;
     while (j > base && stack[j - 1].bound < item.bound) {
       stack[j] = stack[j - 1];
@@ -292,30 +304,44 @@ struct StackItem {
   float limit = 1.0f;  // the largest best[i]
   StackItem stack[kStackSize];
   int top = 0;
-  stack[top++] = {view.root, -kInfinity};
+  stack[top++] = {view.root, -kInfinity, -1, 0};
   while (top > 0) {
     const StackItem item = stack[--top];
     if (!(item.bound < limit)) continue;
     if (item.ref >= 0) {
-      pushChildren(view.nodes[item.ref], g, limit, stack, top);
+      if (item.parent >= 0) {
+        const OuterObjects::Node& parent = view.nodes[item.parent];
+        const CapsuleView bound = capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
+                                               static_cast<size_t>(item.slot));
+        if (!someRayReads(bound, g, best, 0) && !(g.count > kGroup / 2 && someRayReads(bound, g, best, kGroup / 2))) continue;
+      }
+      pushChildren(view.nodes[item.ref], item.ref, g, limit, stack, top);
       continue;
     }
-    // The leaf's capsules that can lower some ray's minimum (their own group bound: a capsule
-    // bounds itself), against the rays, 8 rays to the vector lanes.
+    // The leaf: the halves of the group (8 rays each) one ray of which can find below its
+    // minimum within the leaf's bound (each ray's own bound); the leaf's capsules that can lower
+    // some ray's minimum (their own group bound: a capsule bounds itself); those capsules against
+    // those halves' rays, 8 rays to the vector lanes.
     const uint32_t leaf = static_cast<uint32_t>(~item.ref);
+    const CapsuleView bound = capsulesFrom(view.leafBounds, leaf);
+    bool first = true, second = g.count > kGroup / 2;
+    if (item.parent >= 0) {
+      first = someRayReads(bound, g, best, 0);
+      second = second && someRayReads(bound, g, best, kGroup / 2);
+      if (!first && !second) continue;
+    }
     const CapsuleView c = capsulesFrom(view.entries, static_cast<size_t>(leaf) * kWidth);
-    alignas(32) float capsuleBound[kWidth];
-    childBounds(c, g, limit, capsuleBound);
+    alignas(32) float capsuleBound[kWidth], spread[kWidth];
+    childBounds(c, g, limit, capsuleBound, spread);
     int listed[kWidth], capsules = 0;
     for (int j = 0; j < kWidth; ++j) {
       listed[capsules] = j;
       capsules += capsuleBound[j] < kInfinity;
     }
-    const int lanes = g.count <= kGroup / 2 ? kGroup / 2 : kGroup;
     for (int n = 0; n < capsules; ++n) {
       const int j = listed[n];
       const float p0x = c.p0x[j], p0y = c.p0y[j], p0z = c.p0z[j], ex = c.ex[j], ey = c.ey[j], ez = c.ez[j], radius = c.radius[j];
-      for (int half = 0; half < lanes; half += kGroup / 2)
+      for (int half = first ? 0 : kGroup / 2; half < (second ? kGroup : kGroup / 2); half += kGroup / 2)
         for (int i = half; i < half + kGroup / 2; ++i) {
           const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i], g.vz[i],
                                        g.bScale[i], g.tLimit[i]);
@@ -373,17 +399,15 @@ float combinedAttenuation(const TreeView& view, const Ray& ray, float distanceTo
   found.clear();
   StackItem stack[kStackSize];
   int top = 0;
-  stack[top++] = {view.root, -kInfinity};
+  stack[top++] = {view.root, -kInfinity, -1, 0};
   while (top > 0) {
     const StackItem item = stack[--top];
     if (item.ref >= 0) {
-      pushChildren(view.nodes[item.ref], g, 1.0f, stack, top);
+      pushChildren(view.nodes[item.ref], item.ref, g, 1.0f, stack, top);
       continue;
     }
     const uint32_t leaf = static_cast<uint32_t>(~item.ref);
-    alignas(32) uint32_t read[kGroup];
-    leafReaders(capsulesFrom(view.leafBounds, leaf), g, one, read);
-    if (!read[0]) continue;
+    if (!someRayReads(capsulesFrom(view.leafBounds, leaf), g, one, 0)) continue;
     alignas(32) float tau[kWidth];
     leafTau(view.entries, leaf, r, tau);
     for (int j = 0; j < kWidth; ++j) {
