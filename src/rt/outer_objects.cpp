@@ -50,6 +50,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <span>
 #include <utility>
 
 #include "penumbra/error.h"
@@ -465,12 +466,13 @@ struct Bound {
 // The capsule around `balls` along their centres' principal axis (a few power iterations on
 // their covariance), just long enough to span their centres' projections; its radius enlarged by
 // 1e-6 of itself and of the coordinates' magnitude so that rounding leaves every ball inside.
-Bound enclosingBound(const std::vector<Ball>& balls, float magnitude) {
+Bound enclosingBound(const Ball* first, int count, float magnitude) {
+  const Ball* last = first + count;
   Vec3 mean(0.0f);
-  for (const Ball& b : balls) mean += b.center;
-  mean /= static_cast<float>(balls.size());
+  for (const Ball* b = first; b != last; ++b) mean += b->center;
+  mean /= static_cast<float>(count);
   float cxx = 0, cxy = 0, cxz = 0, cyy = 0, cyz = 0, czz = 0;
-  for (const Ball& b : balls) {
+  for (const Ball& b : std::span(first, last)) {
     const Vec3 d = b.center - mean;
     cxx += d.x * d.x, cxy += d.x * d.y, cxz += d.x * d.z, cyy += d.y * d.y, cyz += d.y * d.z, czz += d.z * d.z;
   }
@@ -483,14 +485,14 @@ Bound enclosingBound(const std::vector<Ball>& balls, float magnitude) {
     axis = next / length;
   }
   float lo = kInfinity, hi = -kInfinity;
-  for (const Ball& b : balls) {
+  for (const Ball& b : std::span(first, last)) {
     const float t = glm::dot(b.center - mean, axis);
     lo = std::min(lo, t);
     hi = std::max(hi, t);
   }
   const Vec3 p0 = mean + lo * axis, e = (hi - lo) * axis;
   float radius = 0.0f;
-  for (const Ball& b : balls) {
+  for (const Ball& b : std::span(first, last)) {
     const float t = glm::dot(b.center - mean, axis);
     radius = std::max(radius, glm::length(b.center - (mean + t * axis)) + b.radius);
   }
@@ -573,7 +575,7 @@ class TreeBuilder {
         node.child[k] = 0;
       }
     }
-    std::vector<Ball> ends;
+    std::array<Ball, 2 * kWidth> ends;
     for (int k = 0; k < count; ++k) {
       const auto [ref, bound] = build(runs[k], depth + 1);
       OuterObjects::Node& node = out_.nodes[index];  // build() may have grown the nodes
@@ -582,10 +584,10 @@ class TreeBuilder {
       node.radius[k] = bound.radius;
       node.child[k] = ref;
       // A capsule is the hull of the balls at its two ends.
-      ends.push_back({bound.p0, bound.radius});
-      ends.push_back({bound.p0 + bound.e, bound.radius});
+      ends[static_cast<size_t>(2 * k)] = {bound.p0, bound.radius};
+      ends[static_cast<size_t>(2 * k + 1)] = {bound.p0 + bound.e, bound.radius};
     }
-    return {static_cast<int32_t>(index), enclosingBound(ends, magnitude_)};
+    return {static_cast<int32_t>(index), enclosingBound(ends.data(), 2 * count, magnitude_)};
   }
 
   // Two runs from one: the plane among 16 bins across the longest axis of the centroids' box with
@@ -661,13 +663,13 @@ class TreeBuilder {
       out_.entries[6]->push_back(used ? capsules_.radius[c] : -kInfinity);  // padding: tau = +inf for every ray
       out_.entryObject.push_back(used ? capsules_.object[c] : -1);
     }
-    std::vector<Ball> ends;
+    std::array<Ball, 2 * kWidth> ends;
     for (size_t i = lo; i < hi; ++i) {
       const Piece& piece = pieces_[order_[i]];
-      ends.push_back({piece.a, piece.radius});
-      ends.push_back({piece.b, piece.radius});
+      ends[2 * (i - lo)] = {piece.a, piece.radius};
+      ends[2 * (i - lo) + 1] = {piece.b, piece.radius};
     }
-    const Bound bound = enclosingBound(ends, magnitude_);
+    const Bound bound = enclosingBound(ends.data(), static_cast<int>(2 * (hi - lo)), magnitude_);
     const float values[7] = {bound.p0.x, bound.p0.y, bound.p0.z, bound.e.x, bound.e.y, bound.e.z, bound.radius};
     for (int k = 0; k < 7; ++k) out_.leafBounds[k]->push_back(values[k]);
     out_.leafSize.push_back(static_cast<uint8_t>(count));

@@ -260,13 +260,32 @@ TEST(Parker, CombinesEveryGrazedObjectNotOnlyTheFirst) {
   EXPECT_GT(both, 10);
 }
 
-TEST(Parker, LightBufferResolutionChangesNothing) {
+// The rays walk the outer objects' hierarchy in groups (4 x 4 pixel tiles) whose bounds are shared:
+// the same receivers grouped differently (the G-buffer shifted by one pixel across and two down)
+// must give the same bits.
+TEST(Parker, PixelTilesChangeNothing) {
   const ::penumbra::testing::ShadowTestScene& s = shadowTestScene("torus");
-  const Image<float> coarse = runTechnique("parker", s, {"grid_resolution=8"});
-  const Image<float> fine = runTechnique("parker", s, {"grid_resolution=128"});
-  size_t differ = 0;
-  for (size_t i = 0; i < coarse.size(); ++i) differ += std::abs(coarse[i] - fine[i]) > 1e-6f;
+  const Image<float> v = runTechnique("parker", s);
+  const int w = s.gbuffer.width(), h = s.gbuffer.height();
+  GBuffer shifted(w + 1, h + 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      shifted.wsPosition(x + 1, y + 2) = s.gbuffer.wsPosition(x, y);
+      shifted.wsNormal(x + 1, y + 2) = s.gbuffer.wsNormal(x, y);
+      shifted.wsGeometricNormal(x + 1, y + 2) = s.gbuffer.wsGeometricNormal(x, y);
+      shifted.objectId(x + 1, y + 2) = s.gbuffer.objectId(x, y);
+      shifted.triangleId(x + 1, y + 2) = s.gbuffer.triangleId(x, y);
+      shifted.csDepth(x + 1, y + 2) = s.gbuffer.csDepth(x, y);
+    }
+  const Image<float> moved = runTechnique("parker", s.scene, shifted);
+  size_t differ = 0, penumbra = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      differ += moved(x + 1, y + 2) != v(x, y);
+      penumbra += v(x, y) > 0.0f && v(x, y) < 1.0f;
+    }
   EXPECT_EQ(differ, 0u);
+  EXPECT_GT(penumbra, 100u);
 }
 
 // ---------------------------------------------------------------------------------------------
