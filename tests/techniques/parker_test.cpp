@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -458,6 +459,99 @@ TEST(Parker, AnalyticAndTessellatedSpheresAgree) {
   // The silhouette edges of a 64 x 32 sphere give nearly the true sphere's outer object:
   // measured RMSE8 between the two 1.15.
   EXPECT_LT(compareVisibility(analytic, meshes, s.mask).rmse8, 2.0);
+}
+
+// A small occluder under a wider light: the paper's stated weakness, not a defect of this code.
+// Section 3: "Note that the umbra region will be larger than in a physically-based computation,
+// but when the occluder size is large relative to the light size, this should not be too
+// noticeable"; Section 4: "its errors are highest for small objects whose real shadows would have
+// no umbra ... the shadows are too prominent". The inner object is the object itself (Figure 2: no
+// light leaks), so parker is 0 over the whole hard shadow, and the outer object's opacity ramps
+// from there over b = D t0 / |l - o|, the whole width of the true penumbra, which in truth
+// straddles the hard edge. Where a small blocker hides only part of a large light, parker is
+// darker than the truth everywhere and farther from it than no shadow at all. Measured along the
+// ground from the shadow's centre outward (201 points, reference 1024 spp), as RMSE8 of the
+// profile.
+struct ProfileErrors {
+  double parker = 0.0, none = 0.0, hard = 0.0;  //!< RMSE8 against the reference
+  int hardShadow = 0;        //!< points in the hard shadow (raytraced-hard 0)
+  int parkerUmbraLeaks = 0;  //!< of those, points where parker is not 0
+  float minTruthInHardShadow = 1.0f;
+  int darker = 0;            //!< points where parker is below the truth by more than 0.02
+  int points = 0;
+};
+ProfileErrors profileErrors(const Scene& scene, const Light& light, const GBuffer& g) {
+  Scene one = scene;
+  one.lights = {light};
+  const std::vector<float> v = runOn(one, g);
+  const std::vector<float> ref = referenceOn(one, g, 1024);
+  auto hard = createTechnique("raytraced-hard");
+  hard->prepare(one, light);
+  Image<float> hardImage;
+  hard->visibility(g, hardImage);
+  const std::vector<float> hardV(hardImage.begin(), hardImage.end());
+  ProfileErrors e;
+  e.points = g.width();
+  double sums[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < e.points; ++i) {
+    sums[0] += std::pow(255.0 * (static_cast<double>(v[i]) - ref[i]), 2.0);
+    sums[1] += std::pow(255.0 * (1.0 - ref[i]), 2.0);
+    sums[2] += std::pow(255.0 * (static_cast<double>(hardV[i]) - ref[i]), 2.0);
+    if (hardV[i] == 0.0f) {
+      ++e.hardShadow;
+      e.parkerUmbraLeaks += v[i] != 0.0f;
+      e.minTruthInHardShadow = std::min(e.minTruthInHardShadow, ref[i]);
+    }
+    e.darker += v[i] < ref[i] - 0.02f;
+  }
+  e.parker = std::sqrt(sums[0] / e.points);
+  e.none = std::sqrt(sums[1] / e.points);
+  e.hard = std::sqrt(sums[2] / e.points);
+  return e;
+}
+
+TEST(Parker, ThinDiskUnderAWiderDiskLightIsTooDarkByDesign) {
+  // A thin disk (radius 0.3, 0.02 thick) at height 1 under a downward disk light of radius 1 at
+  // height 3: it hides at most 81% of the light (the truth has no umbra).
+  const Light light = Light::disk(Vec3(0.0f, 3.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 1.0f);
+  Mesh disk = makeCylinder(0.3f, 0.02f, 64);
+  transformMesh(disk, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.01f, 0.0f)));
+  const Scene scene = makeScene({groundObject(), meshObject(1, std::move(disk), "disk")}, light);
+  const ProfileErrors e = profileErrors(scene, light, groundLineGBuffer(Vec3(0.0f), Vec3(2.0f, 0.0f, 0.0f), 201));
+  // Measured: the hard shadow covers 46 of the 201 points, where the truth is at least 0.188;
+  // parker is 0 there and darker than the truth at every point (0.943 at r = 2, where the truth is
+  // 1). RMSE8 parker 114.6, no shadow 81.6, raytraced-hard 54.9. (A sphere light of radius 1 in
+  // its place, the paper's own assumption: 114.3, 76.8, 58.8.)
+  EXPECT_EQ(e.hardShadow, 46);
+  EXPECT_EQ(e.parkerUmbraLeaks, 0);
+  EXPECT_GT(e.minTruthInHardShadow, 0.18f);
+  EXPECT_EQ(e.darker, e.points);
+  EXPECT_NEAR(e.parker, 114.6, 2.0);
+  EXPECT_NEAR(e.none, 81.6, 2.0);
+  EXPECT_NEAR(e.hard, 54.9, 2.0);
+  EXPECT_GT(e.parker, 1.3 * e.none);
+}
+
+TEST(Parker, TeapotsUnderTheirWideLightAreTooDarkByDesign) {
+  // The built-in `teapots` (Collada/teapots.DAE fitted to 0.6 at height 0.8) under its light 0, a
+  // 2.4 x 2.4 rect at height 3 (D = 3.39, its bounding diameter): a line across the ground under
+  // both teapots.
+  if (!std::filesystem::exists("/usr/share/assimp/models/Collada/teapots.DAE"))
+    GTEST_SKIP() << "Debian's assimp-testmodels is not installed";
+  const Scene scene = loadScene("teapots");
+  const ProfileErrors e = profileErrors(scene, scene.lights.at(0), groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.1f), Vec3(2.0f, 0.0f, 0.1f), 201));
+  // Measured: the hard shadow covers 13 points, where the truth is at least 0.771 (the teapots
+  // hide under a quarter of the light); parker is 0 there and darker than the truth at all 201
+  // points. RMSE8 parker 168.2, no shadow 26.9, raytraced-hard 55.1 (over the whole 256 x 256
+  // image at 256 spp: 146.0, 14.8 and 28.3).
+  EXPECT_EQ(e.hardShadow, 13);
+  EXPECT_EQ(e.parkerUmbraLeaks, 0);
+  EXPECT_GT(e.minTruthInHardShadow, 0.75f);
+  EXPECT_EQ(e.darker, e.points);
+  EXPECT_NEAR(e.parker, 168.2, 3.0);
+  EXPECT_NEAR(e.none, 26.9, 2.0);
+  EXPECT_NEAR(e.hard, 55.1, 2.0);
+  EXPECT_GT(e.parker, 3.0 * e.hard);
 }
 
 // ---------------------------------------------------------------------------------------------
