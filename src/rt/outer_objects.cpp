@@ -189,25 +189,21 @@ struct RayGroup {
 // first capsule), a capsule with tau below its minimum best[i] (each ray's own bound, the top of
 // the file). Rays in the vector lanes.
 [[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best, int first) {
-  const float p0x = c.p0x[0], p0y = c.p0y[0], p0z = c.p0z[0], ex = c.ex[0], ey = c.ey[0], ez = c.ez[0], radius = c.radius[0];
+  // The ball around the capsule bound: centre at its middle, radius half its length plus its own.
+  const float hx = 0.5f * c.ex[0], hy = 0.5f * c.ey[0], hz = 0.5f * c.ez[0];
+  const float cx = c.p0x[0] + hx, cy = c.p0y[0] + hy, cz = c.p0z[0] + hz;
+  const float radius = std::sqrt(hx * hx + hy * hy + hz * hz) * (1.0f + 1e-6f) + c.radius[0];
   alignas(32) float reads[8];
   for (int k = 0; k < 8; ++k) {
     const int i = first + k;
-    const float wx = p0x - g.ox[i], wy = p0y - g.oy[i], wz = p0z - g.oz[i];
+    const float wx = cx - g.ox[i], wy = cy - g.oy[i], wz = cz - g.oz[i];
     const float wv = wx * g.vx[i] + wy * g.vy[i] + wz * g.vz[i];
-    const float ev = ex * g.vx[i] + ey * g.vy[i] + ez * g.vz[i];
-    const float wpx = wx - wv * g.vx[i], wpy = wy - wv * g.vy[i], wpz = wz - wv * g.vz[i];
-    const float epx = ex - ev * g.vx[i], epy = ey - ev * g.vy[i], epz = ez - ev * g.vz[i];
-    const float ee = epx * epx + epy * epy + epz * epz;
-    const float we = wpx * epx + wpy * epy + wpz * epz;
-    const float u = std::min(1.0f, std::max(0.0f, -we / std::max(ee, 1e-30f)));
-    const float rx = wpx + u * epx, ry = wpy + u * epy, rz = wpz + u * epz;
-    const float d = std::sqrt(rx * rx + ry * ry + rz * rz);
+    const float px = wx - wv * g.vx[i], py = wy - wv * g.vy[i], pz = wz - wv * g.vz[i];
+    const float d = std::sqrt(px * px + py * py + pz * pz);
     const float y = radius + g.raySlack[i];
-    const float t0max = std::max(wv, wv + ev) + y;
-    const float t0min = std::min(wv, wv + ev) - y;
+    const float t0max = wv + y;
     const float b = (d - y) / (g.bScale[i] * t0max) * kBoundShrink;
-    reads[k] = ((t0max > 0.0f) & (t0min < g.tLimit[i]) & (b < best[i])) ? 1.0f : 0.0f;
+    reads[k] = ((t0max > 0.0f) & (wv - y < g.tLimit[i]) & (b < best[i])) ? 1.0f : 0.0f;
   }
   float any = 0.0f;
   for (int k = 0; k < 8; ++k) any = std::max(any, reads[k]);
