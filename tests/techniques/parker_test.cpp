@@ -620,6 +620,39 @@ TEST(Parker, ReportsAnalyticSpheresAndNeedsPrepare) {
   EXPECT_EQ(timings.passes[1].first, "visibility");
 }
 
+// The inner objects' BVH is kept across prepares only while their geometry is the same: a moved
+// occluder is seen at once, and a new light over the same geometry reuses it.
+TEST(Parker, KeepsTheInnerBvhOnlyForTheSameGeometry) {
+  const Light light = Light::sphere(Vec3(0.0f, 6.0f, 0.0f), 0.5f);
+  const Scene a = makeScene({groundObject(), boxObject(1, Vec3(0.0f, 1.0f, 0.0f), Vec3(1.0f, 0.2f, 1.0f))}, light);
+  const Scene b = makeScene({groundObject(), boxObject(1, Vec3(0.6f, 1.0f, 0.0f), Vec3(1.0f, 0.2f, 1.0f))}, light);
+  const GBuffer g = groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.0f), Vec3(2.0f, 0.0f, 0.0f), 101);
+  const auto rebuilt = [](const ShadowTechnique& t) {
+    for (const auto& [name, value] : t.stats())
+      if (name == "inner_bvh_rebuilt") return value;
+    return -1.0;
+  };
+  auto t = createTechnique("parker");
+  Image<float> v;
+  t->prepare(a, light);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 1.0);
+  const std::vector<float> va(v.begin(), v.end());
+  t->prepare(b, light);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 1.0);
+  const std::vector<float> fresh = runOn(b, g);
+  EXPECT_EQ(std::vector<float>(v.begin(), v.end()), fresh);
+  EXPECT_NE(va, fresh);  // the box moved: so did its shadow
+  const Light other = Light::sphere(Vec3(1.0f, 5.0f, 0.5f), 0.7f);
+  t->prepare(b, other);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 0.0);
+  Scene bOther = b;
+  bOther.lights = {other};
+  EXPECT_EQ(std::vector<float>(v.begin(), v.end()), runOn(bOther, g));
+}
+
 TEST(Parker, SceneFilesKeepTrueSpheres) {
   const std::string base = R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0]}, "lights": [], "objects": [)";
   const auto load = [&](const std::string& object) { return parseScene(base + object + "]}", "x.json"); };
