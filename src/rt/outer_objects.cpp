@@ -20,23 +20,31 @@
 //     |(I - v0 v0^T)(q - a)| - sin(theta_i) |q - a| - rho_i,
 // and t0_i(q) = (q - a).v_i + h_i with h_i = (a - o_i).v_i, (q - a).v_i <= (q - a).v0 + |v_i - v0| |q - a|.
 // One bound per node child then serves the whole group (the largest of sin(theta_i), |v_i - v0|,
-// rho_i and of bScale_i t0_i over the group), and the group walks the tree once; a leaf it reaches
-// is read by each ray whose own bound (above) is below that ray's smallest tau so far.
+// rho_i and of bScale_i t0_i over the group): the group walks the tree once.
 //
-// The traversal keeps each ray's smallest tau (starting at 1: tau >= 1 gives s = 1) and skips a
-// child whose group bound is not below the largest of them; a skipped capsule has, for every ray,
-// tau >= that ray's final minimum, so the minima, and V, are those of reading every capsule.
-// Rounding: every bounding radius is enlarged by 1e-6 of itself and of the coordinates' magnitude
-// when built, and by kBoundSlack of the coordinates' magnitude when a group or ray reads it (the
-// formulas' float rounding is a few 1e-7 of it), and every bound is lowered by 1e-5 of itself:
-// bounds err only low, which only adds work.
+// The walk keeps each ray's smallest tau (starting at 1: tau >= 1 gives s = 1) and pushes the
+// children whose group bound is below the largest of them, the most promising on top. A node or
+// leaf taken from the stack is first tested ray by ray, 8 rays at a time, against the ball
+// around its bound (each ray's own bound: the group's is loose where the rays start near the
+// capsules, as on a many-part mesh); a leaf's capsules are then culled by their group bound (a
+// capsule bounds itself) and the rest evaluated for the rays of each half of the group one ray of
+// which passed. A capsule left out has, for every ray, tau >= that ray's final minimum, so the
+// minima, and V, are those of reading every capsule. Rounding: every bounding radius is enlarged
+// by 1e-6 of itself and of the coordinates' magnitude when built, and by kBoundSlack of the
+// coordinates' magnitude when read (the formulas' float rounding is a few 1e-7 of it), and every
+// bound is lowered by 1e-5 of itself: bounds err only low, which only adds work.
 //
-// The tree. Capsules are cut into pieces no longer than 1/64 of the scene's radius; the pieces
-// are sorted by the Morton code of their midpoints (a radix sort: linear); a node covers a run of
-// that order, split into up to kWidth runs by repeatedly cutting the largest at the highest bit in
-// which its codes differ (at its middle when all are equal), and a run of at most kWidth^2 pieces
-// into runs of at most kWidth, its leaves, each holding its distinct capsules. Each bound is the
-// capsule along the principal axis of what it holds. Building is linear in the number of pieces.
+// The tree. Capsules are cut into pieces no longer than 1/64 of the scene's radius; a node holds
+// up to kWidth runs of pieces, made by splitting the run of largest area in two until there are
+// kWidth (binned surface-area heuristic, 16 bins across the longest axis of the pieces' centres,
+// each piece's box grown by the piece length so that long thin runs weigh by their length); a run
+// of at most kWidth pieces is a leaf holding its distinct capsules. Each bound is the capsule along
+// the principal axis of what it holds. Building takes one pass over a run per split: O(n log n) in
+// the number of pieces n, nearly linear at the sizes met (bench/parker_bench.cpp).
+//
+// Silhouettes. Per mesh, vertices are welded by position (a hash of their coordinates' bits) and
+// the half-edges of the triangles that can be hit are bucketed by their lower welded vertex (a
+// counting sort), then by the higher: linear in the triangles.
 //
 // The per-ray and per-group loops read 8 capsules, 8 node children or 8 rays at a time
 // branch-free, so the compiler turns them into vector operations (CMakeLists.txt builds this file
@@ -145,18 +153,16 @@ struct RayGroup {
   float mu;      //!< largest |v_i - v0|
   float bsMin, bsMax;
   float h;       //!< largest bScale_i h_i
-  float hMin;    //!< smallest bScale_i h_i
   float gLimit;  //!< largest tLimit_i - h_i
   float slack;   //!< the group's rounding slack
 
   RayQuery query(int i) const { return {ox[i], oy[i], oz[i], vx[i], vy[i], vz[i], bScale[i], tLimit[i]}; }
 };
 
-// For each child of `node`: its group bound where the child can hold, for some ray of the group,
-// a capsule with tau below `limit`; +infinity where it cannot (or the child is unused: radius
-// -infinity makes every test false).
-[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound,
-                                               float* __restrict spread) {
+// For each of the kWidth capsule bounds `c` (a node's children, or a leaf's capsules): the group
+// bound of the top of the file where it can hold, for some ray of the group, a capsule with tau
+// below `limit`; +infinity where it cannot (or is unused: radius -infinity makes every test false).
+[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound) {
   for (int k = 0; k < kWidth; ++k) {
     const float x0 = c.p0x[k] - g.ax, y0 = c.p0y[k] - g.ay, z0 = c.p0z[k] - g.az;
     const float ex = c.ex[k], ey = c.ey[k], ez = c.ez[k];
@@ -179,9 +185,6 @@ struct RayGroup {
     const float b = num / den * kBoundShrink;
     const bool visit = (den > 0.0f) & (alongMin < g.gLimit) & (b < limit);
     bound[k] = visit ? b : kInfinity;
-    // Whether the group's spread (rho, kappa) is what lets the child in: then each ray's own
-    // bound may still leave it out.
-    spread[k] = 1.0f;
   }
 }
 
@@ -217,7 +220,6 @@ struct TreeView {
   bool empty;
   CapsuleView entries;     //!< kWidth per leaf
   CapsuleView leafBounds;  //!< one per leaf
-  const uint8_t* leafSize;  //!< capsules in each leaf
   const int32_t* entryObject;
   bool directional;
   Vec3 lightCenter;
@@ -242,7 +244,7 @@ struct TreeView {
   g.ax = anchor.x, g.ay = anchor.y, g.az = anchor.z;
   g.v0x = v0.x, g.v0y = v0.y, g.v0z = v0.z;
   g.rho = g.kappa = g.mu = 0.0f;
-  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.hMin = kInfinity, g.gLimit = -kInfinity;
+  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.gLimit = -kInfinity;
   float magnitude = std::max({view.sceneMagnitude, std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)});
   for (int i = 0; i < kGroup; ++i) {
     const int k = i < count ? i : 0;
@@ -262,7 +264,6 @@ struct TreeView {
     g.bsMin = std::min(g.bsMin, g.bScale[i]);
     g.bsMax = std::max(g.bsMax, g.bScale[i]);
     g.h = std::max(g.h, g.bScale[i] * h);
-    g.hMin = std::min(g.hMin, g.bScale[i] * h);
     g.gLimit = std::max(g.gLimit, g.tLimit[i] - h);
   }
   g.slack = kBoundSlack * magnitude;
@@ -278,12 +279,12 @@ struct StackItem {
 // first, so that the rays' minima fall early and prune more).
 [[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, int32_t parent, const RayGroup& g, float limit,
                                                 StackItem* stack, int& top) {
-  alignas(32) float bound[kWidth], spread[kWidth];
-  childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound, spread);
+  alignas(32) float bound[kWidth];
+  childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound);
   const int base = top;
   for (int k = 0; k < kWidth; ++k) {
     if (!(bound[k] < kInfinity)) continue;
-    const StackItem item{node.child[k], bound[k], spread[k] > 0.0f ? parent : -1, k};
+    const StackItem item{node.child[k], bound[k], parent, k};
     int j = top++;
     while (j > base && stack[j - 1].bound < item.bound) {
       stack[j] = stack[j - 1];
@@ -306,7 +307,7 @@ struct StackItem {
     const StackItem item = stack[--top];
     if (!(item.bound < limit)) continue;
     if (item.ref >= 0) {
-      if (item.parent >= 0) {
+      if (item.parent >= 0) {  // each ray's own bound (the root has none: every ray reads it)
         const OuterObjects::Node& parent = view.nodes[item.parent];
         const CapsuleView bound = capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
                                                static_cast<size_t>(item.slot));
@@ -315,10 +316,8 @@ struct StackItem {
       pushChildren(view.nodes[item.ref], item.ref, g, limit, stack, top);
       continue;
     }
-    // The leaf: the halves of the group (8 rays each) one ray of which can find below its
-    // minimum within the leaf's bound (each ray's own bound); the leaf's capsules that can lower
-    // some ray's minimum (their own group bound: a capsule bounds itself); those capsules against
-    // those halves' rays, 8 rays to the vector lanes.
+    // The leaf (the top of the file): the halves of the group one ray of which passes its own
+    // bound, the capsules that pass their group bound, those against those, 8 rays to the lanes.
     const uint32_t leaf = static_cast<uint32_t>(~item.ref);
     const CapsuleView bound = capsulesFrom(view.leafBounds, leaf);
     bool first = true, second = g.count > kGroup / 2;
@@ -328,8 +327,8 @@ struct StackItem {
       if (!first && !second) continue;
     }
     const CapsuleView c = capsulesFrom(view.entries, static_cast<size_t>(leaf) * kWidth);
-    alignas(32) float capsuleBound[kWidth], spread[kWidth];
-    childBounds(c, g, limit, capsuleBound, spread);
+    alignas(32) float capsuleBound[kWidth];
+    childBounds(c, g, limit, capsuleBound);
     int listed[kWidth], capsules = 0;
     for (int j = 0; j < kWidth; ++j) {
       listed[capsules] = j;
@@ -501,7 +500,6 @@ struct TreeOut {
   std::vector<float>* entries[7];     //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
   std::vector<int32_t>& entryObject;
   std::vector<float>* leafBounds[7];  //!< one per leaf
-  std::vector<uint8_t>& leafSize;
 };
 
 // Half the surface area of a box (the binned SAH's cost of a run).
@@ -668,7 +666,6 @@ class TreeBuilder {
     const Bound bound = enclosingBound(ends.data(), static_cast<int>(2 * (hi - lo)), magnitude_);
     const float values[7] = {bound.p0.x, bound.p0.y, bound.p0.z, bound.e.x, bound.e.y, bound.e.z, bound.radius};
     for (int k = 0; k < 7; ++k) out_.leafBounds[k]->push_back(values[k]);
-    out_.leafSize.push_back(static_cast<uint8_t>(count));
     return {~static_cast<int32_t>(leaves_++), bound};
   }
 
@@ -746,17 +743,26 @@ class EdgeTable {
 
   void weld(const std::vector<Vec3>& positions) {
     const size_t n = positions.size();
-    size_t size = 16;
-    while (size < 2 * n) size *= 2;
+    int bits = 4;
+    while ((size_t{1} << bits) < 2 * n) ++bits;
+    const size_t size = size_t{1} << bits;
     table_.assign(size, kEmpty);
     weld_.resize(n);
+    // A 64-bit finalizer (MurmurHash3's fmix64) of the coordinates' bits; the slot from its top bits.
+    const auto fmix = [](uint64_t h) {
+      h ^= h >> 33;
+      h *= 0xFF51AFD7ED558CCDull;
+      h ^= h >> 33;
+      h *= 0xC4CEB9FE1A85EC53ull;
+      h ^= h >> 33;
+      return h;
+    };
     for (uint32_t i = 0; i < n; ++i) {
       const Vec3 q = positions[i] + Vec3(0.0f);  // -0 as +0
-      uint32_t bits[3];
-      std::memcpy(bits, &q, sizeof(bits));
-      uint64_t h = (bits[0] * 0x9E3779B97F4A7C15ull) ^ (bits[1] * 0xC2B2AE3D27D4EB4Full) ^ (bits[2] * 0x165667B19E3779F9ull);
-      h ^= h >> 29;
-      for (size_t slot = h & (size - 1);; slot = (slot + 1) & (size - 1)) {
+      uint32_t word[3];
+      std::memcpy(word, &q, sizeof(word));
+      const uint64_t h = fmix(fmix(uint64_t{word[0]} << 32 | word[1]) ^ word[2]);
+      for (size_t slot = h >> (64 - bits);; slot = (slot + 1) & (size - 1)) {
         const uint32_t j = table_[slot];
         if (j == kEmpty) {
           table_[slot] = i;
@@ -847,7 +853,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
 
   const size_t leafEstimate = pieces.size() / 4 + 1;
   TreeOut out{nodes_, {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_}, entryObject_,
-              {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_}, leafSize_};
+              {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_}};
   for (std::vector<float>* e : out.entries) e->reserve(leafEstimate * kWidth);
   for (std::vector<float>* e : out.leafBounds) e->reserve(leafEstimate);
   entryObject_.reserve(leafEstimate * kWidth);
@@ -870,7 +876,6 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
                   entryEy_.data(),  entryEz_.data(),  entryRadius_.data()};
   view.leafBounds = {leafP0x_.data(), leafP0y_.data(), leafP0z_.data(), leafEx_.data(),
                      leafEy_.data(),  leafEz_.data(),  leafRadius_.data()};
-  view.leafSize = leafSize_.data();
   view.entryObject = entryObject_.data();
   view.directional = directional_;
   view.lightCenter = lightCenter_;
