@@ -555,7 +555,7 @@ class TreeBuilder {
         if (runs[k].size() > static_cast<size_t>(kWidth) && (largest < 0 || halfArea(runs[k].box) > halfArea(runs[largest].box)))
           largest = k;
       if (largest < 0) break;
-      const auto [left, right] = split(runs[largest]);
+      const auto [left, right] = depth < kSahDepth ? split(runs[largest]) : splitAtMedian(runs[largest]);
       runs[largest] = left;
       runs[count++] = right;
     }
@@ -582,6 +582,25 @@ class TreeBuilder {
       ends[static_cast<size_t>(2 * k + 1)] = {bound.p0 + bound.e, bound.radius};
     }
     return {static_cast<int32_t>(index), enclosingBound(ends.data(), 2 * count, magnitude_)};
+  }
+
+  // Below kSahDepth levels the runs are halved at their median instead: the heuristic may peel
+  // one piece at a time off a run (pieces spaced ever farther apart), and halving keeps the tree
+  // within kMaxDepth levels whatever the input.
+  static constexpr int kSahDepth = 24;
+  std::pair<Run, Run> splitAtMedian(const Run& run) {
+    Bounds3 centers;
+    for (size_t i = run.lo; i < run.hi; ++i) centers.extend(centroid_[order_[i]]);
+    const Vec3 extent = centers.diagonal();
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+    const size_t middle = run.lo + run.size() / 2;
+    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(run.lo), order_.begin() + static_cast<std::ptrdiff_t>(middle),
+                     order_.begin() + static_cast<std::ptrdiff_t>(run.hi),
+                     [&](uint32_t a, uint32_t b) { return centroid_[a][axis] < centroid_[b][axis]; });
+    Run left{run.lo, middle, {}}, right{middle, run.hi, {}};
+    for (size_t i = left.lo; i < left.hi; ++i) left.box.extend(box_[order_[i]]);
+    for (size_t i = right.lo; i < right.hi; ++i) right.box.extend(box_[order_[i]]);
+    return {left, right};
   }
 
   // Two runs from one: the plane among 16 bins across the longest axis of the centroids' box with

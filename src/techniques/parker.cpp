@@ -12,8 +12,9 @@
 //    analytic sphere, the rounded triangles of the Appendix for meshes (src/rt/outer_objects.h);
 //  - tau = (d - R) / b, s = 3 tau^2 - 2 tau^3 (the Bernstein form) or the exact sinusoid
 //    (1 + sin(pi tau - pi/2)) / 2 (Section 3);
-//  - every outer object the ray passes is seen (a light buffer over the directions leaving the
-//    light's centre, not only the first hit), combined by min (the paper's choice), product or sum.
+//  - every outer object the ray passes is seen (a hierarchy of bounds over the outer objects,
+//    walked with the running minimum of tau: not only the first hit), combined by min (the paper's
+//    choice), product or sum.
 //
 // Approximations (the paper's): the penumbra lies wholly outside the hard shadow and is as wide as
 // the whole physical penumbra (Section 3: "the umbra region will be larger than in a physically-
@@ -29,10 +30,13 @@
 // (bool), light_diameter (world units; directional: per unit distance; auto = as above).
 //
 // Cost (the paper: "approximately 20% slower" than hard ray-traced shadows). prepare builds the
-// outer objects' hierarchy and the inner objects' BVH at once; visibility traces raytraced-
-// hard's rays in packets of 16 and hands the rays that miss every inner object to the outer
-// objects in one batch. At 1024 x 1024 (bench/parker_bench.cpp, one run): visibility 1.16x
-// raytraced-hard on `spheres` and 1.48x on `torus`, prepare + visibility 1.10x and 1.50x.
+// outer objects' hierarchy (the silhouettes depend on the light) and, beside it, the inner objects'
+// BVH, which depends on the geometry alone: it is kept from the last prepare while the inner
+// objects' positions and triangles are the same to the bit (a 128-bit fingerprint), so that a
+// steady-state frame of a static scene under a moving light builds only the outer objects (stat
+// inner_bvh_rebuilt). visibility traces raytraced-hard's rays in packets of 16, one per 4 x 4
+// pixel tile, and the rays of a tile that miss every inner object walk the outer objects'
+// hierarchy as one group. Numbers: bench/parker_bench.cpp.
 #include <algorithm>
 #include <atomic>
 #include <cstring>

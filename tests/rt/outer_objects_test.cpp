@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -300,6 +301,52 @@ TEST(OuterObjects, SilhouettesAreMatchedByPosition) {
     }
     EXPECT_LT(worst, 1e-5);
     EXPECT_GT(penumbra, 50);  // the rays cross the penumbra
+  }
+}
+
+// 600 triangles spaced ever farther apart (each 3% farther than the last), the kind of spread a
+// surface-area split could peel off a few at a time: the hierarchy stays shallow (below 24 levels
+// the builder halves runs at their median in any case) and matches the oracle.
+TEST(OuterObjects, AnySpacingKeepsTheHierarchyShallow) {
+  OracleScene o;
+  o.scene.name = "spaced";
+  o.scene.source = "outer objects test scene";
+  Mesh strip;
+  float x = 0.01f;
+  for (int i = 0; i < 600; ++i, x *= 1.03f) {
+    const uint32_t base = static_cast<uint32_t>(strip.positions.size());
+    const Vec3 a(x - 3.0f, 1.0f, 0.0f), b(x - 3.0f, 1.2f, 0.05f), c(x - 2.99f, 1.1f, 0.1f);
+    strip.positions.insert(strip.positions.end(), {a, b, c});
+    strip.triangles.push_back(glm::uvec3(base, base + 1, base + 2));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = strip.positions[base + k], q = strip.positions[base + (k + 1) % 3];
+      o.capsules.push_back({glm::dvec3(p), glm::dvec3(q - p), 0.0, 0});
+    }
+  }
+  o.scene.objects.push_back(makeObject(0, strip, "strip"));
+  o.objects = 1;
+  const Light light = Light::sphere(Vec3(0.0f, 6.0f, 0.0f), 0.8f);
+  rt::OuterObjectOptions options;
+  options.lightDiameter = 1.6f;
+  const rt::OuterObjects outer(o.scene, light, options);
+  EXPECT_LT(outer.treeDepth(), 16);  // measured 9
+  const TestRays t = groundRays(light, 500);
+  const std::vector<float> s = attenuations(outer, t, rt::OuterCombine::Min);
+  double worst = 0.0;
+  for (size_t i = 0; i < s.size(); ++i)
+    worst = std::max(worst, std::abs(static_cast<double>(s[i]) - oracleS(o, glm::dvec3(t.rays[i].origin), glm::dvec3(t.rays[i].direction),
+                                                                       t.toLight[i], 1.6 / static_cast<double>(t.toLight[i]),
+                                                                       rt::OuterCombine::Min)));
+  EXPECT_LT(worst, 1e-5);
+}
+
+// A ray whose smallest tau is 1 or more is lit (s = 1): the walk starts from tau = 1 and skips
+// everything at or beyond it, which is exact because both falloffs are exactly 1 there.
+TEST(OuterObjects, FalloffsAreExactlyOneAtTheOuterBoundary) {
+  for (const rt::OuterFalloff f : {rt::OuterFalloff::Bernstein, rt::OuterFalloff::Sinusoid}) {
+    EXPECT_EQ(rt::outerFalloff(1.0f, f), 1.0f);
+    EXPECT_EQ(rt::outerFalloff(std::numeric_limits<float>::max(), f), 1.0f);
+    EXPECT_EQ(rt::outerFalloff(0.0f, f), 0.0f);
   }
 }
 
