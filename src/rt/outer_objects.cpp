@@ -61,6 +61,8 @@
 #include <span>
 #include <utility>
 
+#include <tbb/parallel_for.h>
+
 #include "penumbra/error.h"
 
 // An 8-wide build of the per-ray loop beside the baseline's 4-wide one, chosen at run time, where
@@ -496,10 +498,12 @@ Bound enclosingBound(const Ball* first, int count, float magnitude) {
 
 // The outputs of the tree build, as the OuterObjects members they fill.
 struct TreeOut {
-  std::vector<OuterObjects::Node>& nodes;
-  std::vector<float>* entries[7];     //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
-  std::vector<int32_t>& entryObject;
-  std::vector<float>* leafBounds[7];  //!< one per leaf
+  std::vector<OuterObjects::Node> nodes;
+  std::array<std::vector<float>, 7> entries;     //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
+  std::vector<int32_t> entryObject;
+  std::array<std::vector<float>, 7> leafBounds;  //!< one per leaf
+  size_t leaves = 0;
+  int depth = 0;
 };
 
 // Half the surface area of a box (the binned SAH's cost of a run).
@@ -513,8 +517,8 @@ float halfArea(const Bounds3& box) {
 // grown by `margin` so that long thin runs weigh by their length).
 class TreeBuilder {
  public:
-  TreeBuilder(const std::vector<Piece>& pieces, const Capsules& capsules, TreeOut out, float magnitude, float margin)
-      : pieces_(pieces), capsules_(capsules), out_(out), magnitude_(magnitude), order_(pieces.size()),
+  TreeBuilder(const std::vector<Piece>& pieces, const Capsules& capsules, float magnitude, float margin)
+      : pieces_(pieces), capsules_(capsules), magnitude_(magnitude), order_(pieces.size()),
         centroid_(pieces.size()), box_(pieces.size()) {
     for (size_t p = 0; p < pieces.size(); ++p) {
       order_[p] = static_cast<uint32_t>(p);
@@ -525,14 +529,42 @@ class TreeBuilder {
     }
   }
 
-  std::pair<int32_t, Bound> buildAll() {
-    Bounds3 all;
-    for (const Bounds3& b : box_) all.extend(b);
-    return build({0, order_.size(), all}, 0);
+  // The whole tree into `out` (the root: node 0, or the leaf ~0 for at most kWidth pieces). The
+  // root's runs are built at once on the threads there are, each into its own storage, then put
+  // one after the other, their references moved accordingly: the same tree on any thread count.
+  void buildAll(TreeOut& out) {
+    Run all{0, order_.size(), {}};
+    for (const Bounds3& b : box_) all.box.extend(b);
+    if (all.size() <= static_cast<size_t>(kWidth)) {
+      leaf(all.lo, all.hi, out);
+      return;
+    }
+    std::array<Run, kWidth> runs;
+    const int count = splitRuns(all, 0, runs);
+    newNode(out);
+    std::array<TreeOut, kWidth> parts;
+    std::array<std::pair<int32_t, Bound>, kWidth> results;
+    tbb::parallel_for(0, count, [&](int k) {
+      results[static_cast<size_t>(k)] = build(runs[static_cast<size_t>(k)], 1, parts[static_cast<size_t>(k)]);
+    });
+    for (int k = 0; k < count; ++k) {
+      TreeOut& part = parts[static_cast<size_t>(k)];
+      const int32_t nodeOffset = static_cast<int32_t>(out.nodes.size()), leafOffset = static_cast<int32_t>(out.leaves);
+      const auto moved = [&](int32_t ref) { return ref >= 0 ? ref + nodeOffset : ~(~ref + leafOffset); };
+      for (OuterObjects::Node& node : part.nodes)
+        for (int c = 0; c < kWidth; ++c)
+          if (node.radius[c] > -kInfinity) node.child[c] = moved(node.child[c]);
+      out.nodes.insert(out.nodes.end(), part.nodes.begin(), part.nodes.end());
+      for (size_t a = 0; a < 7; ++a) {
+        out.entries[a].insert(out.entries[a].end(), part.entries[a].begin(), part.entries[a].end());
+        out.leafBounds[a].insert(out.leafBounds[a].end(), part.leafBounds[a].begin(), part.leafBounds[a].end());
+      }
+      out.entryObject.insert(out.entryObject.end(), part.entryObject.begin(), part.entryObject.end());
+      out.leaves += part.leaves;
+      out.depth = std::max(out.depth, part.depth);
+      setChild(out.nodes[0], k, moved(results[static_cast<size_t>(k)].first), results[static_cast<size_t>(k)].second);
+    }
   }
-
-  int depth() const { return depth_; }
-  size_t leaves() const { return leaves_; }
 
  private:
   struct Run {
@@ -541,12 +573,28 @@ class TreeBuilder {
     size_t size() const { return hi - lo; }
   };
 
-  // The child reference (a node >= 0, a leaf < 0) and bound of the run's pieces.
-  std::pair<int32_t, Bound> build(const Run& run, int depth) {
-    depth_ = std::max(depth_, depth);
-    if (run.size() <= static_cast<size_t>(kWidth)) return leaf(run.lo, run.hi);
-    // Split the run of largest area (of more than kWidth pieces) until there are kWidth.
-    std::array<Run, kWidth> runs;
+  // A node with every child unused (radius -infinity: no ray reaches it); its index.
+  static size_t newNode(TreeOut& out) {
+    out.nodes.emplace_back();
+    OuterObjects::Node& node = out.nodes.back();
+    for (int k = 0; k < kWidth; ++k) {
+      node.p0x[k] = node.p0y[k] = node.p0z[k] = node.ex[k] = node.ey[k] = node.ez[k] = 0.0f;
+      node.radius[k] = -kInfinity;
+      node.child[k] = 0;
+    }
+    return out.nodes.size() - 1;
+  }
+
+  static void setChild(OuterObjects::Node& node, int k, int32_t ref, const Bound& bound) {
+    node.p0x[k] = bound.p0.x, node.p0y[k] = bound.p0.y, node.p0z[k] = bound.p0.z;
+    node.ex[k] = bound.e.x, node.ey[k] = bound.e.y, node.ez[k] = bound.e.z;
+    node.radius[k] = bound.radius;
+    node.child[k] = ref;
+  }
+
+  // The runs of a node: the run of largest area (of more than kWidth pieces) split in two until
+  // there are kWidth. Their number.
+  int splitRuns(const Run& run, int depth, std::array<Run, kWidth>& runs) {
     int count = 1;
     runs[0] = run;
     while (count < kWidth) {
@@ -559,24 +607,20 @@ class TreeBuilder {
       runs[largest] = left;
       runs[count++] = right;
     }
-    const size_t index = out_.nodes.size();
-    out_.nodes.emplace_back();
-    {
-      OuterObjects::Node& node = out_.nodes[index];
-      for (int k = 0; k < kWidth; ++k) {
-        node.p0x[k] = node.p0y[k] = node.p0z[k] = node.ex[k] = node.ey[k] = node.ez[k] = 0.0f;
-        node.radius[k] = -kInfinity;  // unused: no ray reaches it
-        node.child[k] = 0;
-      }
-    }
+    return count;
+  }
+
+  // The child reference (a node >= 0, a leaf < 0, in `out`) and bound of the run's pieces.
+  std::pair<int32_t, Bound> build(const Run& run, int depth, TreeOut& out) {
+    out.depth = std::max(out.depth, depth);
+    if (run.size() <= static_cast<size_t>(kWidth)) return leaf(run.lo, run.hi, out);
+    std::array<Run, kWidth> runs;
+    const int count = splitRuns(run, depth, runs);
+    const size_t index = newNode(out);
     std::array<Ball, 2 * kWidth> ends;
     for (int k = 0; k < count; ++k) {
-      const auto [ref, bound] = build(runs[k], depth + 1);
-      OuterObjects::Node& node = out_.nodes[index];  // build() may have grown the nodes
-      node.p0x[k] = bound.p0.x, node.p0y[k] = bound.p0.y, node.p0z[k] = bound.p0.z;
-      node.ex[k] = bound.e.x, node.ey[k] = bound.e.y, node.ez[k] = bound.e.z;
-      node.radius[k] = bound.radius;
-      node.child[k] = ref;
+      const auto [ref, bound] = build(runs[static_cast<size_t>(k)], depth + 1, out);
+      setChild(out.nodes[index], k, ref, bound);  // build() may have grown the nodes
       // A capsule is the hull of the balls at its two ends.
       ends[static_cast<size_t>(2 * k)] = {bound.p0, bound.radius};
       ends[static_cast<size_t>(2 * k + 1)] = {bound.p0 + bound.e, bound.radius};
@@ -658,7 +702,7 @@ class TreeBuilder {
   }
 
   // A leaf of the distinct capsules of the pieces order_[lo, hi), padded to kWidth.
-  std::pair<int32_t, Bound> leaf(size_t lo, size_t hi) {
+  std::pair<int32_t, Bound> leaf(size_t lo, size_t hi, TreeOut& out) {
     std::array<int32_t, kWidth> ids;
     int count = 0;
     for (size_t i = lo; i < hi; ++i) ids[static_cast<size_t>(count++)] = pieces_[order_[i]].capsule;
@@ -667,14 +711,14 @@ class TreeBuilder {
     for (int k = 0; k < kWidth; ++k) {
       const bool used = k < count;
       const size_t c = used ? static_cast<size_t>(ids[static_cast<size_t>(k)]) : 0;
-      out_.entries[0]->push_back(used ? capsules_.p0x[c] : 0.0f);
-      out_.entries[1]->push_back(used ? capsules_.p0y[c] : 0.0f);
-      out_.entries[2]->push_back(used ? capsules_.p0z[c] : 0.0f);
-      out_.entries[3]->push_back(used ? capsules_.ex[c] : 0.0f);
-      out_.entries[4]->push_back(used ? capsules_.ey[c] : 0.0f);
-      out_.entries[5]->push_back(used ? capsules_.ez[c] : 0.0f);
-      out_.entries[6]->push_back(used ? capsules_.radius[c] : -kInfinity);  // padding: tau = +inf for every ray
-      out_.entryObject.push_back(used ? capsules_.object[c] : -1);
+      out.entries[0].push_back(used ? capsules_.p0x[c] : 0.0f);
+      out.entries[1].push_back(used ? capsules_.p0y[c] : 0.0f);
+      out.entries[2].push_back(used ? capsules_.p0z[c] : 0.0f);
+      out.entries[3].push_back(used ? capsules_.ex[c] : 0.0f);
+      out.entries[4].push_back(used ? capsules_.ey[c] : 0.0f);
+      out.entries[5].push_back(used ? capsules_.ez[c] : 0.0f);
+      out.entries[6].push_back(used ? capsules_.radius[c] : -kInfinity);  // padding: tau = +inf for every ray
+      out.entryObject.push_back(used ? capsules_.object[c] : -1);
     }
     std::array<Ball, 2 * kWidth> ends;
     for (size_t i = lo; i < hi; ++i) {
@@ -684,19 +728,16 @@ class TreeBuilder {
     }
     const Bound bound = enclosingBound(ends.data(), static_cast<int>(2 * (hi - lo)), magnitude_);
     const float values[7] = {bound.p0.x, bound.p0.y, bound.p0.z, bound.e.x, bound.e.y, bound.e.z, bound.radius};
-    for (int k = 0; k < 7; ++k) out_.leafBounds[k]->push_back(values[k]);
-    return {~static_cast<int32_t>(leaves_++), bound};
+    for (size_t k = 0; k < 7; ++k) out.leafBounds[k].push_back(values[k]);
+    return {~static_cast<int32_t>(out.leaves++), bound};
   }
 
   const std::vector<Piece>& pieces_;
   const Capsules& capsules_;
-  TreeOut out_;
   float magnitude_;
   std::vector<uint32_t> order_;
   std::vector<Vec3> centroid_;
   std::vector<Bounds3> box_;
-  int depth_ = 0;
-  size_t leaves_ = 0;
 };
 
 // The edges of a mesh, matched in linear time: vertices welded by position (a hash of their
@@ -870,17 +911,19 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   if (pieces.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max() / kWidth))
     fail("parker: {} outer-object pieces are more than the hierarchy holds", pieces.size());
 
-  const size_t leafEstimate = pieces.size() / 4 + 1;
-  TreeOut out{nodes_, {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_}, entryObject_,
-              {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_}};
-  for (std::vector<float>* e : out.entries) e->reserve(leafEstimate * kWidth);
-  for (std::vector<float>* e : out.leafBounds) e->reserve(leafEstimate);
-  entryObject_.reserve(leafEstimate * kWidth);
-  nodes_.reserve(leafEstimate / 4 + 1);
-  TreeBuilder builder(pieces, capsules, out, sceneMagnitude_, pieceLength);
-  root_ = builder.buildAll().first;
-  depth_ = builder.depth();
-  leafCount_ = builder.leaves();
+  TreeOut out;
+  TreeBuilder(pieces, capsules, sceneMagnitude_, pieceLength).buildAll(out);
+  root_ = out.nodes.empty() ? ~0 : 0;
+  nodes_ = std::move(out.nodes);
+  std::vector<float>* entries[7] = {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_};
+  std::vector<float>* leafBounds[7] = {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_};
+  for (size_t k = 0; k < 7; ++k) {
+    *entries[k] = std::move(out.entries[k]);
+    *leafBounds[k] = std::move(out.leafBounds[k]);
+  }
+  entryObject_ = std::move(out.entryObject);
+  depth_ = out.depth;
+  leafCount_ = out.leaves;
   hasCapsules_ = true;
   if (depth_ >= kMaxDepth) fail("parker: the outer objects' hierarchy is {} levels deep, more than {}", depth_ + 1, kMaxDepth);
 }
