@@ -34,12 +34,12 @@
 // BVH, which depends on the geometry alone: it is kept from the last prepare while the inner
 // objects' positions and triangles are the same to the bit (a 128-bit fingerprint), so that a
 // steady-state frame of a static scene under a moving light builds only the outer objects (stat
-// inner_bvh_rebuilt). visibility traces raytraced-hard's rays in packets of 16, one per 4 x 4
+// inner_bvh_rebuilt); the meshes' edge adjacency, also light-independent, is kept alike, and only
+// the silhouettes and the hierarchy are built again. visibility traces raytraced-hard's rays in packets of 16, one per 4 x 4
 // pixel tile, and the rays of a tile that miss every inner object walk the outer objects'
 // hierarchy as one group. Numbers: bench/parker_bench.cpp.
 #include <algorithm>
 #include <atomic>
-#include <cstring>
 #include <exception>
 #include <memory>
 #include <optional>
@@ -57,39 +57,6 @@
 
 namespace penumbra {
 namespace {
-
-// A 128-bit fingerprint of objects' geometry: their positions and triangles, bit for bit, in
-// order (two independent 64-bit multiply-xorshift hashes of every 32-bit word).
-struct GeometryKey {
-  uint64_t a = 0, b = 0;
-  bool operator==(const GeometryKey&) const = default;
-};
-
-GeometryKey geometryKey(const std::vector<const Object*>& objects) {
-  GeometryKey key{0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full};
-  const auto mix = [&](uint64_t word) {
-    key.a = (key.a ^ word) * 0xFF51AFD7ED558CCDull;
-    key.a ^= key.a >> 32;
-    key.b = (key.b + word) * 0xC4CEB9FE1A85EC53ull;
-    key.b ^= key.b >> 29;
-  };
-  const auto words = [&](const void* data, size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i + 4 <= bytes; i += 4) {
-      uint32_t w;
-      std::memcpy(&w, p + i, 4);
-      mix(w);
-    }
-  };
-  mix(objects.size());
-  for (const Object* object : objects) {
-    mix(object->mesh.positions.size());
-    mix(object->mesh.triangles.size());
-    words(object->mesh.positions.data(), object->mesh.positions.size() * sizeof(Vec3));
-    words(object->mesh.triangles.data(), object->mesh.triangles.size() * sizeof(glm::uvec3));
-  }
-  return key;
-}
 
 struct ParkerOptions {
   rt::OuterFalloff falloff = rt::OuterFalloff::Bernstein;
@@ -127,16 +94,19 @@ class ParkerTechnique final : public ShadowTechnique {
     std::sort(analyticIds_.begin(), analyticIds_.end());
     // The inner objects' BVH depends on the geometry alone, not on the light: kept from the last
     // prepare while the inner objects' positions and triangles are the same to the bit (a
-    // steady-state frame of a static scene under a moving light builds only the outer objects).
-    const GeometryKey key = geometryKey(innerObjects);
-    const bool rebuildInner = !rays_ || !(key == innerKey_);
+    // steady-state frame of a static scene under a moving light builds only the outer objects;
+    // their meshes' edge adjacency is kept alike, in edgeCache_).
+    std::vector<rt::MeshFingerprint> key;
+    key.reserve(innerObjects.size());
+    for (const Object* object : innerObjects) key.push_back(rt::meshFingerprint(object->mesh));
+    const bool rebuildInner = !rays_ || key != innerKey_;
     // The outer objects' hierarchy and the inner objects' BVH do not depend on each other: both
     // are built at once. An error of either is reported after both finish, the outer objects' first,
     // so the message does not depend on timing.
     std::exception_ptr outerError, innerError;
     const auto buildOuter = [&] {
       try {
-        outer_ = std::make_unique<rt::OuterObjects>(scene, light, outerOptions);
+        outer_ = std::make_unique<rt::OuterObjects>(scene, light, outerOptions, &edgeCache_);
       } catch (...) {
         outerError = std::current_exception();
       }
@@ -161,7 +131,7 @@ class ParkerTechnique final : public ShadowTechnique {
       rays_.reset();
       std::rethrow_exception(outerError ? outerError : innerError);
     }
-    innerKey_ = key;
+    innerKey_ = std::move(key);
     innerRebuilt_ = rebuildInner;
     light_ = light;
     // The full scene's scale, as raytraced-hard and the reference use, so the rays are the same.
@@ -266,7 +236,8 @@ class ParkerTechnique final : public ShadowTechnique {
   std::unique_ptr<RayScene> rays_;
   std::optional<Light> light_;
   std::vector<int32_t> analyticIds_;  //!< ids of the objects whose analytic sphere is used, sorted
-  GeometryKey innerKey_;              //!< the inner objects' geometry rays_ was built from
+  std::vector<rt::MeshFingerprint> innerKey_;  //!< the inner objects' geometry rays_ was built from
+  rt::OuterObjects::EdgeCache edgeCache_;      //!< the meshes' edge adjacency, kept while they stay the same
   bool innerRebuilt_ = false;         //!< the last prepare built rays_ (else it kept it)
   float epsilon_ = 0.0f;
   double rayCount_ = 0.0;

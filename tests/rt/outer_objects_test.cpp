@@ -340,6 +340,30 @@ TEST(OuterObjects, AnySpacingKeepsTheHierarchyShallow) {
   EXPECT_LT(worst, 1e-5);
 }
 
+// The edge cache keeps each mesh's matched edges while its geometry is the same: under another
+// light only the silhouette is chosen again, with the same result as without a cache; a mesh that
+// changed is matched again.
+TEST(OuterObjects, EdgeCacheMatchesAMeshOnlyWhenItChanged) {
+  OracleScene o = makeOracleScene();
+  const Light first = Light::sphere(Vec3(0.5f, 7.0f, -0.3f), 0.8f), second = Light::sphere(Vec3(-1.0f, 5.0f, 1.0f), 0.6f);
+  rt::OuterObjectOptions options;
+  options.lightDiameter = 1.6f;
+  options.analyticSpheres = false;  // every object a mesh
+  rt::OuterObjects::EdgeCache cache;
+  const size_t meshes = o.scene.objects.size();
+  for (const Light& light : {first, second}) {
+    const rt::OuterObjects cached(o.scene, light, options, &cache);
+    const rt::OuterObjects fresh(o.scene, light, options);
+    EXPECT_EQ(cached.silhouetteEdgeCount(), fresh.silhouetteEdgeCount());
+    const TestRays t = groundRays(light, 500);
+    EXPECT_EQ(attenuations(cached, t, rt::OuterCombine::Min), attenuations(fresh, t, rt::OuterCombine::Min));
+  }
+  EXPECT_EQ(cache.matchCount(), meshes);  // each mesh matched once for both lights
+  transformMesh(o.scene.objects[3].mesh, glm::translate(Mat4(1.0f), Vec3(0.1f, 0.0f, 0.0f)));
+  const rt::OuterObjects moved(o.scene, first, options, &cache);
+  EXPECT_EQ(cache.matchCount(), meshes + 1);
+}
+
 // A ray whose smallest tau is 1 or more is lit (s = 1): the walk starts from tau = 1 and skips
 // everything at or beyond it, which is exact because both falloffs are exactly 1 there.
 TEST(OuterObjects, FalloffsAreExactlyOneAtTheOuterBoundary) {
