@@ -39,10 +39,12 @@ BENCHMARK_CAPTURE(parkerOverRaytracedHard, torus1024, std::string("torus"))->Uni
 // ground under a sphere light of radius 0.5 at height 6: `sphere`, one smooth closed mesh (a UV
 // sphere of radius 1, as a mesh, not an analytic sphere: its silhouette grows as the square root
 // of the triangles), and `parts`, separate boxes of side 0.05 on a grid (every box has a silhouette:
-// its edges grow with the triangles). Counters: triangles, silhouette_edges, prepare_ms (parker's
-// whole prepare: the outer objects and, beside them, the inner objects' Embree BVH), outer_ms (the
-// outer objects alone: welding, edge matching, silhouette, pieces and hierarchy, one thread) and
-// both per 1000 triangles.
+// its edges grow with the triangles). Counters: triangles, silhouette_edges; prepare_ms, parker's
+// steady-state prepare (the frames after an untimed one: the inner objects' BVH and the meshes'
+// edge adjacency are kept, the silhouettes and the hierarchy built again); outer_ms, the outer
+// objects built from nothing (welding, edge matching, silhouettes, pieces, hierarchy: a first
+// frame's work beside the BVH); both per 1000 triangles. The first frame's fresh buffers of the
+// largest sizes come from the system as new pages, whose first touch the cold build pays.
 Scene prepareScene(bool parts, int triangles) {
   Scene scene;
   scene.name = parts ? "parts" : "sphere";
