@@ -1,37 +1,69 @@
-// Outer objects and their light buffer (see outer_objects.h for the model and the paper).
+// Outer objects and their hierarchy (see outer_objects.h for the model and the paper).
 //
-// Conservative footprints. A capsule can change s of a shadow ray only if some ray point q lies
-// within R + b of it (b = D t0 / A). Split into pieces of bounding radius rp around centres m, a
-// piece is touched only by rays passing within y = rp + R + b of m. For a local light A <= A_max
-// (the farthest point of the scene's box from the light's centre in the directions of the cell or
-// tile being tested: receivers are scene points) and q lies between the receiver and the light,
-// so b = D (1 - |q - l| / A) <= D (1 - (|m - l| - y) / A_max); hence
-//     y <= (rp + R + D max(0, 1 - |m - l| / A_max)) / (1 - D / A_max),
-// and every such ray leaves the light in a direction within asin(y / |m - l|) of m's: the cube-map
-// cells whose direction cones come that close list the capsule. For a directional light the same
-// argument with b = D t0, t0 <= z(m) + y - z_min gives y <= (rp + R + D max(0, z(m) - z_min)) / (1 - D)
-// as a radius around m's projection on the grid plane. Where the bound does not close (D >= A_max,
-// y >= |m - l|) the capsule goes into every cell: still exact, only slower.
+// Lower bounds of tau. Every bound below is a capsule B (segment p0 -> p0 + e, radius y) that
+// holds a set of capsule points (and y covers their capsules' radii R). For a shadow ray o + t v
+// (v unit) the distance of a point q in B from the ray's line is at least the distance d_B of the
+// line from B's segment minus y, and q's ray parameter t0 = (q - o).v is at most
+// max((p0 - o).v, (p0 + e - o).v) + y =: t0max (t0 is linear along the segment). Hence, for
+// every capsule whose point nearest the ray's line lies in B,
+//     tau = (d - R) / (bScale t0) >= (d_B - y) / (bScale t0max)   when t0 > 0,
+// and the capsule does not shadow at all when t0max <= 0 or when the smallest t0 in B is >= A.
+// A capsule is cut into pieces, and it is read (whole, by the Appendix's formulas) in the leaf of
+// each piece: the piece that holds its nearest point carries the bound of its tau. A node's bound
+// holds its children's, so it bounds the whole subtree.
 //
-// The cone tests work on cosines and sines (cos(a + b) = cos a cos b - sin a sin b, every angle
-// in [0, pi/2]), so building the buffer needs no trigonometric function; each rounding is covered
-// by a slack that only adds entries. Cells' cones are computed only inside the 8 x 8 tiles some
-// piece reaches (for `torus`, 65 of the 384 tiles).
+// Groups of rays. The caller hands over rays in coherent groups (parker: the open rays of a 4 x 4
+// pixel tile). Against an anchor a (the light's centre; for a directional light the mean origin)
+// and a unit direction v0 (the mean of the rays'), ray i's line is within rho_i of a and its
+// direction at angle theta_i from v0. The projector difference |(I - v_i v_i^T) x - (I - v0 v0^T) x|
+// is at most sin(theta_i) |x|, so the distance of q from ray i's line is at least
+//     |(I - v0 v0^T)(q - a)| - sin(theta_i) |q - a| - rho_i,
+// and t0_i(q) = (q - a).v_i + h_i with h_i = (a - o_i).v_i, (q - a).v_i <= (q - a).v0 + |v_i - v0| |q - a|.
+// One bound per node child then serves the whole group (the largest of sin(theta_i), |v_i - v0|,
+// rho_i and of bScale_i t0_i over the group): the group walks the tree once.
 //
-// The per-ray loop reads a cell's list in blocks of kBlock capsules, branch-free, so the compiler
-// turns each block into vector operations (CMakeLists.txt builds this file without errno for sqrt
-// and with selects it may if-convert); the min combination keeps one running minimum per lane.
-// Every lane computes exactly the scalar formulas, so V does not depend on the grid, the block
-// size or the vector width.
+// The walk keeps each ray's smallest tau (starting at 1: tau >= 1 gives s = 1) and pushes the
+// children whose group bound is below the largest of them, the most promising on top. A node or
+// leaf taken from the stack is first tested ray by ray, 8 rays at a time, against the ball
+// around its bound (each ray's own bound: the group's is loose where the rays start near the
+// capsules, as on a many-part mesh); a leaf's capsules are then culled by their group bound (a
+// capsule bounds itself) and the rest evaluated for the rays of each half of the group one ray of
+// which passed. A capsule left out has, for every ray, tau >= that ray's final minimum, so the
+// minima, and V, are those of reading every capsule. Rounding: every bounding radius is enlarged
+// by 1e-6 of itself and of the coordinates' magnitude when built, and by kBoundSlack of the
+// coordinates' magnitude when read (the formulas' float rounding is a few 1e-7 of it), and every
+// bound is lowered by 1e-5 of itself: bounds err only low, which only adds work.
+//
+// The tree. Capsules are cut into pieces no longer than 1/64 of the scene's radius; a node holds
+// up to kWidth runs of pieces, made by splitting the run of largest area in two until there are
+// kWidth (binned surface-area heuristic, 16 bins across the longest axis of the pieces' centres,
+// each piece's box grown by the piece length so that long thin runs weigh by their length); a run
+// of at most kWidth pieces is a leaf holding its distinct capsules. Each bound is the capsule along
+// the principal axis of what it holds. Building takes one pass over a run per split: O(n log n) in
+// the number of pieces n, nearly linear at the sizes met (bench/parker_bench.cpp).
+//
+// Silhouettes. Per mesh, vertices are welded by position (a hash of their coordinates' bits) and
+// the half-edges of the triangles that can be hit are bucketed by their lower welded vertex (a
+// counting sort), then by the higher: linear in the triangles.
+//
+// The per-ray and per-group loops read 8 capsules, 8 node children or 8 rays at a time
+// branch-free, so the compiler turns them into vector operations (CMakeLists.txt builds this file
+// without errno for sqrt and with selects it may if-convert). Every lane computes exactly the
+// scalar formulas and the minimum is exact, so V depends neither on the tree, the groups, nor the
+// vector width.
 #include "rt/outer_objects.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <span>
+#include <utility>
+
+#include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
-#include "penumbra/mesh_topology.h"
 
 // An 8-wide build of the per-ray loop beside the baseline's 4-wide one, chosen at run time, where
 // the baseline has no AVX2 of its own.
@@ -44,83 +76,28 @@
 namespace penumbra::rt {
 namespace {
 
-// A cube face seen from its centre direction to a corner: cos and sin of acos(1 / sqrt(3)).
-constexpr float kFaceCosHalf = 0.57735026918962576f;
-constexpr float kFaceSinHalf = 0.81649658092772603f;
-constexpr int kTile = 8;  // cells per side of the tiles that cull footprints before single cells
+constexpr int kWidth = OuterObjects::kWidth;
+constexpr int kGroup = OuterObjects::kGroup;
 constexpr float kNoTau = std::numeric_limits<float>::max();
-// Absorbs the rounding of the cone tests' cosines (a few float ulps of 1); being conservative only
-// adds entries.
-constexpr float kConeSlack = 1e-6f;
+// When read, every bounding radius grows by this fraction of the largest coordinate magnitude of
+// the rays' origins, the anchor and the scene (float rounding of the formulas is a few 1e-7 of it).
+constexpr float kBoundSlack = 1e-5f;
+// Every bound is lowered by this fraction of itself (the division's relative rounding).
+constexpr float kBoundShrink = 1.0f - 1e-5f;
+// Levels a traversal can hold: (kWidth - 1) stacked children per level below the root, plus it.
+constexpr int kMaxDepth = 64;
+constexpr int kStackSize = kMaxDepth * (kWidth - 1) + 1;
 
-// Direction of cube-map face `face` at face coordinates (u, v) in [-1, 1], not normalized.
-Vec3 faceDirection(int face, float u, float v) {
-  const int axis = face / 2;
-  Vec3 d;
-  d[axis] = (face % 2 == 0) ? 1.0f : -1.0f;
-  d[(axis + 1) % 3] = u;
-  d[(axis + 2) % 3] = v;
-  return d;
-}
-
-// A piece seen from the light's centre: unit direction, distance, and ball radius.
-struct PieceView {
-  Vec3 axis;
-  float distance, reach;
-};
-
-// Cones of directions in structure-of-arrays form: unit axis, cos and sin of the half-angle (at
-// most pi/2), and the largest distance from the light's centre to a scene point inside the cone
-// (the receivers' A_max there).
-struct ConeArrays {
-  std::vector<float> ax, ay, az, cosHalf, sinHalf, maxDistance;
-  explicit ConeArrays(size_t count)
-      : ax(count), ay(count), az(count), cosHalf(count), sinHalf(count), maxDistance(count, 0.0f) {}
-  void set(size_t i, const Vec3& axis, float c, float s, float distance) {
-    ax[i] = axis.x;
-    ay[i] = axis.y;
-    az[i] = axis.z;
-    cosHalf[i] = c;
-    sinHalf[i] = s;
-    maxDistance[i] = distance;
-  }
-};
-
-// out[k] = whether rays through cone first + k can come within the piece's footprint y (the top of
-// the file): no receiver there (maxDistance 0) -> no; the bound does not close (D >= A_max, or
-// y >= |m - l|) -> yes; otherwise whether the piece's cone of reachable directions, asin(y / |m - l|)
-// around its direction, overlaps the cone. Branch-free, so that the loop vectorizes.
-void reachMask(const PieceView& piece, float diameter, const ConeArrays& cones, size_t first, size_t count,
-               uint32_t* __restrict out) {
-  const float* __restrict ax = cones.ax.data() + first;
-  const float* __restrict ay = cones.ay.data() + first;
-  const float* __restrict az = cones.az.data() + first;
-  const float* __restrict cosHalf = cones.cosHalf.data() + first;
-  const float* __restrict sinHalf = cones.sinHalf.data() + first;
-  const float* __restrict maxDistance = cones.maxDistance.data() + first;
-  const float px = piece.axis.x, py = piece.axis.y, pz = piece.axis.z, distance = piece.distance, reach = piece.reach;
-  for (size_t k = 0; k < count; ++k) {
-    // y <= (rp + R + D max(0, 1 - |m - l| / A_max)) / (1 - D / A_max).
-    const float ratio = diameter / maxDistance[k];
-    const float y = (reach + diameter * std::max(0.0f, 1.0f - distance / maxDistance[k])) / (1.0f - ratio);
-    const float sinPiece = y / distance;
-    const float cosPiece = std::sqrt(std::max(0.0f, (1.0f - sinPiece) * (1.0f + sinPiece)));
-    const float dot = px * ax[k] + py * ay[k] + pz * az[k];
-    const bool closes = (ratio < 1.0f) & (y < distance);
-    const bool overlap = dot >= cosPiece * cosHalf[k] - sinPiece * sinHalf[k] - kConeSlack;
-    out[k] = ((maxDistance[k] > 0.0f) & (!closes | overlap)) ? 1u : 0u;
-  }
-}
-
-// A shadow ray as the per-ray loop reads it.
+// A shadow ray as the capsule loop reads it.
 struct RayQuery {
   float ox, oy, oz, vx, vy, vz;
   float bScale;  //!< b = bScale t0: D / A, or D for a directional light
   float tLimit;  //!< A: capsules at or beyond the light's centre do not shadow
 };
 
-// The entries of the light buffer, as restrict pointers so the block loop vectorizes.
-struct EntryView {
+// Structure-of-arrays capsules (leaf entries, node children, leaf bounds), as restrict pointers
+// so that the loops over them vectorize.
+struct CapsuleView {
   const float* __restrict p0x;
   const float* __restrict p0y;
   const float* __restrict p0z;
@@ -130,524 +107,901 @@ struct EntryView {
   const float* __restrict radius;
 };
 
-// The entries from `first` on (whole pointers, so that a block's loads are contiguous vectors).
-[[gnu::always_inline]] inline EntryView entriesFrom(const EntryView& e, uint32_t first) {
-  return {e.p0x + first, e.p0y + first, e.p0z + first, e.ex + first, e.ey + first, e.ez + first, e.radius + first};
+[[gnu::always_inline]] inline CapsuleView capsulesFrom(const CapsuleView& c, size_t first) {
+  return {c.p0x + first, c.p0y + first, c.p0z + first, c.ex + first, c.ey + first, c.ez + first, c.radius + first};
 }
 
-// tau of capsule j for the ray (kNoTau where the capsule does not shadow). The closest points of
-// the ray's line and the capsule's segment, computed on the parts perpendicular to the ray
-// (vectors, not differences of squares, which cancel when the ray passes close to a far point).
-// Every operation runs whatever the capsule and the result is selected, so that a loop over
-// capsules has no branch and vectorizes.
-[[gnu::always_inline]] inline float capsuleTau(const EntryView& entries, uint32_t j, const RayQuery& r) {
-  const float wx = entries.p0x[j] - r.ox, wy = entries.p0y[j] - r.oy, wz = entries.p0z[j] - r.oz;
-  const float ex = entries.ex[j], ey = entries.ey[j], ez = entries.ez[j];
-  const float wv = wx * r.vx + wy * r.vy + wz * r.vz;
-  const float ev = ex * r.vx + ey * r.vy + ez * r.vz;
-  const float wpx = wx - wv * r.vx, wpy = wy - wv * r.vy, wpz = wz - wv * r.vz;
-  const float epx = ex - ev * r.vx, epy = ey - ev * r.vy, epz = ez - ev * r.vz;
+// tau of the capsule (p0, e, radius) for the ray (o, v, bScale, tLimit); kNoTau where the capsule
+// does not shadow. The closest points of the ray's line and the capsule's segment, computed on the
+// parts perpendicular to the ray (vectors, not differences of squares, which cancel when the ray
+// passes close to a far point). Every operation runs whatever the inputs and the result is
+// selected, so that a loop over capsules, or over rays, has no branch and vectorizes; both loops
+// run these operations in this order, so a ray's tau of a capsule has the same bits in either.
+[[gnu::always_inline]] inline float capsuleTau(float p0x, float p0y, float p0z, float ex, float ey, float ez, float radius,
+                                               float ox, float oy, float oz, float vx, float vy, float vz, float bScale,
+                                               float tLimit) {
+  const float wx = p0x - ox, wy = p0y - oy, wz = p0z - oz;
+  const float wv = wx * vx + wy * vy + wz * vz;
+  const float ev = ex * vx + ey * vy + ez * vz;
+  const float wpx = wx - wv * vx, wpy = wy - wv * vy, wpz = wz - wv * vz;
+  const float epx = ex - ev * vx, epy = ey - ev * vy, epz = ez - ev * vz;
   const float ee = epx * epx + epy * epy + epz * epz;
   const float we = wpx * epx + wpy * epy + wpz * epz;
   const float u = std::min(1.0f, std::max(0.0f, -we / std::max(ee, 1e-30f)));
   const float t0 = wv + u * ev;
   const float rx = wpx + u * epx, ry = wpy + u * epy, rz = wpz + u * epz;
   const float d = std::sqrt(rx * rx + ry * ry + rz * rz);
-  const float q = (d - entries.radius[j]) / (r.bScale * t0);
-  return ((t0 > 0.0f) & (t0 < r.tLimit)) ? q : kNoTau;
+  const float q = (d - radius) / (bScale * t0);
+  return ((t0 > 0.0f) & (t0 < tLimit)) ? q : kNoTau;
 }
 
-// tau of the kBlock capsules from `first`.
-[[gnu::always_inline]] inline void blockTau(const EntryView& entries, uint32_t first, const RayQuery& r, float* __restrict tau) {
-  const EntryView block = entriesFrom(entries, first);
-  for (uint32_t j = 0; j < OuterObjects::kBlock; ++j) tau[j] = capsuleTau(block, j, r);
+// tau of the kWidth capsules of leaf `leaf` for one ray (capsules in the vector lanes).
+[[gnu::always_inline]] inline void leafTau(const CapsuleView& entries, uint32_t leaf, const RayQuery& r, float* __restrict tau) {
+  const CapsuleView c = capsulesFrom(entries, static_cast<size_t>(leaf) * kWidth);
+  for (int j = 0; j < kWidth; ++j)
+    tau[j] = capsuleTau(c.p0x[j], c.p0y[j], c.p0z[j], c.ex[j], c.ey[j], c.ez[j], c.radius[j], r.ox, r.oy, r.oz, r.vx, r.vy, r.vz,
+                        r.bScale, r.tLimit);
 }
 
-// The smallest tau over the blocks [begin, end). One running minimum per lane, std::min(lane, tau)
-// written as the select that vectorizes (a compare and a blend); min is exact, so the result is
-// the minimum over the list in any order.
-[[gnu::always_inline]] inline float minTauOver(const EntryView& entries, uint32_t begin, uint32_t end, const RayQuery& ray) {
-  alignas(32) float lanes[OuterObjects::kBlock];
-  std::fill(lanes, lanes + OuterObjects::kBlock, kNoTau);
-  for (uint32_t first = begin; first < end; first += OuterObjects::kBlock) {
-    const EntryView block = entriesFrom(entries, first);
-    for (uint32_t j = 0; j < OuterObjects::kBlock; ++j) {
-      const float tau = capsuleTau(block, j, ray);
-      lanes[j] = tau < lanes[j] ? tau : lanes[j];
-    }
-  }
-  static_assert(OuterObjects::kBlock == 8);  // a reduction tree of three levels
-  float half[4];
-  for (int k = 0; k < 4; ++k) half[k] = std::min(lanes[k], lanes[k + 4]);
-  return std::min(std::min(half[0], half[2]), std::min(half[1], half[3]));
-}
+// A group of rays: each ray's query and, for the bounds, the group's anchor a, direction v0 and
+// the largest deviations from them (the top of the file).
+struct RayGroup {
+  int count;
+  alignas(32) float ox[kGroup], oy[kGroup], oz[kGroup], vx[kGroup], vy[kGroup], vz[kGroup];
+  alignas(32) float bScale[kGroup], tLimit[kGroup], raySlack[kGroup];
+  float ax, ay, az, v0x, v0y, v0z;
+  float rho;     //!< largest distance of a ray's line from a
+  float kappa;   //!< largest sin(theta_i)
+  float mu;      //!< largest |v_i - v0|
+  float bsMin, bsMax;
+  float h;       //!< largest bScale_i h_i
+  float gLimit;  //!< largest tLimit_i - h_i
+  float slack;   //!< the group's rounding slack
 
-// What the per-ray code reads of the light buffer, gathered once per batch of rays.
-struct LightBufferView {
-  bool directional;
-  Vec3 frameX, frameY;  //!< directional: the grid plane's axes
-  Vec2 gridLower;       //!< directional: grid origin in (x, y)
-  float cellSize;       //!< directional: world units per cell
-  int resolution;
-  uint32_t catchAll;    //!< the cell that lists every capsule
-  const uint32_t* cellStart;
-  const uint32_t* cellCount;
-  EntryView entries;
-  float diameter;
+  RayQuery query(int i) const { return {ox[i], oy[i], oz[i], vx[i], vy[i], vz[i], bScale[i], tLimit[i]}; }
 };
 
-// The cell of the ray from `origin` along `direction`: for a local light, the cube-map cell of the
-// direction in which it leaves the light's centre; for a directional light, the grid cell of the
-// origin's projection. The catch-all cell outside the grid.
-[[gnu::always_inline]] inline uint32_t cellOf(const LightBufferView& view, const Vec3& origin, const Vec3& direction) {
-  const int n = view.resolution;
-  if (view.directional) {
-    const float fx = std::floor((glm::dot(origin, view.frameX) - view.gridLower.x) / view.cellSize);
-    const float fy = std::floor((glm::dot(origin, view.frameY) - view.gridLower.y) / view.cellSize);
-    if (!(fx >= 0.0f && fx < static_cast<float>(n) && fy >= 0.0f && fy < static_cast<float>(n))) return view.catchAll;
-    return static_cast<uint32_t>(static_cast<int>(fy) * n + static_cast<int>(fx));
+// For each of the kWidth capsule bounds `c` (a node's children, or a leaf's capsules): the group
+// bound of the top of the file where it can hold, for some ray of the group, a capsule with tau
+// below `limit`; +infinity where it cannot (or is unused: radius -infinity makes every test false).
+[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound) {
+  for (int k = 0; k < kWidth; ++k) {
+    const float x0 = c.p0x[k] - g.ax, y0 = c.p0y[k] - g.ay, z0 = c.p0z[k] - g.az;
+    const float ex = c.ex[k], ey = c.ey[k], ez = c.ez[k];
+    const float xv = x0 * g.v0x + y0 * g.v0y + z0 * g.v0z;
+    const float ev = ex * g.v0x + ey * g.v0y + ez * g.v0z;
+    const float px = x0 - xv * g.v0x, py = y0 - xv * g.v0y, pz = z0 - xv * g.v0z;
+    const float qx = ex - ev * g.v0x, qy = ey - ev * g.v0y, qz = ez - ev * g.v0z;
+    const float qq = qx * qx + qy * qy + qz * qz;
+    const float pq = px * qx + py * qy + pz * qz;
+    const float u = std::min(1.0f, std::max(0.0f, -pq / std::max(qq, 1e-30f)));
+    const float rx = px + u * qx, ry = py + u * qy, rz = pz + u * qz;
+    const float dPerp = std::sqrt(rx * rx + ry * ry + rz * rz);
+    const float x1 = x0 + ex, y1 = y0 + ey, z1 = z0 + ez;
+    const float y = c.radius[k] + g.slack;
+    const float far = std::sqrt(std::max(x0 * x0 + y0 * y0 + z0 * z0, x1 * x1 + y1 * y1 + z1 * z1)) + y;  // >= |q - a|
+    const float along = std::max(xv, xv + ev) + y + g.mu * far;   // >= (q - a).v_i
+    const float alongMin = std::min(xv, xv + ev) - y - g.mu * far;  // <= (q - a).v_i
+    const float num = dPerp - y - g.rho - g.kappa * far;
+    const float den = (along >= 0.0f ? g.bsMax : g.bsMin) * along + g.h;  // >= bScale_i t0_i
+    const float b = num / den * kBoundShrink;
+    const bool visit = (den > 0.0f) & (alongMin < g.gLimit) & (b < limit);
+    bound[k] = visit ? b : kInfinity;
   }
-  const Vec3 w = -direction;
-  const Vec3 a = glm::abs(w);
-  const int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
-  if (!(a[axis] > 0.0f)) return view.catchAll;
-  const int face = 2 * axis + (w[axis] < 0.0f ? 1 : 0);
-  const float u = w[(axis + 1) % 3] / a[axis], v = w[(axis + 2) % 3] / a[axis];
-  const int x = std::clamp(static_cast<int>((u + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
-  const int y = std::clamp(static_cast<int>((v + 1.0f) * 0.5f * static_cast<float>(n)), 0, n - 1);
-  return static_cast<uint32_t>((face * n + y) * n + x);
 }
 
-// b = D t0 / A (Appendix); A -> infinity with D per unit distance for a directional light.
-[[gnu::always_inline]] inline RayQuery rayQuery(const LightBufferView& view, const Ray& ray, float distanceToLight) {
-  return {ray.origin.x,
-          ray.origin.y,
-          ray.origin.z,
-          ray.direction.x,
-          ray.direction.y,
-          ray.direction.z,
-          view.directional ? view.diameter : view.diameter / distanceToLight,
-          view.directional ? kInfinity : distanceToLight};
+// Whether one of the rays [first, first + 8) of the group can find, within the bound `c` (its
+// first capsule), a capsule with tau below its minimum best[i] (each ray's own bound, the top of
+// the file). Rays in the vector lanes.
+[[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best, int first) {
+  // The ball around the capsule bound: centre at its middle, radius half its length plus its own.
+  const float hx = 0.5f * c.ex[0], hy = 0.5f * c.ey[0], hz = 0.5f * c.ez[0];
+  const float cx = c.p0x[0] + hx, cy = c.p0y[0] + hy, cz = c.p0z[0] + hz;
+  const float radius = std::sqrt(hx * hx + hy * hy + hz * hz) * (1.0f + 1e-6f) + c.radius[0];
+  alignas(32) float reads[8];
+  for (int k = 0; k < 8; ++k) {
+    const int i = first + k;
+    const float wx = cx - g.ox[i], wy = cy - g.oy[i], wz = cz - g.oz[i];
+    const float wv = wx * g.vx[i] + wy * g.vy[i] + wz * g.vz[i];
+    const float px = wx - wv * g.vx[i], py = wy - wv * g.vy[i], pz = wz - wv * g.vz[i];
+    const float d = std::sqrt(px * px + py * py + pz * pz);
+    const float y = radius + g.raySlack[i];
+    const float t0max = wv + y;
+    const float b = (d - y) / (g.bScale[i] * t0max) * kBoundShrink;
+    reads[k] = ((t0max > 0.0f) & (wv - y < g.tLimit[i]) & (b < best[i])) ? 1.0f : 0.0f;
+  }
+  float any = 0.0f;
+  for (int k = 0; k < 8; ++k) any = std::max(any, reads[k]);
+  return any > 0.0f;
 }
 
-// s of each ray under the min combination: the falloff of the smallest tau in its cell's list.
-// The cells first, then the capsule loops of the rays whose cell lists anything, one after the
-// other: independent work that the CPU overlaps, with no branch on empty cells between them.
-[[gnu::always_inline]] inline void minAttenuationsOver(const LightBufferView& view, const Ray* rays, const float* distanceToLight,
+// What the per-ray code reads of the hierarchy, gathered once per call.
+struct TreeView {
+  const OuterObjects::Node* nodes;
+  int32_t root;
+  bool empty;
+  CapsuleView entries;     //!< kWidth per leaf
+  CapsuleView leafBounds;  //!< one per leaf
+  const int32_t* entryObject;
+  bool directional;
+  Vec3 lightCenter;
+  float diameter;
+  float sceneMagnitude;  //!< the largest coordinate magnitude of the scene's bounds
+};
+
+// The group of rays [first, first + count): queries (b = D t0 / A, Appendix; A -> infinity with D
+// per unit distance for a directional light) and the group's bound parameters. Unused slots
+// repeat the first ray.
+[[gnu::always_inline]] inline void makeGroup(const TreeView& view, const Ray* rays, const float* distanceToLight, int count,
+                                             RayGroup& g) {
+  g.count = count;
+  Vec3 directionSum(0.0f), originSum(0.0f);
+  for (int i = 0; i < count; ++i) {
+    directionSum += rays[i].direction;
+    originSum += rays[i].origin;
+  }
+  const Vec3 anchor = view.directional ? originSum / static_cast<float>(count) : view.lightCenter;
+  const float sumLength = glm::length(directionSum);
+  const Vec3 v0 = sumLength > 0.0f ? directionSum / sumLength : rays[0].direction;
+  g.ax = anchor.x, g.ay = anchor.y, g.az = anchor.z;
+  g.v0x = v0.x, g.v0y = v0.y, g.v0z = v0.z;
+  g.rho = g.kappa = g.mu = 0.0f;
+  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.gLimit = -kInfinity;
+  float magnitude = std::max({view.sceneMagnitude, std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)});
+  for (int i = 0; i < kGroup; ++i) {
+    const int k = i < count ? i : 0;
+    const Ray& ray = rays[k];
+    g.ox[i] = ray.origin.x, g.oy[i] = ray.origin.y, g.oz[i] = ray.origin.z;
+    g.vx[i] = ray.direction.x, g.vy[i] = ray.direction.y, g.vz[i] = ray.direction.z;
+    g.bScale[i] = view.directional ? view.diameter : view.diameter / distanceToLight[k];
+    g.tLimit[i] = view.directional ? kInfinity : distanceToLight[k];
+    const float rayMagnitude = std::max({view.sceneMagnitude, std::abs(ray.origin.x), std::abs(ray.origin.y), std::abs(ray.origin.z)});
+    g.raySlack[i] = kBoundSlack * rayMagnitude;
+    magnitude = std::max(magnitude, rayMagnitude);
+    const Vec3 w = anchor - ray.origin;
+    const float h = glm::dot(w, ray.direction);
+    g.rho = std::max(g.rho, glm::length(w - h * ray.direction));
+    g.kappa = std::max(g.kappa, glm::length(glm::cross(ray.direction, v0)));
+    g.mu = std::max(g.mu, glm::length(ray.direction - v0));
+    g.bsMin = std::min(g.bsMin, g.bScale[i]);
+    g.bsMax = std::max(g.bsMax, g.bScale[i]);
+    g.h = std::max(g.h, g.bScale[i] * h);
+    g.gLimit = std::max(g.gLimit, g.tLimit[i] - h);
+  }
+  g.slack = kBoundSlack * magnitude;
+}
+
+struct StackItem {
+  int32_t ref;  //!< >= 0 a node, < 0 the leaf ~ref
+  float bound;  //!< the child's bound when it was pushed
+  int32_t parent, slot;  //!< where its bound is: child `slot` of node `parent` (-1: the root)
+};
+
+// Pushes the children of `node` whose bound is below `limit`, the smallest bound on top (read
+// first, so that the rays' minima fall early and prune more).
+[[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, int32_t parent, const RayGroup& g, float limit,
+                                                StackItem* stack, int& top) {
+  alignas(32) float bound[kWidth];
+  childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound);
+  const int base = top;
+  for (int k = 0; k < kWidth; ++k) {
+    if (!(bound[k] < kInfinity)) continue;
+    const StackItem item{node.child[k], bound[k], parent, k};
+    int j = top++;
+    while (j > base && stack[j - 1].bound < item.bound) {
+      stack[j] = stack[j - 1];
+      --j;
+    }
+    stack[j] = item;
+  }
+}
+
+// best[i] = the smallest tau of ray i over every capsule where it is below 1 (else 1): the
+// traversal of the top of the file.
+[[gnu::always_inline]] inline void groupMinTau(const TreeView& view, const RayGroup& g, float* __restrict best) {
+  for (int i = 0; i < kGroup; ++i) best[i] = i < g.count ? 1.0f : -kInfinity;  // unused slots read nothing
+  if (view.empty) return;
+  float limit = 1.0f;  // the largest best[i]
+  StackItem stack[kStackSize];
+  int top = 0;
+  stack[top++] = {view.root, -kInfinity, -1, 0};
+  while (top > 0) {
+    const StackItem item = stack[--top];
+    if (!(item.bound < limit)) continue;
+    if (item.ref >= 0) {
+      if (item.parent >= 0) {  // each ray's own bound (the root has none: every ray reads it)
+        const OuterObjects::Node& parent = view.nodes[item.parent];
+        const CapsuleView bound = capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
+                                               static_cast<size_t>(item.slot));
+        if (!someRayReads(bound, g, best, 0) && !(g.count > kGroup / 2 && someRayReads(bound, g, best, kGroup / 2))) continue;
+      }
+      pushChildren(view.nodes[item.ref], item.ref, g, limit, stack, top);
+      continue;
+    }
+    // The leaf (the top of the file): the halves of the group one ray of which passes its own
+    // bound, the capsules that pass their group bound, those against those, 8 rays to the lanes.
+    const uint32_t leaf = static_cast<uint32_t>(~item.ref);
+    const CapsuleView bound = capsulesFrom(view.leafBounds, leaf);
+    bool first = true, second = g.count > kGroup / 2;
+    if (item.parent >= 0) {
+      first = someRayReads(bound, g, best, 0);
+      second = second && someRayReads(bound, g, best, kGroup / 2);
+      if (!first && !second) continue;
+    }
+    const CapsuleView c = capsulesFrom(view.entries, static_cast<size_t>(leaf) * kWidth);
+    alignas(32) float capsuleBound[kWidth];
+    childBounds(c, g, limit, capsuleBound);
+    int listed[kWidth], capsules = 0;
+    for (int j = 0; j < kWidth; ++j) {
+      listed[capsules] = j;
+      capsules += capsuleBound[j] < kInfinity;
+    }
+    for (int n = 0; n < capsules; ++n) {
+      const int j = listed[n];
+      const float p0x = c.p0x[j], p0y = c.p0y[j], p0z = c.p0z[j], ex = c.ex[j], ey = c.ey[j], ez = c.ez[j], radius = c.radius[j];
+      for (int half = first ? 0 : kGroup / 2; half < (second ? kGroup : kGroup / 2); half += kGroup / 2)
+        for (int i = half; i < half + kGroup / 2; ++i) {
+          const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i], g.vz[i],
+                                       g.bScale[i], g.tLimit[i]);
+          best[i] = tau < best[i] ? tau : best[i];
+        }
+    }
+    // The largest minimum (unused slots hold -infinity).
+    alignas(32) float upper[kGroup / 2];
+    for (int i = 0; i < kGroup / 2; ++i) upper[i] = std::max(best[i], best[i + kGroup / 2]);
+    for (int width = kGroup / 4; width > 0; width /= 2)
+      for (int i = 0; i < width; ++i) upper[i] = std::max(upper[i], upper[i + width]);
+    limit = upper[0];
+    if (!(limit > 0.0f)) return;  // every ray is inside an analytic sphere's inner object
+  }
+}
+
+// s of each ray under the min combination: the falloff of its smallest tau, group by group.
+[[gnu::always_inline]] inline void minAttenuationsOver(const TreeView& view, const Ray* rays, const float* distanceToLight,
                                                        int count, OuterFalloff falloff, float* s) {
-  constexpr int kBatch = 16;
-  for (int first = 0; first < count; first += kBatch) {
-    const int batch = std::min(kBatch, count - first);
-    int listed[kBatch];
-    uint32_t cells[kBatch];
-    int busy = 0;
-    for (int i = first; i < first + batch; ++i) {
-      const uint32_t cell = cellOf(view, rays[i].origin, rays[i].direction);
-      s[i] = 1.0f;
-      listed[busy] = i;
-      cells[busy] = cell;
-      busy += view.cellCount[cell] != 0;
-    }
-    for (int k = 0; k < busy; ++k) {
-      const int i = listed[k];
-      const float minTau = minTauOver(view.entries, view.cellStart[cells[k]], view.cellStart[cells[k] + 1],
-                                      rayQuery(view, rays[i], distanceToLight[i]));
-      s[i] = minTau <= 0.0f ? 0.0f : outerFalloff(minTau, falloff);  // <= 0: inside an analytic sphere's inner object
-    }
+  RayGroup g;
+  for (int first = 0; first < count; first += kGroup) {
+    const int n = std::min(kGroup, count - first);
+    makeGroup(view, rays + first, distanceToLight + first, n, g);
+    alignas(32) float best[kGroup];
+    groupMinTau(view, g, best);
+    for (int i = 0; i < n; ++i) s[first + i] = best[i] <= 0.0f ? 0.0f : outerFalloff(best[i], falloff);
   }
 }
 
-void minAttenuations(const LightBufferView& view, const Ray* rays, const float* distanceToLight, int count,
-                     OuterFalloff falloff, float* s) {
+void minAttenuations(const TreeView& view, const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
+                     float* s) {
   minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
 }
 
 #if PENUMBRA_OUTER_AVX2
 // The same compiled for 8-wide vectors, where the CPU has them: the same operations per lane (no
 // multiply-add: CMakeLists.txt builds this file with -ffp-contract=off), so the same values.
-[[gnu::target("avx2")]] void minAttenuationsAvx2(const LightBufferView& view, const Ray* rays, const float* distanceToLight,
+[[gnu::target("avx2")]] void minAttenuationsAvx2(const TreeView& view, const Ray* rays, const float* distanceToLight,
                                                  int count, OuterFalloff falloff, float* s) {
   minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
 }
 #endif
 
-// s of one ray under the product or sum combination: per object, the smallest tau over its
-// capsules (an object's capsules are adjacent in every list), then the objects' s_i combined.
-float combinedAttenuation(const LightBufferView& view, const int32_t* entryObject, const Ray& ray, float distanceToLight,
-                          OuterFalloff falloff, OuterCombine combine) {
-  const uint32_t cell = cellOf(view, ray.origin, ray.direction);
-  const uint32_t count = view.cellCount[cell];
-  if (count == 0) return 1.0f;
-  const uint32_t begin = view.cellStart[cell], end = view.cellStart[cell + 1];
-  const RayQuery query = rayQuery(view, ray, distanceToLight);
-  float s = 1.0f;         // combined over finished objects
-  int32_t object = -1;    // the object whose capsules are being read
-  float objectTau = kNoTau;
-  const auto finishObject = [&] {
-    if (object < 0) return;
-    const float si = outerFalloff(objectTau, falloff);
-    s = combine == OuterCombine::Product ? s * si : s - (1.0f - si);
-  };
-  alignas(32) float tau[OuterObjects::kBlock];
-  for (uint32_t block = begin; block < end; block += OuterObjects::kBlock) {
-    blockTau(view.entries, block, query, tau);
-    const uint32_t listed = std::min(OuterObjects::kBlock, begin + count - block);  // the padding is not read
-    for (uint32_t j = 0; j < listed; ++j) {
-      if (tau[j] <= 0.0f) return 0.0f;
-      const int32_t o = entryObject[block + j];
-      if (o != object) {
-        finishObject();
-        object = o;
-        objectTau = kNoTau;
-      }
-      objectTau = std::min(objectTau, tau[j]);
+// s of one ray under the product or sum combination: every capsule with tau below 1 (the others
+// give s_i = 1, which changes neither), per object the smallest tau, then the objects' s_i
+// combined in the order of the objects. `found` is scratch space.
+float combinedAttenuation(const TreeView& view, const Ray& ray, float distanceToLight, OuterFalloff falloff,
+                          OuterCombine combine, std::vector<std::pair<int32_t, float>>& found) {
+  if (view.empty) return 1.0f;
+  RayGroup g;
+  makeGroup(view, &ray, &distanceToLight, 1, g);
+  const RayQuery r = g.query(0);
+  alignas(32) float one[kGroup];
+  for (int i = 0; i < kGroup; ++i) one[i] = i == 0 ? 1.0f : -kInfinity;
+  found.clear();
+  StackItem stack[kStackSize];
+  int top = 0;
+  stack[top++] = {view.root, -kInfinity, -1, 0};
+  while (top > 0) {
+    const StackItem item = stack[--top];
+    if (item.ref >= 0) {
+      pushChildren(view.nodes[item.ref], item.ref, g, 1.0f, stack, top);
+      continue;
+    }
+    const uint32_t leaf = static_cast<uint32_t>(~item.ref);
+    if (!someRayReads(capsulesFrom(view.leafBounds, leaf), g, one, 0)) continue;
+    alignas(32) float tau[kWidth];
+    leafTau(view.entries, leaf, r, tau);
+    for (int j = 0; j < kWidth; ++j) {
+      if (!(tau[j] < 1.0f)) continue;
+      if (tau[j] <= 0.0f) return 0.0f;  // inside an analytic sphere's inner object
+      found.emplace_back(view.entryObject[static_cast<size_t>(leaf) * kWidth + static_cast<size_t>(j)], tau[j]);
     }
   }
-  finishObject();
+  std::sort(found.begin(), found.end());  // by object, its smallest tau first
+  float s = 1.0f;
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (i > 0 && found[i].first == found[i - 1].first) continue;
+    const float si = outerFalloff(found[i].second, falloff);
+    s = combine == OuterCombine::Product ? s * si : s - (1.0f - si);
+  }
   return std::max(0.0f, s);
 }
 
-}  // namespace
+// Capsules, structure of arrays, in the order they are found (object by object).
+struct Capsules {
+  std::vector<float> p0x, p0y, p0z, ex, ey, ez, radius;
+  std::vector<int32_t> object;  //!< index into the scene's objects
+  void add(const Vec3& p0, const Vec3& e, float r, int32_t objectIndex) {
+    p0x.push_back(p0.x);
+    p0y.push_back(p0.y);
+    p0z.push_back(p0.z);
+    ex.push_back(e.x);
+    ey.push_back(e.y);
+    ez.push_back(e.z);
+    radius.push_back(r);
+    object.push_back(objectIndex);
+  }
+  size_t size() const { return object.size(); }
+};
 
-void OuterObjects::Capsules::add(const Vec3& p0, const Vec3& e, float r, int32_t objectIndex) {
-  p0x.push_back(p0.x);
-  p0y.push_back(p0.y);
-  p0z.push_back(p0.z);
-  ex.push_back(e.x);
-  ey.push_back(e.y);
-  ez.push_back(e.z);
-  radius.push_back(r);
-  object.push_back(objectIndex);
+// A piece of a capsule: its part of the segment, a -> b, the capsule's radius, and the capsule.
+struct Piece {
+  Vec3 a, b;
+  float radius;
+  int32_t capsule;
+};
+
+// A ball: centre and radius.
+struct Ball {
+  Vec3 center;
+  float radius;
+};
+
+// A capsule bound: segment p0 -> p0 + e, radius.
+struct Bound {
+  Vec3 p0, e;
+  float radius;
+};
+
+// The capsule around `balls` along their centres' principal axis (a few power iterations on
+// their covariance), just long enough to span their centres' projections; its radius enlarged by
+// 1e-6 of itself and of the coordinates' magnitude so that rounding leaves every ball inside.
+Bound enclosingBound(const Ball* first, int count, float magnitude) {
+  const Ball* last = first + count;
+  Vec3 mean(0.0f);
+  for (const Ball* b = first; b != last; ++b) mean += b->center;
+  mean /= static_cast<float>(count);
+  float cxx = 0, cxy = 0, cxz = 0, cyy = 0, cyz = 0, czz = 0;
+  for (const Ball& b : std::span(first, last)) {
+    const Vec3 d = b.center - mean;
+    cxx += d.x * d.x, cxy += d.x * d.y, cxz += d.x * d.z, cyy += d.y * d.y, cyz += d.y * d.z, czz += d.z * d.z;
+  }
+  Vec3 axis = cxx >= cyy && cxx >= czz ? Vec3(1, 0, 0) : cyy >= czz ? Vec3(0, 1, 0) : Vec3(0, 0, 1);
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const Vec3 next(cxx * axis.x + cxy * axis.y + cxz * axis.z, cxy * axis.x + cyy * axis.y + cyz * axis.z,
+                    cxz * axis.x + cyz * axis.y + czz * axis.z);
+    const float length = glm::length(next);
+    if (!(length > 0.0f) || !std::isfinite(length)) break;
+    axis = next / length;
+  }
+  float lo = kInfinity, hi = -kInfinity;
+  for (const Ball& b : std::span(first, last)) {
+    const float t = glm::dot(b.center - mean, axis);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
+  }
+  const Vec3 p0 = mean + lo * axis, e = (hi - lo) * axis;
+  float radius = 0.0f;
+  for (const Ball& b : std::span(first, last)) {
+    const float t = glm::dot(b.center - mean, axis);
+    radius = std::max(radius, glm::length(b.center - (mean + t * axis)) + b.radius);
+  }
+  return {p0, e, radius * (1.0f + 1e-6f) + 1e-6f * magnitude};
 }
 
-OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options) {
+// The outputs of the tree build, as the OuterObjects members they fill.
+struct TreeOut {
+  std::vector<OuterObjects::Node> nodes;
+  std::array<std::vector<float>, 7> entries;     //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
+  std::vector<int32_t> entryObject;
+  std::array<std::vector<float>, 7> leafBounds;  //!< one per leaf
+  size_t leaves = 0;
+  int depth = 0;
+};
+
+// Half the surface area of a box (the binned SAH's cost of a run).
+float halfArea(const Bounds3& box) {
+  if (box.empty()) return 0.0f;
+  const Vec3 d = box.diagonal();
+  return d.x * d.y + d.y * d.z + d.z * d.x;
+}
+
+// Builds the tree top-down over the pieces (binned surface-area heuristic on the pieces' boxes,
+// grown by `margin` so that long thin runs weigh by their length).
+class TreeBuilder {
+ public:
+  TreeBuilder(const std::vector<Piece>& pieces, const Capsules& capsules, float magnitude, float margin)
+      : pieces_(pieces), capsules_(capsules), magnitude_(magnitude), order_(pieces.size()),
+        centroid_(pieces.size()), box_(pieces.size()) {
+    for (size_t p = 0; p < pieces.size(); ++p) {
+      order_[p] = static_cast<uint32_t>(p);
+      centroid_[p] = 0.5f * (pieces[p].a + pieces[p].b);
+      const Vec3 grow(pieces[p].radius + margin);
+      box_[p].extend(glm::min(pieces[p].a, pieces[p].b) - grow);
+      box_[p].extend(glm::max(pieces[p].a, pieces[p].b) + grow);
+    }
+  }
+
+  // The whole tree into `out` (the root: node 0, or the leaf ~0 for at most kWidth pieces). The
+  // root's runs are built at once on the threads there are, each into its own storage, then put
+  // one after the other, their references moved accordingly: the same tree on any thread count.
+  void buildAll(TreeOut& out) {
+    Run all{0, order_.size(), {}};
+    for (const Bounds3& b : box_) all.box.extend(b);
+    if (all.size() <= static_cast<size_t>(kWidth)) {
+      leaf(all.lo, all.hi, out);
+      return;
+    }
+    std::array<Run, kWidth> runs;
+    const int count = splitRuns(all, 0, runs);
+    newNode(out);
+    std::array<TreeOut, kWidth> parts;
+    std::array<std::pair<int32_t, Bound>, kWidth> results;
+    tbb::parallel_for(0, count, [&](int k) {
+      results[static_cast<size_t>(k)] = build(runs[static_cast<size_t>(k)], 1, parts[static_cast<size_t>(k)]);
+    });
+    for (int k = 0; k < count; ++k) {
+      TreeOut& part = parts[static_cast<size_t>(k)];
+      const int32_t nodeOffset = static_cast<int32_t>(out.nodes.size()), leafOffset = static_cast<int32_t>(out.leaves);
+      const auto moved = [&](int32_t ref) { return ref >= 0 ? ref + nodeOffset : ~(~ref + leafOffset); };
+      for (OuterObjects::Node& node : part.nodes)
+        for (int c = 0; c < kWidth; ++c)
+          if (node.radius[c] > -kInfinity) node.child[c] = moved(node.child[c]);
+      out.nodes.insert(out.nodes.end(), part.nodes.begin(), part.nodes.end());
+      for (size_t a = 0; a < 7; ++a) {
+        out.entries[a].insert(out.entries[a].end(), part.entries[a].begin(), part.entries[a].end());
+        out.leafBounds[a].insert(out.leafBounds[a].end(), part.leafBounds[a].begin(), part.leafBounds[a].end());
+      }
+      out.entryObject.insert(out.entryObject.end(), part.entryObject.begin(), part.entryObject.end());
+      out.leaves += part.leaves;
+      out.depth = std::max(out.depth, part.depth);
+      setChild(out.nodes[0], k, moved(results[static_cast<size_t>(k)].first), results[static_cast<size_t>(k)].second);
+    }
+  }
+
+ private:
+  struct Run {
+    size_t lo, hi;
+    Bounds3 box;
+    size_t size() const { return hi - lo; }
+  };
+
+  // A node with every child unused (radius -infinity: no ray reaches it); its index.
+  static size_t newNode(TreeOut& out) {
+    out.nodes.emplace_back();
+    OuterObjects::Node& node = out.nodes.back();
+    for (int k = 0; k < kWidth; ++k) {
+      node.p0x[k] = node.p0y[k] = node.p0z[k] = node.ex[k] = node.ey[k] = node.ez[k] = 0.0f;
+      node.radius[k] = -kInfinity;
+      node.child[k] = 0;
+    }
+    return out.nodes.size() - 1;
+  }
+
+  static void setChild(OuterObjects::Node& node, int k, int32_t ref, const Bound& bound) {
+    node.p0x[k] = bound.p0.x, node.p0y[k] = bound.p0.y, node.p0z[k] = bound.p0.z;
+    node.ex[k] = bound.e.x, node.ey[k] = bound.e.y, node.ez[k] = bound.e.z;
+    node.radius[k] = bound.radius;
+    node.child[k] = ref;
+  }
+
+  // The runs of a node: the run of largest area (of more than kWidth pieces) split in two until
+  // there are kWidth. Their number.
+  int splitRuns(const Run& run, int depth, std::array<Run, kWidth>& runs) {
+    int count = 1;
+    runs[0] = run;
+    while (count < kWidth) {
+      int largest = -1;
+      for (int k = 0; k < count; ++k)
+        if (runs[k].size() > static_cast<size_t>(kWidth) && (largest < 0 || halfArea(runs[k].box) > halfArea(runs[largest].box)))
+          largest = k;
+      if (largest < 0) break;
+      const auto [left, right] = depth < kSahDepth ? split(runs[largest]) : splitAtMedian(runs[largest]);
+      runs[largest] = left;
+      runs[count++] = right;
+    }
+    return count;
+  }
+
+  // The child reference (a node >= 0, a leaf < 0, in `out`) and bound of the run's pieces.
+  std::pair<int32_t, Bound> build(const Run& run, int depth, TreeOut& out) {
+    out.depth = std::max(out.depth, depth);
+    if (run.size() <= static_cast<size_t>(kWidth)) return leaf(run.lo, run.hi, out);
+    std::array<Run, kWidth> runs;
+    const int count = splitRuns(run, depth, runs);
+    const size_t index = newNode(out);
+    std::array<Ball, 2 * kWidth> ends;
+    for (int k = 0; k < count; ++k) {
+      const auto [ref, bound] = build(runs[static_cast<size_t>(k)], depth + 1, out);
+      setChild(out.nodes[index], k, ref, bound);  // build() may have grown the nodes
+      // A capsule is the hull of the balls at its two ends.
+      ends[static_cast<size_t>(2 * k)] = {bound.p0, bound.radius};
+      ends[static_cast<size_t>(2 * k + 1)] = {bound.p0 + bound.e, bound.radius};
+    }
+    return {static_cast<int32_t>(index), enclosingBound(ends.data(), 2 * count, magnitude_)};
+  }
+
+  // Below kSahDepth levels the runs are halved at their median instead: the heuristic may peel
+  // one piece at a time off a run (pieces spaced ever farther apart), and halving keeps the tree
+  // within kMaxDepth levels whatever the input.
+  static constexpr int kSahDepth = 24;
+  std::pair<Run, Run> splitAtMedian(const Run& run) {
+    Bounds3 centers;
+    for (size_t i = run.lo; i < run.hi; ++i) centers.extend(centroid_[order_[i]]);
+    const Vec3 extent = centers.diagonal();
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+    const size_t middle = run.lo + run.size() / 2;
+    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(run.lo), order_.begin() + static_cast<std::ptrdiff_t>(middle),
+                     order_.begin() + static_cast<std::ptrdiff_t>(run.hi),
+                     [&](uint32_t a, uint32_t b) { return centroid_[a][axis] < centroid_[b][axis]; });
+    Run left{run.lo, middle, {}}, right{middle, run.hi, {}};
+    for (size_t i = left.lo; i < left.hi; ++i) left.box.extend(box_[order_[i]]);
+    for (size_t i = right.lo; i < right.hi; ++i) right.box.extend(box_[order_[i]]);
+    return {left, right};
+  }
+
+  // Two runs from one: the plane among 16 bins across the longest axis of the centroids' box with
+  // the least sum of area times count; the middle where all centroids coincide.
+  std::pair<Run, Run> split(const Run& run) {
+    constexpr int kBins = 16;
+    Bounds3 centers;
+    for (size_t i = run.lo; i < run.hi; ++i) centers.extend(centroid_[order_[i]]);
+    const Vec3 extent = centers.diagonal();
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+    Run left{run.lo, run.lo + run.size() / 2, {}}, right{left.hi, run.hi, {}};
+    if (!(extent[axis] > 0.0f)) {
+      for (size_t i = left.lo; i < left.hi; ++i) left.box.extend(box_[order_[i]]);
+      for (size_t i = right.lo; i < right.hi; ++i) right.box.extend(box_[order_[i]]);
+      return {left, right};
+    }
+    const float scale = static_cast<float>(kBins) / extent[axis], lower = centers.lower[axis];
+    const auto binOf = [&](uint32_t p) { return std::min(kBins - 1, static_cast<int>((centroid_[p][axis] - lower) * scale)); };
+    std::array<Bounds3, kBins> binBox;
+    std::array<size_t, kBins> binCount{};
+    for (size_t i = run.lo; i < run.hi; ++i) {
+      const uint32_t p = order_[i];
+      const int bin = binOf(p);
+      binBox[static_cast<size_t>(bin)].extend(box_[p]);
+      ++binCount[static_cast<size_t>(bin)];
+    }
+    std::array<Bounds3, kBins> rightBox;  // bins [bin, kBins)
+    rightBox[kBins - 1] = binBox[kBins - 1];
+    for (int bin = kBins - 2; bin > 0; --bin) {
+      rightBox[static_cast<size_t>(bin)] = rightBox[static_cast<size_t>(bin + 1)];
+      rightBox[static_cast<size_t>(bin)].extend(binBox[static_cast<size_t>(bin)]);
+    }
+    Bounds3 leftBox;
+    size_t n = 0;
+    int bestBin = -1;
+    float bestCost = kInfinity;
+    Bounds3 bestLeft;
+    for (int bin = 0; bin < kBins - 1; ++bin) {
+      leftBox.extend(binBox[static_cast<size_t>(bin)]);
+      n += binCount[static_cast<size_t>(bin)];
+      if (n == 0 || n == run.size()) continue;
+      const float cost = halfArea(leftBox) * static_cast<float>(n) +
+                         halfArea(rightBox[static_cast<size_t>(bin + 1)]) * static_cast<float>(run.size() - n);
+      if (cost < bestCost) {
+        bestCost = cost;
+        bestBin = bin;
+        bestLeft = leftBox;
+      }
+    }
+    const size_t cut = static_cast<size_t>(std::partition(order_.begin() + static_cast<std::ptrdiff_t>(run.lo),
+                                                          order_.begin() + static_cast<std::ptrdiff_t>(run.hi),
+                                                          [&](uint32_t p) { return binOf(p) <= bestBin; }) -
+                                           order_.begin());
+    return {{run.lo, cut, bestLeft}, {cut, run.hi, rightBox[static_cast<size_t>(bestBin + 1)]}};
+  }
+
+  // A leaf of the distinct capsules of the pieces order_[lo, hi), padded to kWidth.
+  std::pair<int32_t, Bound> leaf(size_t lo, size_t hi, TreeOut& out) {
+    std::array<int32_t, kWidth> ids;
+    int count = 0;
+    for (size_t i = lo; i < hi; ++i) ids[static_cast<size_t>(count++)] = pieces_[order_[i]].capsule;
+    std::sort(ids.begin(), ids.begin() + count);
+    count = static_cast<int>(std::unique(ids.begin(), ids.begin() + count) - ids.begin());
+    for (int k = 0; k < kWidth; ++k) {
+      const bool used = k < count;
+      const size_t c = used ? static_cast<size_t>(ids[static_cast<size_t>(k)]) : 0;
+      out.entries[0].push_back(used ? capsules_.p0x[c] : 0.0f);
+      out.entries[1].push_back(used ? capsules_.p0y[c] : 0.0f);
+      out.entries[2].push_back(used ? capsules_.p0z[c] : 0.0f);
+      out.entries[3].push_back(used ? capsules_.ex[c] : 0.0f);
+      out.entries[4].push_back(used ? capsules_.ey[c] : 0.0f);
+      out.entries[5].push_back(used ? capsules_.ez[c] : 0.0f);
+      out.entries[6].push_back(used ? capsules_.radius[c] : -kInfinity);  // padding: tau = +inf for every ray
+      out.entryObject.push_back(used ? capsules_.object[c] : -1);
+    }
+    std::array<Ball, 2 * kWidth> ends;
+    for (size_t i = lo; i < hi; ++i) {
+      const Piece& piece = pieces_[order_[i]];
+      ends[2 * (i - lo)] = {piece.a, piece.radius};
+      ends[2 * (i - lo) + 1] = {piece.b, piece.radius};
+    }
+    const Bound bound = enclosingBound(ends.data(), static_cast<int>(2 * (hi - lo)), magnitude_);
+    const float values[7] = {bound.p0.x, bound.p0.y, bound.p0.z, bound.e.x, bound.e.y, bound.e.z, bound.radius};
+    for (size_t k = 0; k < 7; ++k) out.leafBounds[k].push_back(values[k]);
+    return {~static_cast<int32_t>(out.leaves++), bound};
+  }
+
+  const std::vector<Piece>& pieces_;
+  const Capsules& capsules_;
+  float magnitude_;
+  std::vector<uint32_t> order_;
+  std::vector<Vec3> centroid_;
+  std::vector<Bounds3> box_;
+};
+
+// The edges of a mesh, matched in linear time: vertices welded by position (a hash of their
+// coordinates' bits, -0 as +0; each vertex maps to the first at its position), the half-edges of
+// the triangles that can be hit (finite, non-zero area) bucketed by their lower welded vertex (a
+// counting sort, stable, so each edge's half-edges stay in triangle order), then by the higher.
+// The matching depends on the geometry alone; which edges are kept, on the light.
+class EdgeTable {
+ public:
+  // Welds the mesh's vertices and matches the edges of its triangles that can be hit.
+  void match(const Mesh& mesh) {
+    weld(mesh.positions);
+    std::vector<Half> half;
+    half.reserve(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const glm::uvec3& tri = mesh.triangles[t];
+      const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
+      const Vec3 n = glm::cross(p1 - p0, p2 - p0);
+      const float n2 = glm::dot(n, n);
+      if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2)) continue;  // cannot be hit
+      const uint32_t v[3] = {tri.x, tri.y, tri.z};
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = v[k], b = v[(k + 1) % 3];
+        const uint32_t wa = weld_[a], wb = weld_[b];
+        if (wa == wb) continue;
+        half.push_back({std::min(wa, wb), std::max(wa, wb), a, b, static_cast<uint32_t>(t)});
+      }
+    }
+    // Counting sort by the lower welded vertex.
+    std::vector<uint32_t> start(weld_.size() + 1, 0);
+    for (const Half& h : half) ++start[h.low + 1];
+    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+    sorted_.resize(half.size());
+    std::vector<uint32_t> next(start.begin(), start.end() - 1);
+    for (const Half& h : half) sorted_[next[h.low]++] = h;
+    // Within each bucket (a vertex's edges: a handful), by the higher one: an insertion sort, stable.
+    for (size_t v = 0; v + 1 < start.size(); ++v)
+      for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i) {
+        const Half h = sorted_[i];
+        uint32_t j = i;
+        for (; j > start[v] && sorted_[j - 1].high > h.high; --j) sorted_[j] = sorted_[j - 1];
+        sorted_[j] = h;
+      }
+    weld_ = {};
+    table_ = {};
+  }
+
+  // Calls keep(a, b) for each kept edge (an open boundary: one face; a silhouette: two faces, one
+  // towards the light; a non-manifold edge: three or more, its outline status ambiguous), with the
+  // vertices of its first half-edge. `front(p0, n)`: whether the triangle with first vertex p0
+  // and normal n faces the light.
+  template <typename Front, typename Keep>
+  void forEachKept(const Mesh& mesh, Front front, Keep keep) const {
+    const auto facing = [&](uint32_t t) {
+      const glm::uvec3& tri = mesh.triangles[t];
+      const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
+      return front(p0, glm::cross(p1 - p0, p2 - p0));
+    };
+    for (size_t i = 0; i < sorted_.size();) {
+      size_t j = i + 1;
+      while (j < sorted_.size() && sorted_[j].low == sorted_[i].low && sorted_[j].high == sorted_[i].high) ++j;
+      if (j - i != 2 || facing(sorted_[i].triangle) != facing(sorted_[i + 1].triangle)) keep(sorted_[i].a, sorted_[i].b);
+      i = j;
+    }
+  }
+
+ private:
+  struct Half {
+    uint32_t low, high;  //!< welded vertices
+    uint32_t a, b;       //!< the half-edge's vertices in the mesh
+    uint32_t triangle;   //!< its triangle
+  };
+  void weld(const std::vector<Vec3>& positions) {
+    const size_t n = positions.size();
+    int bits = 4;
+    while ((size_t{1} << bits) < 2 * n) ++bits;
+    const size_t size = size_t{1} << bits;
+    table_.assign(size, kEmpty);
+    weld_.resize(n);
+    // A 64-bit finalizer (MurmurHash3's fmix64) of the coordinates' bits; the slot from its top bits.
+    const auto fmix = [](uint64_t h) {
+      h ^= h >> 33;
+      h *= 0xFF51AFD7ED558CCDull;
+      h ^= h >> 33;
+      h *= 0xC4CEB9FE1A85EC53ull;
+      h ^= h >> 33;
+      return h;
+    };
+    for (uint32_t i = 0; i < n; ++i) {
+      const Vec3 q = positions[i] + Vec3(0.0f);  // -0 as +0
+      uint32_t word[3];
+      std::memcpy(word, &q, sizeof(word));
+      const uint64_t h = fmix(fmix(uint64_t{word[0]} << 32 | word[1]) ^ word[2]);
+      for (size_t slot = h >> (64 - bits);; slot = (slot + 1) & (size - 1)) {
+        const uint32_t j = table_[slot];
+        if (j == kEmpty) {
+          table_[slot] = i;
+          weld_[i] = i;
+          break;
+        }
+        const Vec3 r = positions[j] + Vec3(0.0f);
+        if (std::memcmp(&q, &r, sizeof(q)) == 0) {
+          weld_[i] = j;
+          break;
+        }
+      }
+    }
+  }
+
+  static constexpr uint32_t kEmpty = 0xffffffffu;
+  std::vector<uint32_t> table_, weld_;  //!< while matching
+  std::vector<Half> sorted_;
+};
+
+}  // namespace
+
+struct OuterObjects::EdgeCache::Impl {
+  struct Entry {
+    bool matched = false;
+    MeshFingerprint key;
+    EdgeTable edges;
+  };
+  std::vector<Entry> entries;  //!< per object index
+  size_t matches = 0;
+};
+
+OuterObjects::EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
+OuterObjects::EdgeCache::~EdgeCache() = default;
+size_t OuterObjects::EdgeCache::matchCount() const { return impl_->matches; }
+
+MeshFingerprint meshFingerprint(const Mesh& mesh) {
+  MeshFingerprint key{0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full};
+  const auto mix = [&](uint64_t word) {
+    key.a = (key.a ^ word) * 0xFF51AFD7ED558CCDull;
+    key.a ^= key.a >> 32;
+    key.b = (key.b + word) * 0xC4CEB9FE1A85EC53ull;
+    key.b ^= key.b >> 29;
+  };
+  const auto words = [&](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i + 8 <= bytes; i += 8) {
+      uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      mix(w);
+    }
+    if (bytes % 8 != 0) {
+      uint64_t w = 0;
+      std::memcpy(&w, p + bytes / 8 * 8, bytes % 8);
+      mix(w);
+    }
+  };
+  mix(mesh.positions.size());
+  mix(mesh.triangles.size());
+  words(mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
+  words(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+  return key;
+}
+
+OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options, EdgeCache* cache) {
   if (!(options.lightDiameter > 0.0f) || !std::isfinite(options.lightDiameter))
     fail("parker: light diameter must be a finite number > 0, got {}", options.lightDiameter);
-  if (options.gridResolution < 1) fail("parker: grid resolution must be >= 1, got {}", options.gridResolution);
   directional_ = light.isDirectional();
   lightCenter_ = light.center();
   diameter_ = options.lightDiameter;
-  resolution_ = options.gridResolution;
-  faceCount_ = directional_ ? 1 : 6;
 #if PENUMBRA_OUTER_AVX2
   avx2_ = __builtin_cpu_supports("avx2");
 #endif
 
   const Bounds3 bounds = scene.bounds();
   const float sceneRadius = bounds.empty() ? 1.0f : std::max(bounds.radius(), 1e-6f);
-  // Receivers lie in the scene's bounds; shadow-ray origins are offset from them by 1e-4 of the
-  // scene's scale (shadowRayEpsilon), far inside this margin.
-  const float margin = 1e-3f * sceneRadius;
-  std::array<Vec3, 8> corners;
-  for (int i = 0; i < 8; ++i)
-    corners[i] = bounds.empty() ? lightCenter_
-                                : Vec3((i & 1) ? bounds.upper.x : bounds.lower.x, (i & 2) ? bounds.upper.y : bounds.lower.y,
-                                       (i & 4) ? bounds.upper.z : bounds.lower.z);
-  float gridExtent = 0.0f;  // directional: side of the square the planar grid covers
-  if (directional_) {
-    frame_ = Frame::fromZ(light.direction());
-    Vec2 lower(kInfinity), upper(-kInfinity);
-    minReceiverDepth_ = kInfinity;
-    for (const Vec3& c : corners) {
-      const Vec3 local = frame_.toLocal(c);
-      lower = glm::min(lower, Vec2(local));
-      upper = glm::max(upper, Vec2(local));
-      minReceiverDepth_ = std::min(minReceiverDepth_, local.z);
-    }
-    lower -= Vec2(margin);
-    upper += Vec2(margin);
-    minReceiverDepth_ -= margin;
-    gridLower_ = lower;
-    gridExtent = std::max(upper.x - lower.x, upper.y - lower.y);
-  } else {
-    for (const Vec3& c : corners) maxReceiverDistance_ = std::max(maxReceiverDistance_, glm::length(c - lightCenter_));
-    maxReceiverDistance_ += margin;
-  }
+  if (!bounds.empty())
+    for (int k = 0; k < 3; ++k) sceneMagnitude_ = std::max({sceneMagnitude_, std::abs(bounds.lower[k]), std::abs(bounds.upper[k])});
 
+  Capsules capsules;
   // Capsules: analytic spheres, then every mesh's silhouette edges.
   analytic_.assign(scene.objects.size(), false);
-  struct EdgeRecord {
-    uint64_t key;      // welded vertex ids (low, high)
-    uint32_t a, b;     // the edge's vertex indices in the mesh
-    bool front;        // the face faces the light's centre
-  };
-  std::vector<EdgeRecord> edges;
+  EdgeCache local;
+  EdgeCache& edgeCache = cache ? *cache : local;
+  edgeCache.impl_->entries.resize(scene.objects.size());
   for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
     const Object& object = scene.objects[objectIndex];
     const int32_t index = static_cast<int32_t>(objectIndex);
     if (usesAnalyticSphere(object, options)) {
-      capsules_.add(object.sphere->center, Vec3(0.0f), object.sphere->radius, index);
+      capsules.add(object.sphere->center, Vec3(0.0f), object.sphere->radius, index);
       analytic_[objectIndex] = true;
       ++analyticCount_;
       continue;
     }
     const Mesh& mesh = object.mesh;
-    // Weld vertices at the same position (split normals or UV seams make duplicates), so that an
-    // edge between two faces is found even when each face has its own copy of the vertices.
-    const std::vector<uint32_t> weld = firstVertexAtSamePosition(mesh.positions);
-
-    edges.clear();
-    edges.reserve(3 * mesh.triangles.size());
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3& tri = mesh.triangles[t];
       if (tri.x >= mesh.positions.size() || tri.y >= mesh.positions.size() || tri.z >= mesh.positions.size())
         fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name, t,
              std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
-      const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
-      const Vec3 n = glm::cross(p1 - p0, p2 - p0);
-      const float n2 = glm::dot(n, n);
-      if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2)) continue;  // cannot be hit
-      const bool front = glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f;
-      const uint32_t v[3] = {tri.x, tri.y, tri.z};
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = v[k], b = v[(k + 1) % 3];
-        const uint64_t wa = weld[a], wb = weld[b];
-        if (wa == wb) continue;
-        edges.push_back({std::min(wa, wb) << 32 | std::max(wa, wb), a, b, front});
-      }
     }
-    std::sort(edges.begin(), edges.end(), [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key; });
-    for (size_t i = 0; i < edges.size();) {
-      size_t j = i + 1;
-      while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-      // An open boundary (one face), a silhouette (two faces, one towards the light) or a
-      // non-manifold edge (three or more faces: its outline status is ambiguous, so it is kept).
-      const bool keep = (j - i != 2) || edges[i].front != edges[i + 1].front;
-      if (keep) {
-        const Vec3 a = mesh.positions[edges[i].a];
-        capsules_.add(a, mesh.positions[edges[i].b] - a, 0.0f, index);
-        ++edgeCount_;
-      }
-      i = j;
+    // Per edge (its vertices welded by position: split normals or UV seams make duplicates) the
+    // faces that share it, matched again only where the mesh changed since the cache's last use.
+    EdgeCache::Impl::Entry& entry = edgeCache.impl_->entries[objectIndex];
+    const MeshFingerprint key = meshFingerprint(mesh);
+    if (!entry.matched || !(entry.key == key)) {
+      entry.edges.match(mesh);
+      entry.key = key;
+      entry.matched = true;
+      ++edgeCache.impl_->matches;
     }
+    entry.edges.forEachKept(
+        mesh, [&](const Vec3& p0, const Vec3& n) { return glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f; },
+        [&](uint32_t a, uint32_t b) {
+          const Vec3 pa = mesh.positions[a];
+          capsules.add(pa, mesh.positions[b] - pa, 0.0f, index);
+          ++edgeCount_;
+        });
   }
 
   // Pieces of at most sceneRadius / 64 along each capsule, in capsule order.
   const float pieceLength = sceneRadius / 64.0f;
   std::vector<Piece> pieces;
-  for (size_t c = 0; c < capsules_.size(); ++c) {
-    const Vec3 p0(capsules_.p0x[c], capsules_.p0y[c], capsules_.p0z[c]);
-    const Vec3 e(capsules_.ex[c], capsules_.ey[c], capsules_.ez[c]);
-    const float length = glm::length(e);
-    const int count = std::max(1, static_cast<int>(std::ceil(std::min(length / pieceLength, 1e6f))));
-    const float rp = 0.5f * length / static_cast<float>(count);
+  pieces.reserve(capsules.size());
+  for (size_t c = 0; c < capsules.size(); ++c) {
+    const Vec3 p0(capsules.p0x[c], capsules.p0y[c], capsules.p0z[c]);
+    const Vec3 e(capsules.ex[c], capsules.ey[c], capsules.ez[c]);
+    const int count = std::max(1, static_cast<int>(std::ceil(std::min(glm::length(e) / pieceLength, 1e6f))));
     for (int k = 0; k < count; ++k)
-      pieces.push_back({p0 + e * ((static_cast<float>(k) + 0.5f) / static_cast<float>(count)), rp + capsules_.radius[c],
-                        static_cast<int>(c)});
+      pieces.push_back({p0 + e * (static_cast<float>(k) / static_cast<float>(count)),
+                        k + 1 == count ? p0 + e : p0 + e * (static_cast<float>(k + 1) / static_cast<float>(count)),
+                        capsules.radius[c], static_cast<int32_t>(c)});
   }
+  pieceCount_ = pieces.size();
+  if (pieces.empty()) return;
+  if (pieces.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max() / kWidth))
+    fail("parker: {} outer-object pieces are more than the hierarchy holds", pieces.size());
 
-  // The light buffer: (cell, capsule) pairs from every piece's footprint (at the finest grid, up to
-  // gridResolution, that keeps them within maxGridEntries), then compressed rows.
-  std::vector<std::pair<int, int>> pairs;
-  for (;;) {
-    const size_t limit = resolution_ > 1 ? options.maxGridEntries : std::numeric_limits<size_t>::max();
-    pairs.clear();
-    bool within = true;
-    if (directional_) {
-      cellSize_ = gridExtent / static_cast<float>(resolution_);
-      for (const Piece& piece : pieces) {
-        insertDirectional(piece, pairs);
-        if (pairs.size() > limit) {
-          within = false;
-          break;
-        }
-      }
-    } else {
-      within = insertLocal(bounds, margin, pieces, limit, pairs);
-    }
-    if (within) break;
-    resolution_ /= 2;
+  TreeOut out;
+  TreeBuilder(pieces, capsules, sceneMagnitude_, pieceLength).buildAll(out);
+  root_ = out.nodes.empty() ? ~0 : 0;
+  nodes_ = std::move(out.nodes);
+  std::vector<float>* entries[7] = {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_};
+  std::vector<float>* leafBounds[7] = {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_};
+  for (size_t k = 0; k < 7; ++k) {
+    *entries[k] = std::move(out.entries[k]);
+    *leafBounds[k] = std::move(out.leafBounds[k]);
   }
-  const int cells = faceCount_ * resolution_ * resolution_;
-  for (size_t c = 0; c < capsules_.size(); ++c) pairs.emplace_back(cells, static_cast<int>(c));  // the catch-all cell
-  // Sorted by cell, then object, then capsule: per-object runs in each cell, duplicates adjacent.
-  // Every cell's pairs arrive in capsule order (capsules were added object by object), so a stable
-  // counting sort by cell gives that order in linear time (a comparison sort took seconds at 10^6
-  // triangles).
-  const size_t cellTotal = static_cast<size_t>(cells) + 1;
-  {
-    std::vector<uint32_t> start(cellTotal + 1, 0);
-    for (const auto& [cell, capsule] : pairs) ++start[static_cast<size_t>(cell) + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<std::pair<int, int>> sorted(pairs.size());
-    for (const auto& pair : pairs) sorted[start[static_cast<size_t>(pair.first)]++] = pair;
-    pairs.swap(sorted);
-  }
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  entryCount_ = pairs.size();
-  cellCount_.assign(cellTotal, 0);
-  for (const auto& [cell, capsule] : pairs) ++cellCount_[static_cast<size_t>(cell)];
-  cellStart_.assign(cellTotal + 1, 0);
-  for (size_t c = 0; c < cellTotal; ++c)
-    cellStart_[c + 1] = cellStart_[c] + (cellCount_[c] + kBlock - 1) / kBlock * kBlock;
-  // Padding: a point capsule of radius -infinity, whose tau is +infinity (or kNoTau) for every ray.
-  const size_t padded = cellStart_.back();
-  entryP0x_.assign(padded, 0.0f);
-  entryP0y_.assign(padded, 0.0f);
-  entryP0z_.assign(padded, 0.0f);
-  entryEx_.assign(padded, 0.0f);
-  entryEy_.assign(padded, 0.0f);
-  entryEz_.assign(padded, 0.0f);
-  entryRadius_.assign(padded, -kInfinity);
-  entryObject_.assign(padded, -1);
-  std::vector<uint32_t> next(cellStart_.begin(), cellStart_.end() - 1);
-  for (const auto& [cell, capsule] : pairs) {
-    const uint32_t i = next[static_cast<size_t>(cell)]++;
-    const size_t c = static_cast<size_t>(capsule);
-    entryP0x_[i] = capsules_.p0x[c];
-    entryP0y_[i] = capsules_.p0y[c];
-    entryP0z_[i] = capsules_.p0z[c];
-    entryEx_[i] = capsules_.ex[c];
-    entryEy_[i] = capsules_.ey[c];
-    entryEz_[i] = capsules_.ez[c];
-    entryRadius_[i] = capsules_.radius[c];
-    entryObject_[i] = capsules_.object[c];
-  }
-}
-
-void OuterObjects::insertDirectional(const Piece& piece, std::vector<std::pair<int, int>>& pairs) const {
-  const int n = resolution_;
-  const float depth = glm::dot(piece.center, frame_.z) - minReceiverDepth_;
-  const float footprint = diameter_ < 1.0f ? (piece.reach + diameter_ * std::max(0.0f, depth)) / (1.0f - diameter_) : kInfinity;
-  const Vec3 local = frame_.toLocal(piece.center);
-  const bool everywhere = !std::isfinite(footprint);
-  const auto cellRange = [&](float c, float lower) {
-    if (everywhere) return std::pair<int, int>(0, n - 1);
-    const float lo = std::floor((c - footprint - lower) / cellSize_), hi = std::floor((c + footprint - lower) / cellSize_);
-    return std::pair<int, int>(static_cast<int>(std::clamp(lo, 0.0f, static_cast<float>(n - 1))),
-                               static_cast<int>(std::clamp(hi, 0.0f, static_cast<float>(n - 1))));
-  };
-  const auto [x0, x1] = cellRange(local.x, gridLower_.x);
-  const auto [y0, y1] = cellRange(local.y, gridLower_.y);
-  if (!everywhere && (local.x + footprint < gridLower_.x || local.y + footprint < gridLower_.y ||
-                      local.x - footprint > gridLower_.x + n * cellSize_ || local.y - footprint > gridLower_.y + n * cellSize_))
-    return;  // no receiver's ray comes near it
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) pairs.emplace_back(y * n + x, piece.capsule);
-}
-
-bool OuterObjects::insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces, size_t limit,
-                               std::vector<std::pair<int, int>>& pairs) const {
-  const int n = resolution_, tilesPerSide = (n + kTile - 1) / kTile, side = n + 1;
-  const float step = 2.0f / static_cast<float>(n);
-  // A point of the scene's box in direction w at distance r from the light has
-  // r w_k <= upper_k - l_k (w_k > 0) or r (-w_k) <= l_k - lower_k (w_k < 0): over a cone whose
-  // directions all lie on one side of an axis, |w_k| >= cos(angle(axis, +-e_k) + halfAngle), the
-  // cosine of a sum expanded; the cosine is lowered by its rounding so that r stays an upper bound.
-  const auto maxDistance = [&](const Vec3& axis, float cosHalf, float sinHalf) {
-    float r = maxReceiverDistance_;
-    if (bounds.empty()) return r;
-    for (int k = 0; k < 3; ++k)
-      for (const float sign : {1.0f, -1.0f}) {
-        const float x = std::clamp(sign * axis[k], -1.0f, 1.0f);
-        const float cosAngle = x * cosHalf - std::sqrt((1.0f - x) * (1.0f + x)) * sinHalf - kConeSlack;
-        if (!(cosAngle > 0.0f)) continue;  // the cone reaches the plane w_k = 0: no bound from axis k
-        const float room = sign > 0.0f ? bounds.upper[k] - lightCenter_[k] : lightCenter_[k] - bounds.lower[k];
-        r = std::min(r, std::max(0.0f, room + margin) / cosAngle);
-      }
-    return r;
-  };
-  // Directions of the grid's vertices (normalized): the corners of cells and tiles. Every face's
-  // are those of the +x face with their components permuted and signed.
-  std::vector<Vec3> vertex(static_cast<size_t>(side * side));
-  for (int y = 0; y <= n; ++y)
-    for (int x = 0; x <= n; ++x)
-      vertex[static_cast<size_t>(y * side + x)] =
-          glm::normalize(faceDirection(0, -1.0f + step * static_cast<float>(x), -1.0f + step * static_cast<float>(y)));
-  const auto vertexDirection = [&](int face, int x, int y) {
-    const Vec3& w = vertex[static_cast<size_t>(y * side + x)];
-    const int axis = face / 2;
-    Vec3 d;
-    d[axis] = (face % 2 == 0) ? w.x : -w.x;
-    d[(axis + 1) % 3] = w.y;
-    d[(axis + 2) % 3] = w.z;
-    return d;
-  };
-  // The cone of the face rectangle of cells [x0, x1) x [y0, y1), into `cones` at `index`: its
-  // corners are the farthest directions from its centre's.
-  const auto rectangleCone = [&](int face, int x0, int x1, int y0, int y1, ConeArrays& cones, size_t index) {
-    const Vec3 axis = glm::normalize(faceDirection(face, -1.0f + 0.5f * step * static_cast<float>(x0 + x1),
-                                                   -1.0f + 0.5f * step * static_cast<float>(y0 + y1)));
-    float minCos = 1.0f;
-    for (const int y : {y0, y1})
-      for (const int x : {x0, x1})
-        minCos = std::min(minCos, glm::dot(axis, vertexDirection(face, x, y)));
-    const float cosHalf = std::clamp(minCos, 0.0f, 1.0f);
-    const float sinHalf = std::sqrt((1.0f - cosHalf) * (1.0f + cosHalf));
-    cones.set(index, axis, cosHalf, sinHalf, maxDistance(axis, cosHalf, sinHalf));
-  };
-
-  std::vector<PieceView> views(pieces.size());
-  for (size_t p = 0; p < pieces.size(); ++p) {
-    const Vec3 toPiece = pieces[p].center - lightCenter_;
-    const float distance = glm::length(toPiece);
-    views[p] = {distance > 0.0f ? toPiece / distance : Vec3(0.0f, 0.0f, 1.0f), distance, pieces[p].reach};
-  }
-  // Faces, then tiles: the (tile, piece) candidates in piece order.
-  const size_t tilesPerFace = static_cast<size_t>(tilesPerSide * tilesPerSide);
-  ConeArrays faces(6), tiles(6 * tilesPerFace);
-  for (int face = 0; face < 6; ++face) {
-    Vec3 axis(0.0f);
-    axis[face / 2] = (face % 2 == 0) ? 1.0f : -1.0f;
-    faces.set(static_cast<size_t>(face), axis, kFaceCosHalf, kFaceSinHalf, maxReceiverDistance_);
-    for (int ty = 0; ty < tilesPerSide; ++ty)
-      for (int tx = 0; tx < tilesPerSide; ++tx)
-        rectangleCone(face, tx * kTile, std::min(n, (tx + 1) * kTile), ty * kTile, std::min(n, (ty + 1) * kTile), tiles,
-                      static_cast<size_t>(face) * tilesPerFace + static_cast<size_t>(ty * tilesPerSide + tx));
-  }
-  std::vector<uint32_t> reached(std::max<size_t>(tilesPerFace, kTile * kTile));
-  std::vector<std::pair<int, int>> candidates;
-  for (size_t p = 0; p < pieces.size(); ++p) {
-    uint32_t faceReached[6];
-    reachMask(views[p], diameter_, faces, 0, 6, faceReached);
-    for (int face = 0; face < 6; ++face) {
-      if (!faceReached[face]) continue;
-      const size_t first = static_cast<size_t>(face) * tilesPerFace;
-      reachMask(views[p], diameter_, tiles, first, tilesPerFace, reached.data());
-      for (size_t t = 0; t < tilesPerFace; ++t)
-        if (reached[t]) candidates.emplace_back(static_cast<int>(first + t), static_cast<int>(p));
-    }
-  }
-  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  // Cells, only in the tiles some piece reaches; per tile, each cell's pairs in piece order. Cells
-  // of a tile cut by the face's edge keep maxDistance 0: never reached.
-  ConeArrays cells(kTile * kTile);
-  for (size_t i = 0; i < candidates.size();) {
-    const int tile = candidates[i].first;
-    size_t j = i;
-    while (j < candidates.size() && candidates[j].first == tile) ++j;
-    const int face = tile / static_cast<int>(tilesPerFace), inFace = tile % static_cast<int>(tilesPerFace);
-    const int x0 = (inFace % tilesPerSide) * kTile, y0 = (inFace / tilesPerSide) * kTile;
-    const int x1 = std::min(n, x0 + kTile), y1 = std::min(n, y0 + kTile);
-    std::fill(cells.maxDistance.begin(), cells.maxDistance.end(), 0.0f);
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) rectangleCone(face, x, x + 1, y, y + 1, cells, static_cast<size_t>((y - y0) * kTile + (x - x0)));
-    for (; i < j; ++i) {
-      const size_t p = static_cast<size_t>(candidates[i].second);
-      reachMask(views[p], diameter_, cells, 0, kTile * kTile, reached.data());
-      for (int k = 0; k < kTile * kTile; ++k)
-        if (reached[static_cast<size_t>(k)]) pairs.emplace_back((face * n + y0 + k / kTile) * n + x0 + k % kTile, pieces[p].capsule);
-      if (pairs.size() > limit) return false;
-    }
-  }
-  return true;
+  entryObject_ = std::move(out.entryObject);
+  depth_ = out.depth;
+  leafCount_ = out.leaves;
+  hasCapsules_ = true;
+  if (depth_ >= kMaxDepth) fail("parker: the outer objects' hierarchy is {} levels deep, more than {}", depth_ + 1, kMaxDepth);
 }
 
 void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
                                 OuterCombine combine, float* s) const {
-  LightBufferView view;
-  view.directional = directional_;
-  view.frameX = frame_.x;
-  view.frameY = frame_.y;
-  view.gridLower = gridLower_;
-  view.cellSize = cellSize_;
-  view.resolution = resolution_;
-  view.catchAll = static_cast<uint32_t>(faceCount_ * resolution_ * resolution_);
-  view.cellStart = cellStart_.data();
-  view.cellCount = cellCount_.data();
+  TreeView view;
+  view.nodes = nodes_.data();
+  view.root = root_;
+  view.empty = !hasCapsules_;
   view.entries = {entryP0x_.data(), entryP0y_.data(), entryP0z_.data(), entryEx_.data(),
                   entryEy_.data(),  entryEz_.data(),  entryRadius_.data()};
+  view.leafBounds = {leafP0x_.data(), leafP0y_.data(), leafP0z_.data(), leafEx_.data(),
+                     leafEy_.data(),  leafEz_.data(),  leafRadius_.data()};
+  view.entryObject = entryObject_.data();
+  view.directional = directional_;
+  view.lightCenter = lightCenter_;
   view.diameter = diameter_;
+  view.sceneMagnitude = sceneMagnitude_;
   if (combine == OuterCombine::Min) {
 #if PENUMBRA_OUTER_AVX2
     if (avx2_) {
@@ -658,7 +1012,8 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
     minAttenuations(view, rays, distanceToLight, count, falloff, s);
     return;
   }
-  for (int i = 0; i < count; ++i) s[i] = combinedAttenuation(view, entryObject_.data(), rays[i], distanceToLight[i], falloff, combine);
+  std::vector<std::pair<int32_t, float>> found;
+  for (int i = 0; i < count; ++i) s[i] = combinedAttenuation(view, rays[i], distanceToLight[i], falloff, combine, found);
 }
 
 float OuterObjects::attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,

@@ -1,8 +1,8 @@
 // Outer objects of Parker, Shirley and Smits 1998, "Single Sample Soft Shadows" (Section 3 and the
 // Appendix), and the traversal that lets one shadow ray see every outer object it passes, not only
-// the first: a light buffer (Haines and Greenberg 1986) — a grid over the directions leaving the
-// light's centre (a cube map; for a directional light, a grid over the plane perpendicular to the
-// light) whose every cell lists each outer object that any shadow ray through that cell can touch.
+// the first: a bounding-volume hierarchy over the outer objects (the paper's "shadow-ray/bounding-
+// volume tests"), walked with the running minimum of tau, so that the ray reads only the outer
+// objects that can still lower it.
 //
 // Every outer object is a capsule: the points within R + b of a segment p0 -> p0 + e, with
 //  - an analytic sphere: e = 0, R = its radius (the Appendix's sphere test exactly);
@@ -29,19 +29,30 @@
 // "thresholding"), product, or sum s = 1 - sum(1 - s_i), which leaves [0, 1] when many objects are
 // grazed and is then taken as 0 (fully shadowed).
 //
-// Cost (one core of the development machine): building the light buffer of `torus` (162
-// silhouette edges, 64 x 64 cells a face) takes about 1.5 ms, of `spheres` (5 spheres, the ground's outline) 0.4 ms. Per
-// shadow ray that misses every inner object: one cell lookup and, where the cell lists anything
-// (`torus` at 1024 x 1024: 4 rays in 10, 14 capsules on average), one pass over the list in
-// 8-capsule blocks that the compiler vectorizes (8 lanes where the CPU has AVX2, else 4). In all,
-// parker's visibility pass costs 1.48x raytraced-hard's on `torus` and 1.16x on `spheres`
-// (bench/parker_bench.cpp).
+// The hierarchy (outer_objects.cpp): capsules are cut into pieces no longer than 1/64 of the
+// scene's radius and grouped by a surface-area heuristic into a tree of 8-wide nodes whose
+// children are bounded by capsules, with leaves of up to 8 capsules. A bound gives a lower bound
+// of tau for every capsule point in it, so a child is skipped when its bound is not below the
+// smallest tau found so far (min; under product and sum, when it is not below 1, where s = 1).
+// Rays walk the tree in groups of neighbours (kGroup) that share the bounds, each ray also tested
+// on its own before a node's children or a leaf's capsules are read. Only the order of work
+// depends on the tree and the groups: V is the minimum (or combination) over exactly the capsules
+// the Appendix's formulas give, to the bit.
+//
+// Cost: building is linear in the triangles for the silhouettes and O(n log n) in the silhouette
+// pieces for the tree (bench/parker_bench.cpp: prepare at 10k, 40k and 160k triangles). Per group
+// of shadow rays that miss every inner object: per visited node, its 8 children's group bounds in
+// one vector pass and 8 rays' own bounds per pass; per visited leaf, the same, then each capsule
+// left against 8 rays per pass (8 lanes where the CPU has AVX2, else 4). Where a small occluder
+// lies under a wide light every ray is in its penumbra and many of its silhouette edges lie
+// within a few per cent of the ray's smallest tau, all of which must be read: about 30 capsule
+// evaluations per ray on `teapots` under its 2.4 x 2.4 light, where a light buffer listed all 551.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <utility>
+#include <memory>
 #include <vector>
 
 #include "penumbra/light.h"
@@ -56,15 +67,6 @@ enum class OuterCombine { Min, Product, Sum };
 struct OuterObjectOptions {
   float lightDiameter = 1.0f;  //!< D: world units; for a directional light, per unit distance
   bool analyticSpheres = true; //!< objects that remember a true sphere use it instead of their mesh
-  // Cells per side of each cube-map face (or of the planar grid), at most: halved while the light
-  // buffer would list more than maxGridEntries (cell, capsule) pairs.
-  int gridResolution = 64;
-  // The light buffer's size limit. Each capsule is listed in every cell its footprint reaches,
-  // about (footprint / cell)^2 of them: 10^6 separate tiny triangles (3 x 10^6 open edges, each
-  // reaching ~10^2 cells at 64 x 64 a face) would list 1.7 x 10^8 pairs, 8 GB and a minute of
-  // page faults. Halving the grid divides that by up to 4 and leaves V unchanged (the lists stay
-  // conservative); 2^24 entries are 0.5 GB. A grid of one cell a face is never refused.
-  size_t maxGridEntries = size_t{1} << 24;
 };
 
 // The attenuation of the Section 3 falloff at tau (s = 0 at tau <= 0, 1 at tau >= 1).
@@ -74,12 +76,38 @@ inline float outerFalloff(float tau, OuterFalloff falloff) {
   return t * t * (3.0f - 2.0f * t);
 }
 
+// A 128-bit fingerprint of a mesh's geometry: its positions and triangles, bit for bit (two
+// independent 64-bit multiply-xorshift hashes of every 64-bit word).
+struct MeshFingerprint {
+  uint64_t a = 0, b = 0;
+  bool operator==(const MeshFingerprint&) const = default;
+};
+MeshFingerprint meshFingerprint(const Mesh& mesh);
+
 class OuterObjects {
  public:
+  // The meshes' edge adjacency (welded vertices, edges matched with their faces), which depends on
+  // the geometry alone: a caller that builds the outer objects again for the same objects under
+  // another light passes the same cache, and a mesh whose positions and triangles are the same to
+  // the bit (meshFingerprint) as at the cache's last use is not matched again.
+  class EdgeCache {
+   public:
+    EdgeCache();
+    ~EdgeCache();
+    EdgeCache(const EdgeCache&) = delete;
+    EdgeCache& operator=(const EdgeCache&) = delete;
+    size_t matchCount() const;  //!< meshes matched so far (the others were found in the cache)
+
+   private:
+    friend class OuterObjects;
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+  };
+
   // Builds the capsules of every object of `scene` (silhouettes seen from light.center(), or along
-  // light.direction() for a directional light) and the light buffer. Throws Error for a light
+  // light.direction() for a directional light) and their hierarchy. Throws Error for a light
   // diameter that is not finite and > 0.
-  OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options);
+  OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options, EdgeCache* cache = nullptr);
 
   // s for the shadow ray from `origin` along unit `direction` to the light's centre at
   // `distanceToLight` (kInfinity for a directional light). 0 when the ray passes through an
@@ -87,8 +115,8 @@ class OuterObjects {
   float attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,
                     OuterCombine combine) const;
   // The same for `count` rays at once (rays[i].origin, unit rays[i].direction, distanceToLight[i])
-  // into s[i]: the per-call work is shared, and under the min combination the loop over the rays
-  // runs in one function built for the widest vectors the CPU has.
+  // into s[i]: the per-call work is shared, and the loop over the rays runs in one function built
+  // for the widest vectors the CPU has.
   void attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff, OuterCombine combine,
                     float* s) const;
 
@@ -101,59 +129,48 @@ class OuterObjects {
   }
   size_t analyticSphereCount() const { return analyticCount_; }
   size_t silhouetteEdgeCount() const { return edgeCount_; }
-  size_t gridEntryCount() const { return entryCount_; }
-  int gridResolution() const { return resolution_; }
+  size_t pieceCount() const { return pieceCount_; }
+  size_t nodeCount() const { return nodes_.size(); }
+  size_t leafCount() const { return leafCount_; }
+  int treeDepth() const { return depth_; }
 
-  // Capsules a cell's list holds in one pass of the per-ray loop; lists are padded to a multiple.
-  static constexpr uint32_t kBlock = 8;
+  // Children per node, and capsules per leaf (leaves are padded to it).
+  static constexpr int kWidth = 8;
+  // Rays that walk the hierarchy together: attenuations() takes its rays in groups of this many,
+  // in the order given (the caller groups neighbouring rays: the bounds are shared by a group).
+  static constexpr int kGroup = 16;
+
+  // A node of the hierarchy: kWidth children, each bounded by a capsule (segment p0 -> p0 + e,
+  // `radius`, which covers the capsule points and the radii R of everything below it), and a
+  // reference: >= 0 a node, < 0 the leaf ~child. An unused child has radius -infinity, which no
+  // ray reaches.
+  struct alignas(32) Node {
+    float p0x[kWidth], p0y[kWidth], p0z[kWidth], ex[kWidth], ey[kWidth], ez[kWidth], radius[kWidth];
+    int32_t child[kWidth];
+  };
 
  private:
-  // Capsules, structure of arrays (one entry per capsule, listed per cell below).
-  struct Capsules {
-    std::vector<float> p0x, p0y, p0z, ex, ey, ez, radius;
-    std::vector<int32_t> object;  //!< index into the scene's objects
-    void add(const Vec3& p0, const Vec3& e, float r, int32_t objectIndex);
-    size_t size() const { return object.size(); }
-  };
-  // A piece of a capsule: a ball (centre, radius `reach` = piece radius + R) that bounds it.
-  struct Piece {
-    Vec3 center;
-    float reach;
-    int capsule;
-  };
-
-  // The (cell, capsule) pairs of the cube map (local light) or of the planar grid (directional)
-  // for every piece, by the footprint bound of outer_objects.cpp; per cell in capsule order.
-  // insertLocal stops, returning false, once `pairs` holds more than `limit`.
-  bool insertLocal(const Bounds3& bounds, float margin, const std::vector<Piece>& pieces, size_t limit,
-                   std::vector<std::pair<int, int>>& pairs) const;
-  void insertDirectional(const Piece& piece, std::vector<std::pair<int, int>>& pairs) const;
-
   bool directional_ = false;
   Vec3 lightCenter_{0.0f};
-  Frame frame_;             //!< directional: x, y span the grid plane, z = direction to the light
-  Vec2 gridLower_{0.0f};    //!< directional: grid origin in (x, y)
-  float cellSize_ = 1.0f;   //!< directional: world units per cell
-  int resolution_ = 1;
-  int faceCount_ = 6;       //!< cube faces (local light) or 1 (directional)
-  float maxReceiverDistance_ = 0.0f;  //!< local: A_max, farthest scene point from the light's centre
-  float minReceiverDepth_ = 0.0f;     //!< directional: smallest z of a scene point
   float diameter_ = 1.0f;
+  float sceneMagnitude_ = 0.0f;  //!< the largest coordinate magnitude of the scene's bounds (rounding slack)
   bool avx2_ = false;       //!< the per-ray loop's 8-wide build runs (same values, see outer_objects.cpp)
 
-  Capsules capsules_;
   std::vector<bool> analytic_;
-  size_t analyticCount_ = 0, edgeCount_ = 0;
+  size_t analyticCount_ = 0, edgeCount_ = 0, pieceCount_ = 0, leafCount_ = 0;
+  int depth_ = 0;
 
-  // The light buffer in compressed rows: cell c holds cellCount_[c] entries from cellStart_[c],
-  // sorted by object, each a copy of its capsule (contiguous, so the per-ray loop vectorizes), then
-  // padding up to a multiple of kBlock that no ray reaches (R = -infinity). One extra cell after
-  // the grid's lists every capsule, for an origin outside the grid (not expected: receivers lie in
-  // the scene's bounds, which the grid covers with a margin).
-  std::vector<uint32_t> cellStart_, cellCount_;
+  // The tree: nodes_[0] is the root unless root_ < 0 (a single leaf ~root_), or there is no
+  // capsule at all (hasCapsules_ false). Leaf k holds capsules kWidth k ... kWidth k + kWidth - 1
+  // of the entry arrays (copies of its capsules, contiguous so that the per-ray loop vectorizes),
+  // padded with points of radius -infinity that no ray reaches.
+  std::vector<Node> nodes_;
+  int32_t root_ = 0;
+  bool hasCapsules_ = false;
   std::vector<float> entryP0x_, entryP0y_, entryP0z_, entryEx_, entryEy_, entryEz_, entryRadius_;
   std::vector<int32_t> entryObject_;
-  size_t entryCount_ = 0;  //!< entries without the padding
+  // Each leaf's bound (the capsule around its pieces), as in its parent node.
+  std::vector<float> leafP0x_, leafP0y_, leafP0z_, leafEx_, leafEy_, leafEz_, leafRadius_;
 };
 
 }  // namespace penumbra::rt

@@ -12,8 +12,9 @@
 //    analytic sphere, the rounded triangles of the Appendix for meshes (src/rt/outer_objects.h);
 //  - tau = (d - R) / b, s = 3 tau^2 - 2 tau^3 (the Bernstein form) or the exact sinusoid
 //    (1 + sin(pi tau - pi/2)) / 2 (Section 3);
-//  - every outer object the ray passes is seen (a light buffer over the directions leaving the
-//    light's centre, not only the first hit), combined by min (the paper's choice), product or sum.
+//  - every outer object the ray passes is seen (a hierarchy of bounds over the outer objects,
+//    walked with the running minimum of tau: not only the first hit), combined by min (the paper's
+//    choice), product or sum.
 //
 // Approximations (the paper's): the penumbra lies wholly outside the hard shadow and is as wide as
 // the whole physical penumbra (Section 3: "the umbra region will be larger than in a physically-
@@ -26,15 +27,17 @@
 // (use `heidrich`).
 //
 // Parameters: falloff (bernstein | sinusoid), combine (min | product | sum), analytic_spheres
-// (bool), light_diameter (world units; directional: per unit distance; auto = as above),
-// grid_resolution (cells per side of each face of the light buffer's cube map; lowered where the
-// buffer would exceed rt::OuterObjectOptions::maxGridEntries, 2^24).
+// (bool), light_diameter (world units; directional: per unit distance; auto = as above).
 //
 // Cost (the paper: "approximately 20% slower" than hard ray-traced shadows). prepare builds the
-// outer objects' light buffer and the inner objects' BVH at once; visibility traces raytraced-
-// hard's rays in packets of 16 and hands the rays that miss every inner object to the outer
-// objects in one batch. At 1024 x 1024 (bench/parker_bench.cpp, one run): visibility 1.16x
-// raytraced-hard on `spheres` and 1.48x on `torus`, prepare + visibility 1.10x and 1.50x.
+// outer objects' hierarchy (the silhouettes depend on the light) and, beside it, the inner objects'
+// BVH, which depends on the geometry alone: it is kept from the last prepare while the inner
+// objects' positions and triangles are the same to the bit (a 128-bit fingerprint), so that a
+// steady-state frame of a static scene under a moving light builds only the outer objects (stat
+// inner_bvh_rebuilt); the meshes' edge adjacency, also light-independent, is kept alike, and only
+// the silhouettes and the hierarchy are built again. visibility traces raytraced-hard's rays in packets of 16, one per 4 x 4
+// pixel tile, and the rays of a tile that miss every inner object walk the outer objects'
+// hierarchy as one group. Numbers: bench/parker_bench.cpp.
 #include <algorithm>
 #include <atomic>
 #include <exception>
@@ -60,7 +63,6 @@ struct ParkerOptions {
   rt::OuterCombine combine = rt::OuterCombine::Min;
   bool analyticSpheres = true;
   std::optional<float> lightDiameter;  //!< world units (directional: per unit distance); nullopt = derived
-  int gridResolution = 64;             //!< light-buffer cells per cube-face side
 };
 
 class ParkerTechnique final : public ShadowTechnique {
@@ -81,41 +83,56 @@ class ParkerTechnique final : public ShadowTechnique {
     rt::OuterObjectOptions outerOptions;
     outerOptions.lightDiameter = diameter;
     outerOptions.analyticSpheres = options_.analyticSpheres;
-    outerOptions.gridResolution = options_.gridResolution;
 
     // Inner objects: the meshes, except those whose analytic sphere the outer objects test.
-    Scene inner;
-    inner.source = scene.source;
     analyticIds_.clear();
+    std::vector<const Object*> innerObjects;
     for (const Object& object : scene.objects) {
-      if (!rt::OuterObjects::usesAnalyticSphere(object, outerOptions)) inner.objects.push_back(object);
+      if (!rt::OuterObjects::usesAnalyticSphere(object, outerOptions)) innerObjects.push_back(&object);
       else analyticIds_.push_back(object.id);
     }
     std::sort(analyticIds_.begin(), analyticIds_.end());
-    // The outer objects' light buffer and the inner objects' BVH do not depend on each other: both
+    // The inner objects' BVH depends on the geometry alone, not on the light: kept from the last
+    // prepare while the inner objects' positions and triangles are the same to the bit (a
+    // steady-state frame of a static scene under a moving light builds only the outer objects;
+    // their meshes' edge adjacency is kept alike, in edgeCache_).
+    std::vector<rt::MeshFingerprint> key;
+    key.reserve(innerObjects.size());
+    for (const Object* object : innerObjects) key.push_back(rt::meshFingerprint(object->mesh));
+    const bool rebuildInner = !rays_ || key != innerKey_;
+    // The outer objects' hierarchy and the inner objects' BVH do not depend on each other: both
     // are built at once. An error of either is reported after both finish, the outer objects' first,
     // so the message does not depend on timing.
     std::exception_ptr outerError, innerError;
-    tbb::parallel_invoke(
-        [&] {
-          try {
-            outer_ = std::make_unique<rt::OuterObjects>(scene, light, outerOptions);
-          } catch (...) {
-            outerError = std::current_exception();
-          }
-        },
-        [&] {
-          try {
-            rays_ = std::make_unique<RayScene>(inner);
-          } catch (...) {
-            innerError = std::current_exception();
-          }
-        });
+    const auto buildOuter = [&] {
+      try {
+        outer_ = std::make_unique<rt::OuterObjects>(scene, light, outerOptions, &edgeCache_);
+      } catch (...) {
+        outerError = std::current_exception();
+      }
+    };
+    if (rebuildInner) {
+      rays_.reset();
+      tbb::parallel_invoke(buildOuter, [&] {
+        try {
+          Scene inner;
+          inner.source = scene.source;
+          for (const Object* object : innerObjects) inner.objects.push_back(*object);
+          rays_ = std::make_unique<RayScene>(inner);
+        } catch (...) {
+          innerError = std::current_exception();
+        }
+      });
+    } else {
+      buildOuter();
+    }
     if (outerError || innerError) {
       outer_.reset();
       rays_.reset();
       std::rethrow_exception(outerError ? outerError : innerError);
     }
+    innerKey_ = std::move(key);
+    innerRebuilt_ = rebuildInner;
     light_ = light;
     // The full scene's scale, as raytraced-hard and the reference use, so the rays are the same.
     epsilon_ = shadowRayEpsilon(scene.bounds());
@@ -133,57 +150,64 @@ class ParkerTechnique final : public ShadowTechnique {
     const rt::OuterCombine combine = options_.combine;
     const bool directional = light.isDirectional();
     std::atomic<int64_t> rays{0};
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+    // 4 x 4 pixel tiles: one packet of occlusion rays each, and the rays that miss every inner
+    // object walk the outer objects' hierarchy as one group (neighbouring rays share its bounds).
+    constexpr int kTile = 4;
+    static_assert(kTile * kTile == rt::OuterObjects::kGroup);
+    const int tileRows = (height + kTile - 1) / kTile;
+    tbb::parallel_for(tbb::blocked_range<int>(0, tileRows), [&](const tbb::blocked_range<int>& range) {
       Ray packet[16], open[16];
-      int xs[16], openXs[16];
+      int xs[16], ys[16], openIndex[16];
       bool occluded[16];
       float toLight[16], s[16];
       int64_t rangeRays = 0;
-      for (int y = range.begin(); y < range.end(); ++y) {
-        int count = 0;
-        auto flush = [&] {
+      for (int tileRow = range.begin(); tileRow < range.end(); ++tileRow) {
+        const int y0 = tileRow * kTile, y1 = std::min(height, y0 + kTile);
+        for (int x0 = 0; x0 < width; x0 += kTile) {
+          const int x1 = std::min(width, x0 + kTile);
+          int count = 0;
+          for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+              if (!gbuffer.hit(x, y)) continue;
+              const Vec3 wsP = gbuffer.wsPosition(x, y);
+              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+              // One direction to the light's centre serves the facing test, the offset's side (the
+              // dot product of rt::lightSide) and the ray, so the ray is raytraced-hard's exactly.
+              const Vec3 wsToLight = light.directionToCenter(wsP);
+              const float facing = glm::dot(wsNg, wsToLight);
+              // A receiver on an analytic sphere's tessellation whose facet faces away from the light
+              // is shadowed by its own closed surface, as raytraced-hard's ray through the facet finds
+              // (near the terminator the true sphere would still face the light: the G-buffer, and the
+              // reference, see the facets).
+              if (facing < 0.0f && !analyticIds_.empty() &&
+                  std::binary_search(analyticIds_.begin(), analyticIds_.end(), gbuffer.objectId(x, y))) {
+                v(x, y) = 0.0f;
+                continue;
+              }
+              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, facing >= 0.0f ? 1.0f : -1.0f, epsilon_);
+              const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
+              rt::storeRay(packet[count], ray);
+              xs[count] = x;
+              ys[count++] = y;
+            }
+          if (count == 0) continue;
           rays_->occluded16(packet, count, occluded);
           rangeRays += count;
           int openCount = 0;
           for (int i = 0; i < count; ++i) {
             if (occluded[i]) {
-              v(xs[i], y) = 0.0f;  // the inner object: umbra
+              v(xs[i], ys[i]) = 0.0f;  // the inner object: umbra
               continue;
             }
             open[openCount] = packet[i];
             // shadowRay stops epsilon short of the centre: the distance to the centre is tMax + epsilon.
             toLight[openCount] = directional ? kInfinity : packet[i].tMax + epsilon_;
-            openXs[openCount++] = xs[i];
+            openIndex[openCount++] = i;
           }
-          // The outer objects of the rays that miss every inner object, in one batch.
+          // The outer objects of the rays that miss every inner object, as one group.
           outer.attenuations(open, toLight, openCount, falloff, combine, s);
-          for (int i = 0; i < openCount; ++i) v(openXs[i], y) = s[i];
-          count = 0;
-        };
-        for (int x = 0; x < width; ++x) {
-          if (!gbuffer.hit(x, y)) continue;
-          const Vec3 wsP = gbuffer.wsPosition(x, y);
-          const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-          // One direction to the light's centre serves the facing test, the offset's side (the
-          // dot product of rt::lightSide) and the ray, so the ray is raytraced-hard's exactly.
-          const Vec3 wsToLight = light.directionToCenter(wsP);
-          const float facing = glm::dot(wsNg, wsToLight);
-          // A receiver on an analytic sphere's tessellation whose facet faces away from the light
-          // is shadowed by its own closed surface, as raytraced-hard's ray through the facet finds
-          // (near the terminator the true sphere would still face the light: the G-buffer, and the
-          // reference, see the facets).
-          if (facing < 0.0f && !analyticIds_.empty() &&
-              std::binary_search(analyticIds_.begin(), analyticIds_.end(), gbuffer.objectId(x, y))) {
-            v(x, y) = 0.0f;
-            continue;
-          }
-          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, facing >= 0.0f ? 1.0f : -1.0f, epsilon_);
-          const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
-          rt::storeRay(packet[count], ray);
-          xs[count++] = x;
-          if (count == 16) flush();
+          for (int k = 0; k < openCount; ++k) v(xs[openIndex[k]], ys[openIndex[k]]) = s[k];
         }
-        if (count > 0) flush();
       }
       rays += rangeRays;
     });
@@ -200,8 +224,9 @@ class ParkerTechnique final : public ShadowTechnique {
     if (!outer_) return {};
     return {{"analytic_spheres", static_cast<double>(outer_->analyticSphereCount())},
             {"silhouette_edges", static_cast<double>(outer_->silhouetteEdgeCount())},
-            {"light_buffer_entries", static_cast<double>(outer_->gridEntryCount())},
-            {"light_buffer_resolution", static_cast<double>(outer_->gridResolution())},
+            {"outer_pieces", static_cast<double>(outer_->pieceCount())},
+            {"outer_leaves", static_cast<double>(outer_->leafCount())},
+            {"inner_bvh_rebuilt", innerRebuilt_ ? 1.0 : 0.0},
             {"rays", rayCount_}};
   }
 
@@ -211,6 +236,9 @@ class ParkerTechnique final : public ShadowTechnique {
   std::unique_ptr<RayScene> rays_;
   std::optional<Light> light_;
   std::vector<int32_t> analyticIds_;  //!< ids of the objects whose analytic sphere is used, sorted
+  std::vector<rt::MeshFingerprint> innerKey_;  //!< the inner objects' geometry rays_ was built from
+  rt::OuterObjects::EdgeCache edgeCache_;      //!< the meshes' edge adjacency, kept while they stay the same
+  bool innerRebuilt_ = false;         //!< the last prepare built rays_ (else it kept it)
   float epsilon_ = 0.0f;
   double rayCount_ = 0.0;
   PassTimings timings_;
@@ -241,11 +269,6 @@ TechniqueInfo parkerTechniqueInfo() {
                 .help = "D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: "
                         "2 tan(angular_diameter / 2))",
                 .autoDefault = true},
-      ParamSpec{.name = "grid_resolution", .type = ParamType::Int, .defaultValue = int64_t{64}, .min = 1.0, .max = 1024.0,
-                .choices = {}, .unit = "cells",
-                .help = "cells per side of each cube-map face of the light buffer that lists the outer objects each "
-                        "shadow ray can touch, at most: halved while the buffer would exceed 2^24 entries (speed "
-                        "and memory only: the result does not depend on it)"},
   };
   info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
     ParkerOptions o;
@@ -254,7 +277,6 @@ TechniqueInfo parkerTechniqueInfo() {
     o.combine = combine == "product" ? rt::OuterCombine::Product : combine == "sum" ? rt::OuterCombine::Sum : rt::OuterCombine::Min;
     o.analyticSpheres = params.getBool("analytic_spheres");
     if (!params.isAuto("light_diameter")) o.lightDiameter = static_cast<float>(params.getFloat("light_diameter"));
-    o.gridResolution = static_cast<int>(params.getInt("grid_resolution"));
     return std::make_unique<ParkerTechnique>(o);
   };
   return info;

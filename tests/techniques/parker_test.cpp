@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -260,13 +261,32 @@ TEST(Parker, CombinesEveryGrazedObjectNotOnlyTheFirst) {
   EXPECT_GT(both, 10);
 }
 
-TEST(Parker, LightBufferResolutionChangesNothing) {
+// The rays walk the outer objects' hierarchy in groups (4 x 4 pixel tiles) whose bounds are shared:
+// the same receivers grouped differently (the G-buffer shifted by one pixel across and two down)
+// must give the same bits.
+TEST(Parker, PixelTilesChangeNothing) {
   const ::penumbra::testing::ShadowTestScene& s = shadowTestScene("torus");
-  const Image<float> coarse = runTechnique("parker", s, {"grid_resolution=8"});
-  const Image<float> fine = runTechnique("parker", s, {"grid_resolution=128"});
-  size_t differ = 0;
-  for (size_t i = 0; i < coarse.size(); ++i) differ += std::abs(coarse[i] - fine[i]) > 1e-6f;
+  const Image<float> v = runTechnique("parker", s);
+  const int w = s.gbuffer.width(), h = s.gbuffer.height();
+  GBuffer shifted(w + 1, h + 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      shifted.wsPosition(x + 1, y + 2) = s.gbuffer.wsPosition(x, y);
+      shifted.wsNormal(x + 1, y + 2) = s.gbuffer.wsNormal(x, y);
+      shifted.wsGeometricNormal(x + 1, y + 2) = s.gbuffer.wsGeometricNormal(x, y);
+      shifted.objectId(x + 1, y + 2) = s.gbuffer.objectId(x, y);
+      shifted.triangleId(x + 1, y + 2) = s.gbuffer.triangleId(x, y);
+      shifted.csDepth(x + 1, y + 2) = s.gbuffer.csDepth(x, y);
+    }
+  const Image<float> moved = runTechnique("parker", s.scene, shifted);
+  size_t differ = 0, penumbra = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      differ += moved(x + 1, y + 2) != v(x, y);
+      penumbra += v(x, y) > 0.0f && v(x, y) < 1.0f;
+    }
   EXPECT_EQ(differ, 0u);
+  EXPECT_GT(penumbra, 100u);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -441,6 +461,99 @@ TEST(Parker, AnalyticAndTessellatedSpheresAgree) {
   EXPECT_LT(compareVisibility(analytic, meshes, s.mask).rmse8, 2.0);
 }
 
+// A small occluder under a wider light: the paper's stated weakness, not a defect of this code.
+// Section 3: "Note that the umbra region will be larger than in a physically-based computation,
+// but when the occluder size is large relative to the light size, this should not be too
+// noticeable"; Section 4: "its errors are highest for small objects whose real shadows would have
+// no umbra ... the shadows are too prominent". The inner object is the object itself (Figure 2: no
+// light leaks), so parker is 0 over the whole hard shadow, and the outer object's opacity ramps
+// from there over b = D t0 / |l - o|, the whole width of the true penumbra, which in truth
+// straddles the hard edge. Where a small blocker hides only part of a large light, parker is
+// darker than the truth everywhere and farther from it than no shadow at all. Measured along the
+// ground from the shadow's centre outward (201 points, reference 1024 spp), as RMSE8 of the
+// profile.
+struct ProfileErrors {
+  double parker = 0.0, none = 0.0, hard = 0.0;  //!< RMSE8 against the reference
+  int hardShadow = 0;        //!< points in the hard shadow (raytraced-hard 0)
+  int parkerUmbraLeaks = 0;  //!< of those, points where parker is not 0
+  float minTruthInHardShadow = 1.0f;
+  int darker = 0;            //!< points where parker is below the truth by more than 0.02
+  int points = 0;
+};
+ProfileErrors profileErrors(const Scene& scene, const Light& light, const GBuffer& g) {
+  Scene one = scene;
+  one.lights = {light};
+  const std::vector<float> v = runOn(one, g);
+  const std::vector<float> ref = referenceOn(one, g, 1024);
+  auto hard = createTechnique("raytraced-hard");
+  hard->prepare(one, light);
+  Image<float> hardImage;
+  hard->visibility(g, hardImage);
+  const std::vector<float> hardV(hardImage.begin(), hardImage.end());
+  ProfileErrors e;
+  e.points = g.width();
+  double sums[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < e.points; ++i) {
+    sums[0] += std::pow(255.0 * (static_cast<double>(v[i]) - ref[i]), 2.0);
+    sums[1] += std::pow(255.0 * (1.0 - ref[i]), 2.0);
+    sums[2] += std::pow(255.0 * (static_cast<double>(hardV[i]) - ref[i]), 2.0);
+    if (hardV[i] == 0.0f) {
+      ++e.hardShadow;
+      e.parkerUmbraLeaks += v[i] != 0.0f;
+      e.minTruthInHardShadow = std::min(e.minTruthInHardShadow, ref[i]);
+    }
+    e.darker += v[i] < ref[i] - 0.02f;
+  }
+  e.parker = std::sqrt(sums[0] / e.points);
+  e.none = std::sqrt(sums[1] / e.points);
+  e.hard = std::sqrt(sums[2] / e.points);
+  return e;
+}
+
+TEST(Parker, ThinDiskUnderAWiderDiskLightIsTooDarkByDesign) {
+  // A thin disk (radius 0.3, 0.02 thick) at height 1 under a downward disk light of radius 1 at
+  // height 3: it hides at most 81% of the light (the truth has no umbra).
+  const Light light = Light::disk(Vec3(0.0f, 3.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 1.0f);
+  Mesh disk = makeCylinder(0.3f, 0.02f, 64);
+  transformMesh(disk, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.01f, 0.0f)));
+  const Scene scene = makeScene({groundObject(), meshObject(1, std::move(disk), "disk")}, light);
+  const ProfileErrors e = profileErrors(scene, light, groundLineGBuffer(Vec3(0.0f), Vec3(2.0f, 0.0f, 0.0f), 201));
+  // Measured: the hard shadow covers 46 of the 201 points, where the truth is at least 0.188;
+  // parker is 0 there and darker than the truth at every point (0.943 at r = 2, where the truth is
+  // 1). RMSE8 parker 114.6, no shadow 81.6, raytraced-hard 54.9. (A sphere light of radius 1 in
+  // its place, the paper's own assumption: 114.3, 76.8, 58.8.)
+  EXPECT_EQ(e.hardShadow, 46);
+  EXPECT_EQ(e.parkerUmbraLeaks, 0);
+  EXPECT_GT(e.minTruthInHardShadow, 0.18f);
+  EXPECT_EQ(e.darker, e.points);
+  EXPECT_NEAR(e.parker, 114.6, 2.0);
+  EXPECT_NEAR(e.none, 81.6, 2.0);
+  EXPECT_NEAR(e.hard, 54.9, 2.0);
+  EXPECT_GT(e.parker, 1.3 * e.none);
+}
+
+TEST(Parker, TeapotsUnderTheirWideLightAreTooDarkByDesign) {
+  // The built-in `teapots` (Collada/teapots.DAE fitted to 0.6 at height 0.8) under its light 0, a
+  // 2.4 x 2.4 rect at height 3 (D = 3.39, its bounding diameter): a line across the ground under
+  // both teapots.
+  if (!std::filesystem::exists("/usr/share/assimp/models/Collada/teapots.DAE"))
+    GTEST_SKIP() << "Debian's assimp-testmodels is not installed";
+  const Scene scene = loadScene("teapots");
+  const ProfileErrors e = profileErrors(scene, scene.lights.at(0), groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.1f), Vec3(2.0f, 0.0f, 0.1f), 201));
+  // Measured: the hard shadow covers 13 points, where the truth is at least 0.771 (the teapots
+  // hide under a quarter of the light); parker is 0 there and darker than the truth at all 201
+  // points. RMSE8 parker 168.2, no shadow 26.9, raytraced-hard 55.1 (over the whole 256 x 256
+  // image at 256 spp: 146.0, 14.8 and 28.3).
+  EXPECT_EQ(e.hardShadow, 13);
+  EXPECT_EQ(e.parkerUmbraLeaks, 0);
+  EXPECT_GT(e.minTruthInHardShadow, 0.75f);
+  EXPECT_EQ(e.darker, e.points);
+  EXPECT_NEAR(e.parker, 168.2, 3.0);
+  EXPECT_NEAR(e.none, 26.9, 2.0);
+  EXPECT_NEAR(e.hard, 55.1, 2.0);
+  EXPECT_GT(e.parker, 3.0 * e.hard);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Lights, parameters, scenes.
 
@@ -505,6 +618,39 @@ TEST(Parker, ReportsAnalyticSpheresAndNeedsPrepare) {
   ASSERT_EQ(timings.passes.size(), 2u);
   EXPECT_EQ(timings.passes[0].first, "prepare");
   EXPECT_EQ(timings.passes[1].first, "visibility");
+}
+
+// The inner objects' BVH is kept across prepares only while their geometry is the same: a moved
+// occluder is seen at once, and a new light over the same geometry reuses it.
+TEST(Parker, KeepsTheInnerBvhOnlyForTheSameGeometry) {
+  const Light light = Light::sphere(Vec3(0.0f, 6.0f, 0.0f), 0.5f);
+  const Scene a = makeScene({groundObject(), boxObject(1, Vec3(0.0f, 1.0f, 0.0f), Vec3(1.0f, 0.2f, 1.0f))}, light);
+  const Scene b = makeScene({groundObject(), boxObject(1, Vec3(0.6f, 1.0f, 0.0f), Vec3(1.0f, 0.2f, 1.0f))}, light);
+  const GBuffer g = groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.0f), Vec3(2.0f, 0.0f, 0.0f), 101);
+  const auto rebuilt = [](const ShadowTechnique& t) {
+    for (const auto& [name, value] : t.stats())
+      if (name == "inner_bvh_rebuilt") return value;
+    return -1.0;
+  };
+  auto t = createTechnique("parker");
+  Image<float> v;
+  t->prepare(a, light);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 1.0);
+  const std::vector<float> va(v.begin(), v.end());
+  t->prepare(b, light);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 1.0);
+  const std::vector<float> fresh = runOn(b, g);
+  EXPECT_EQ(std::vector<float>(v.begin(), v.end()), fresh);
+  EXPECT_NE(va, fresh);  // the box moved: so did its shadow
+  const Light other = Light::sphere(Vec3(1.0f, 5.0f, 0.5f), 0.7f);
+  t->prepare(b, other);
+  t->visibility(g, v);
+  EXPECT_EQ(rebuilt(*t), 0.0);
+  Scene bOther = b;
+  bOther.lights = {other};
+  EXPECT_EQ(std::vector<float>(v.begin(), v.end()), runOn(bOther, g));
 }
 
 TEST(Parker, SceneFilesKeepTrueSpheres) {
