@@ -62,17 +62,14 @@ int runBench(const BenchOptions& options) {
   if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
   if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
   // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
-  std::vector<std::string> namedNotRun;
+  NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     std::optional<TechniqueRun> attempt;
     try {
       attempt = runTechnique(setup, gbuffer, info, given[i], options.repeat);
     } catch (const std::exception& e) {
-      fmt::print("{}: not run here: {}\n", info.name, e.what());
-      report.skipped.emplace_back(info.name, e.what());
-      if (!options.techniques.empty() || (!options.baseline.empty() && info.name == baseline))
-        namedNotRun.push_back(info.name);
+      notRun.add(info.name, e.what());
       continue;
     }
     const TechniqueRun& run = *attempt;
@@ -89,13 +86,7 @@ int runBench(const BenchOptions& options) {
     writeTextFile(options.jsonPath, reportToJson(report));
     fmt::print("wrote {}\n", options.jsonPath);
   }
-  if (!namedNotRun.empty()) {
-    std::fflush(stdout);  // the table first, then the error, also when both go to one pipe
-    fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the table): {}\n",
-               namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
-    return 1;
-  }
-  return 0;
+  return notRun.exitCode("table");
 }
 
 }  // namespace

@@ -85,6 +85,25 @@ struct TechniqueRun {
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
                           int repeat = 1);
 
+// Techniques that could not take the scene, for compare and bench: each keeps its row in the report
+// with the reason (printed too), never ending the run; exitCode() is 1, after saying which, when the
+// user named one of them (in --techniques, or as --baseline).
+class NotRunTechniques {
+ public:
+  NotRunTechniques(Report& report, bool techniquesNamed, std::string namedBaseline)
+      : report_(report), techniquesNamed_(techniquesNamed), namedBaseline_(std::move(namedBaseline)) {}
+  void add(const std::string& name, const std::string& why);
+  // 0, or 1 after an error line naming the named techniques that did not run; `where` says where
+  // their reasons are ("report", "table").
+  int exitCode(const char* where) const;
+
+ private:
+  Report& report_;
+  bool techniquesNamed_;
+  std::string namedBaseline_;
+  std::vector<std::string> named_;
+};
+
 // A report of `kind` ("compare", "bench") with the scene, light, image size, baseline and version
 // of this setup filled in.
 Report beginReport(const std::string& kind, const Setup& setup, const std::string& baseline);

@@ -289,12 +289,7 @@ int runCompare(const CompareOptions& options) {
   report.profile = profile;
 
   // Techniques the user named that did not run: the exit status says so once the report is written.
-  std::vector<std::string> namedNotRun;
-  auto notRun = [&](const std::string& name, const std::string& why) {
-    fmt::print("{}: not run here: {}\n", name, why);
-    report.skipped.emplace_back(name, why);
-    if (!options.techniques.empty() || (!options.baseline.empty() && name == baseline)) namedNotRun.push_back(name);
-  };
+  NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     const Params params = resolveParams(info.name, info.params, given[i]);
@@ -322,7 +317,7 @@ int runCompare(const CompareOptions& options) {
         // A technique that cannot take this scene (its light's shape, or anything its prepare or
         // visibility refuses) costs its row, never the comparison: the others run and the report is
         // written with its reason. Only one the user named makes the exit status non-zero.
-        notRun(info.name, e.what());
+        notRun.add(info.name, e.what());
         continue;
       }
       TechniqueRun& run = *attempt;
@@ -346,7 +341,7 @@ int runCompare(const CompareOptions& options) {
             point.timings = run.timings;
           } catch (const std::exception& e) {
             // The row leaves the map-size sweep (its plot and table) and this size is listed as not run.
-            notRun(fmt::format("{} (map_size={})", info.name, mapSizes[s]), e.what());
+            notRun.add(fmt::format("{} (map_size={})", info.name, mapSizes[s]), e.what());
             row.mapSizeVaries = false;
             row.mapSizeSweep.clear();
             break;
@@ -375,13 +370,7 @@ int runCompare(const CompareOptions& options) {
              gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report),
              (fs::path(staged.finalDir()) / "index.html").string(), "compare.json",
              "compare.md");
-  if (!namedNotRun.empty()) {
-    std::fflush(stdout);  // the table first, then the error, also when both go to one pipe
-    fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the report): {}\n",
-               namedNotRun.size() == 1 ? "a technique asked for" : "techniques asked for", fmt::join(namedNotRun, ", "));
-    return 1;
-  }
-  return 0;
+  return notRun.exitCode("report");
 }
 
 }  // namespace

@@ -191,6 +191,20 @@ std::string outputPath(const Setup& setup, const std::string& dir, const std::st
   return path;
 }
 
+void NotRunTechniques::add(const std::string& name, const std::string& why) {
+  fmt::print("{}: not run here: {}\n", name, why);
+  report_.skipped.emplace_back(name, why);
+  if (techniquesNamed_ || (!namedBaseline_.empty() && name == namedBaseline_)) named_.push_back(name);
+}
+
+int NotRunTechniques::exitCode(const char* where) const {
+  if (named_.empty()) return 0;
+  std::fflush(stdout);  // the table first, then the error, also when both go to one pipe
+  fmt::print(stderr, "penumbra: error: {} did not run on this scene (the reasons are in the {}): {}\n",
+             named_.size() == 1 ? "a technique asked for" : "techniques asked for", where, fmt::join(named_, ", "));
+  return 1;
+}
+
 OutputLock::OutputLock(const std::string& dir) {
   const std::string path = (fs::path(dir) / ".penumbra.lock").string();
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
