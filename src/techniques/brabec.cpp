@@ -846,13 +846,13 @@ TechniqueInfo brabecTechniqueInfo() {
   };
   add("meet", ParamType::Float, 0.5, 0.0, 1.0, "",
       "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)");
-  add("r_scale", ParamType::Float, 0.0, 0.0, std::nullopt, "texels per world unit",
+  add("r_scale", ParamType::Float, 0.0, 0.0, 1.0e6, "texels per world unit",
       "paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
       "(give r_scale, r_bias and r_shrink together)",
       true);
-  add("r_bias", ParamType::Float, 0.0, 0.0, std::nullopt, "texels",
+  add("r_bias", ParamType::Float, 0.0, 0.0, 1.0e6, "texels",
       "paper's knob: search radius at depth 0 (with r_scale and r_shrink)", true);
-  add("r_shrink", ParamType::Float, 0.0, 0.0, std::nullopt, "1 / world unit",
+  add("r_shrink", ParamType::Float, 0.0, 0.0, 1.0e6, "1 / world unit",
       "paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
       "(with r_scale and r_bias)",
       true);

@@ -183,8 +183,10 @@ TechniqueInfo referenceTechniqueInfo() {
   info.summary = "stratified Monte Carlo ray tracing over the light's emitting area (Embree occlusion rays)";
   info.source = "ground truth";
   info.params = {
-      ParamSpec{.name = "spp", .type = ParamType::Int, .defaultValue = int64_t{256}, .min = 1.0, .max = 16777216.0, .choices = {},
-                .unit = "samples", .help = "samples per pixel (shadow rays, CMJ-stratified over the light)"},
+      ParamSpec{.name = "spp", .type = ParamType::Int, .defaultValue = int64_t{256}, .min = 1.0, .max = 65536.0, .choices = {},
+                .unit = "samples",
+                // 65536 puts the standard error of V under 0.002, half an 8-bit step: more buys nothing.
+                .help = "samples per pixel (shadow rays, CMJ-stratified over the light)"},
       ParamSpec{.name = "seed", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 0.0, .max = 4294967295.0, .choices = {},
                 .unit = "", .help = "random seed; the same seed gives bit-identical output"},
   };
