@@ -212,6 +212,57 @@ TEST(RealMeshCorpus, SoftTechniquesBeatHardWithoutLeaksOrSpeckle) {
   }
 }
 
+// smoothies (Chan and Durand 2003) and kirsch (Kirsch and Doellner 2003) each draw one half of the
+// penumbra, and Lawlor 2006 measures them so: "Smoothies and Kirsch and Döllner are compared with the
+// outer and inner penumbra respectively" (Fig. 11). Against its half truth (halfPenumbraTruth,
+// metrics.h), each must beat `hard` measured against the same half truth, on every case it takes, but
+// for the cases named in kHalfPenumbraMisses, which must keep missing (so the record cannot go stale).
+struct HalfPenumbraMiss {
+  const char* technique;
+  const char* label;  //!< "scene/light N"
+  const char* why;
+};
+const HalfPenumbraMiss kHalfPenumbraMisses[] = {
+    // Measured (RMSE8 against the outer half truth, smoothies / hard): light 0 41.60 / 30.84, light 1
+    // 37.61 / 29.74 (light 2 27.26 / 28.51 and light 3 16.12 / 18.99 pass).
+    {"smoothies", "teapots/light 0",
+     "the outer half-penumbra model puts V = 1/2 at the hard edge (Lawlor, Sec. 2: a half-infinite occluder); "
+     "teapots floating under a light wider than they are leave most of the light visible at their hard edge "
+     "(docs/small-occluders.md), and the fade from 0 there is darker than the truth by more than hard's 1 is too "
+     "bright"},
+    {"smoothies", "teapots/light 1", "as light 0: the disk light of radius 1.2 is wider than the teapots"},
+};
+
+TEST(RealMeshCorpus, HalfPenumbraTechniquesBeatHardAgainstTheirHalf) {
+  const std::pair<const char*, PenumbraHalf> kHalves[] = {{"smoothies", PenumbraHalf::Outer},
+                                                          {"kirsch", PenumbraHalf::Inner}};
+  std::string table = "scene/light technique: RMSE8 / umbra leaks / speckle against its half truth (hard's)\n";
+  for (const auto& [name, half] : kHalves) {
+    size_t misses = 0, cases = 0;
+    for (const Case& c : corpus()) {
+      const TechniqueRun& run = c.runs.at(name);
+      if (!run.error) continue;
+      const Image<float> truth = halfPenumbraTruth(c.reference, half);
+      const ErrorStats e = compareVisibility(run.v, truth, c.mask);
+      const ErrorStats h = compareVisibility(c.runs.at("hard").v, truth, c.mask);
+      table += fmt::format("{} {}: {:.2f} ({:.2f}) / {} ({}) / {} ({})\n", label(c), name, e.rmse8, h.rmse8, e.umbraLeaks,
+                           h.umbraLeaks, e.speckle, h.speckle);
+      ++cases;
+      const bool beats = e.rmse8 < h.rmse8;
+      misses += beats ? 0 : 1;
+      const HalfPenumbraMiss* recorded = nullptr;
+      for (const HalfPenumbraMiss& m : kHalfPenumbraMisses)
+        if (name == std::string(m.technique) && label(c) == m.label) recorded = &m;
+      if (recorded)
+        EXPECT_FALSE(beats) << label(c) << " " << name << " beats hard against its half truth now: drop the record";
+      else
+        EXPECT_TRUE(beats) << label(c) << " " << name << " against its half truth: " << e.rmse8 << ", hard " << h.rmse8;
+    }
+    std::printf("[ measured ] %s against its half truth misses in %zu of %zu cases\n", name, misses, cases);
+  }
+  std::fputs(table.c_str(), stdout);
+}
+
 // parker (Parker, Shirley and Smits 1998) keeps each object as its own inner object, so its shadow is
 // the exact hard shadow widened outwards: "the umbra region will be larger than in a physically-based
 // computation". Its claims on real models: wherever the exact hard shadow is dark, parker is dark (no
