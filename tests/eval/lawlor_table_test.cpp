@@ -33,8 +33,9 @@ const LawlorTable& smallTable() {
 // above plm, pcf and the exact hard shadow; pcf ("one-shadowmap-pixel-wide soft shadows") gets worse
 // once its texel is narrower than the penumbra (64 -> 128). Not asserted, because they do not hold:
 // plm is not flat across sizes (it keeps improving), smoothies and Kirsch & Doellner sit above the
-// hard shadow map from 32^2 on, pcf improves from 16^2 to 64^2, and the "16 Samples" row (our
-// stratified reference at 16 spp) is far below the paper's stochastic 16 samples and below plm.
+// hard shadow map from 32^2 on against the full truth (against their halves they are below it: the
+// next test), pcf improves from 16^2 to 64^2, and the "16 Samples" row (our stratified reference at
+// 16 spp) is far below the paper's stochastic 16 samples and below plm.
 TEST(LawlorTable, ShapeOfFigure10At16To128) {
   const LawlorTable& t = smallTable();
   ASSERT_EQ(t.rows.size(), 11u);
