@@ -176,7 +176,9 @@ const RecordedMisses kRecordedMisses[] = {
      "method: its attenuation takes \"the distance of the occluding point to the shadowed point\" (Kirsch and "
      "Doellner's abstract), the depth map's point over the pixel; on a rounded occluder that is its top, nearer the "
      "light than the silhouette that bounds the shadow, so the fade is too wide and reaches into the umbra (\"The "
-     "shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts\")"},
+     "shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts\"); 200 of "
+     "the 299 pixels where it leaks and hard does not fall to V <= 0.5 with the silhouette edge's depth "
+     "(docs/real-meshes.md)"},
     {"kirsch", "speckle", 13,
      "method: the hard map's isolated lit texels stay lit (outside the hard shadow V = 1), and dark pixels are left "
      "alone in the too-wide fade of its umbra leaks; 217 of its 505 specks on the corpus lie on pixels where hard "
