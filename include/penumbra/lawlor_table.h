@@ -9,13 +9,18 @@
 // shadow) and the reference at 16 samples per pixel with another seed than the truth ("16 Samples").
 // A technique with a map_size parameter runs at every size; the others run once and their value
 // stands for every size. The truth is the reference at `truthSpp` (the paper used 4,096 rays).
+// "Smoothies and Kirsch and Döllner are compared with the outer and inner penumbra respectively"
+// (Fig. 11): besides their rows against the full truth, smoothies and hard are measured against the
+// outer half truth and kirsch and hard against the inner one (halfPenumbraTruth, metrics.h).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "penumbra/image.h"
+#include "penumbra/metrics.h"
 #include "penumbra/scene.h"
 
 namespace penumbra {
@@ -25,6 +30,7 @@ struct LawlorRowSpec {
   std::string technique;               //!< registry name
   std::vector<std::string> params;     //!< "key=value" (map_size is added per size)
   std::vector<double> paper;           //!< Fig. 10's values at 16, 32, 64, 128 (empty: none)
+  std::optional<PenumbraHalf> half;    //!< measured against this half truth; absent: the full truth
 };
 
 // Fig. 10's rows with the paper's numbers.
@@ -56,7 +62,8 @@ struct LawlorTable {
   double truthMeanStdError = 0.0;      //!< mean per-pixel standard error of the truth
   double seconds = 0.0;                //!< wall-clock time of the sweep
 
-  const LawlorRow& row(const std::string& technique) const;  //!< throws Error if absent
+  //! The row of `technique` measured against the full truth, or against `half`; throws Error if absent.
+  const LawlorRow& row(const std::string& technique, std::optional<PenumbraHalf> half = std::nullopt) const;
 };
 
 // Runs the sweep on the scene's first light. Throws Error for bad options.
@@ -68,7 +75,9 @@ std::string lawlorTableMarkdown(const LawlorTable& table);
 std::string lawlorTableJson(const LawlorTable& table);
 // Writes lawlor-table.md, lawlor-table.json, and Fig. 11's images: fig11-truth.png and, per row,
 // fig11-<technique>.png (V) and fig11-<technique>-diff.png (V - truth: red where too bright, blue
-// where too dark, full colour at |difference| 0.5) into `directory` (created if missing).
+// where too dark, full colour at |difference| 0.5), and for the half-truth rows fig11-truth-outer.png,
+// fig11-truth-inner.png and fig11-<technique>-outer-diff.png / -inner-diff.png (V - half truth) into
+// `directory` (created if missing).
 void writeLawlorTable(const LawlorTable& table, const std::string& directory);
 
 }  // namespace penumbra

@@ -36,4 +36,22 @@ inline constexpr float kSpeckleCalm = 0.05f;     //!< ... where the reference's 
 
 ErrorStats compareVisibility(const Image<float>& v, const Image<float>& reference, const Image<uint8_t>& mask);
 
+// The half-penumbra truths of Lawlor 2006, Sec. 4 (Fig. 11: "Smoothies and Kirsch and Döllner are
+// compared with the outer and inner penumbra respectively"; Fig. 10: "they only compute one half of
+// the penumbra"). Sec. 2 (Fig. 2, Fig. 3) splits the light at the point the hard shadow is cast from:
+// across a straight edge, V = 1/2 + 1/2 d/a in the outer penumbra ("more than half of the light source
+// is visible"; d/a the visible fraction of the half the occluder covers first) and V = 1/2 - 1/2 d/a in
+// the inner one (d/a the hidden fraction of the other half). A technique that keeps the hard shadow
+// dark and fades from 0 at its edge outwards (smoothies) draws the visibility of the first half,
+//     V_outer = max(0, 2 V - 1)   (0 in the inner penumbra and umbra, d/a in the outer penumbra),
+// and one that keeps everything outside the hard shadow lit and fades from 1 at its edge inwards
+// (kirsch) draws the visibility of the second half,
+//     V_inner = min(1, 2 V)       (1 in the outer penumbra and outside, 1 - d/a in the inner penumbra).
+// The two halves average to the full truth, (V_outer + V_inner) / 2 = V, at every V. Applied per pixel
+// to the reference, they are exact for a straight edge under a light symmetric about its centre (disk,
+// sphere, rect, directional); elsewhere they are the same per-pixel split of the truth's V.
+enum class PenumbraHalf { Outer, Inner };
+float halfPenumbraVisibility(float v, PenumbraHalf half);
+Image<float> halfPenumbraTruth(const Image<float>& reference, PenumbraHalf half);
+
 }  // namespace penumbra

@@ -28,13 +28,19 @@ std::vector<LawlorRowSpec> lawlorFigure10Rows() {
       {"Hard Shadow Map", "hard", {}, {45.5, 39.3, 35.1, 34.2}},
       {"Shadow Volumes", "raytraced-hard", {}, {33.5, 33.5, 33.5, 33.5}},
       {"16 Samples", "reference", {"spp=16"}, {12.0, 12.0, 12.0, 12.0}},
+      // Fig. 11's comparison of the two half-penumbra techniques, with hard against the same halves.
+      {"Smoothies, outer penumbra", "smoothies", {}, {24.7, 17.8, 16.4, 15.3}, PenumbraHalf::Outer},
+      {"Hard Shadow Map, outer penumbra", "hard", {}, {}, PenumbraHalf::Outer},
+      {"Kirsch & Doellner, inner penumbra", "kirsch", {}, {37.2, 23.0, 15.6, 10.9}, PenumbraHalf::Inner},
+      {"Hard Shadow Map, inner penumbra", "hard", {}, {}, PenumbraHalf::Inner},
   };
 }
 
-const LawlorRow& LawlorTable::row(const std::string& technique) const {
+const LawlorRow& LawlorTable::row(const std::string& technique, std::optional<PenumbraHalf> half) const {
   for (const LawlorRow& r : rows)
-    if (r.spec.technique == technique) return r;
-  fail("Lawlor table: no row for technique '{}'", technique);
+    if (r.spec.technique == technique && r.spec.half == half) return r;
+  fail("Lawlor table: no row for technique '{}'{}", technique,
+       !half ? "" : *half == PenumbraHalf::Outer ? " against the outer penumbra" : " against the inner penumbra");
 }
 
 LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options, const std::vector<LawlorRowSpec>& rows) {
@@ -57,7 +63,11 @@ LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options
     for (const auto& [key, value] : truth.stats())
       if (key == "mean_std_error") table.truthMeanStdError = value;
   }
+  const Image<float> outerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Outer);
+  const Image<float> innerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Inner);
   for (const LawlorRowSpec& spec : rows) {
+    const Image<float>& truth =
+        !spec.half ? table.truth : *spec.half == PenumbraHalf::Outer ? outerTruth : innerTruth;
     LawlorRow row;
     row.spec = spec;
     const TechniqueInfo& info = findTechnique(spec.technique);
@@ -76,14 +86,14 @@ LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options
     if (row.usesMap) {
       for (int size : options.mapSizes) {
         Image<float> v = run(size);
-        const ErrorStats e = compareVisibility(v, table.truth, table.mask);
+        const ErrorStats e = compareVisibility(v, truth, table.mask);
         row.rmse8.push_back(e.rmse8);
         row.penumbraRmse8.push_back(e.penumbraRmse8);
         if (size == options.figureMapSize) row.figureV = std::move(v);
       }
     } else {
       row.figureV = run(0);
-      const ErrorStats e = compareVisibility(row.figureV, table.truth, table.mask);
+      const ErrorStats e = compareVisibility(row.figureV, truth, table.mask);
       row.rmse8.assign(options.mapSizes.size(), e.rmse8);
       row.penumbraRmse8.assign(options.mapSizes.size(), e.penumbraRmse8);
     }
@@ -130,6 +140,7 @@ std::string lawlorTableJson(const LawlorTable& table) {
     nlohmann::json r;
     r["label"] = row.spec.label;
     r["technique"] = row.spec.technique;
+    r["truth"] = !row.spec.half ? "full" : *row.spec.half == PenumbraHalf::Outer ? "outer penumbra" : "inner penumbra";
     r["params"] = row.spec.params;
     r["uses_map"] = row.usesMap;
     r["rmse8"] = row.rmse8;
@@ -168,7 +179,18 @@ void writeLawlorTable(const LawlorTable& table, const std::string& directory) {
   writeText(dir / "lawlor-table.md", lawlorTableMarkdown(table));
   writeText(dir / "lawlor-table.json", lawlorTableJson(table));
   writePngGray((dir / "fig11-truth.png").string(), table.truth);
+  const Image<float> outerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Outer);
+  const Image<float> innerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Inner);
+  writePngGray((dir / "fig11-truth-outer.png").string(), outerTruth);
+  writePngGray((dir / "fig11-truth-inner.png").string(), innerTruth);
   for (const LawlorRow& row : table.rows) {
+    if (row.spec.half) {
+      // The V image is the full-truth row's; only the difference to the half truth is new.
+      const bool outer = *row.spec.half == PenumbraHalf::Outer;
+      writePng((dir / fmt::format("fig11-{}-{}-diff.png", row.spec.technique, outer ? "outer" : "inner")).string(),
+               signedDifference(row.figureV, outer ? outerTruth : innerTruth, table.mask));
+      continue;
+    }
     writePngGray((dir / fmt::format("fig11-{}.png", row.spec.technique)).string(), row.figureV);
     writePng((dir / fmt::format("fig11-{}-diff.png", row.spec.technique)).string(),
              signedDifference(row.figureV, table.truth, table.mask));

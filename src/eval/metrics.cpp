@@ -85,4 +85,16 @@ ErrorStats compareVisibility(const Image<float>& v, const Image<float>& referenc
   return stats;
 }
 
+float halfPenumbraVisibility(float v, PenumbraHalf half) {
+  // Outer: the light's first half is hidden while V <= 1/2, and its visible fraction is 2V - 1 beyond.
+  // Inner: the second half is whole while V >= 1/2, and its visible fraction is 2V below (metrics.h).
+  return half == PenumbraHalf::Outer ? std::max(0.0f, 2.0f * v - 1.0f) : std::min(1.0f, 2.0f * v);
+}
+
+Image<float> halfPenumbraTruth(const Image<float>& reference, PenumbraHalf half) {
+  Image<float> out(reference.width(), reference.height());
+  for (size_t i = 0; i < reference.size(); ++i) out[i] = halfPenumbraVisibility(reference[i], half);
+  return out;
+}
+
 }  // namespace penumbra

@@ -7,13 +7,17 @@
 // pixel in it is attenuated by a bivariate function of (1) the distance from the occluding point to
 // the pixel and (2) the shadow width at the pixel's texel, so the shadow fades from the hard edge
 // inwards over a width that grows with the occluder distance. The hard shadow's outline stays the
-// outer border of the shadow: this row sees half of every penumbra, from the inside.
+// outer border of the shadow: this row sees half of every penumbra, from the inside, and Lawlor 2006
+// measures it against that half (Fig. 11; penumbra/metrics.h, halfPenumbraTruth, PenumbraHalf::Inner).
 //
 // Our implementation: the attenuation is the disk light's inner penumbra in plm.h's zeta and depth
 // rate, from the hard edge (V = 1) to the umbra (V = 0),
 //     V = 1 - sat(|w| s r / (z - c)),
-// with c the occluding point's depth (the hard map's texel, as in the paper) and |w| the shadow width
-// in texels. The shadow-width map is the inner halves of the silhouette ribbons of plm.h (distance to
+// with c the occluding point's depth (the hard map's texel, as in the paper: "the distance of the
+// occluding point to the shadowed point") and |w| the shadow width in texels. On a rounded occluder
+// that point is its top, nearer the light than the silhouette that bounds the shadow, so the fade is
+// wider than the penumbra and lights umbra pixels near the hard edge; the paper's caveat: "The
+// shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts". The shadow-width map is the inner halves of the silhouette ribbons of plm.h (distance to
 // the nearest silhouette segment, measured at texel centres, "highest penumbra limit wins") instead
 // of the paper's iterative image passes over the depth map, which estimate the same distance in whole
 // texels. Only edges on the border of their object's footprint in the map count (plm::RibbonFilter:

@@ -8,7 +8,8 @@
 // gets V = 0; a lit pixel behind a smoothie gets the alpha remapped by the blocker and receiver
 // depths, alpha' = alpha / (1 - b / r) (Chan & Durand, Sec. 4), so the penumbra widens with the
 // distance to the occluder; V = 1 elsewhere. The hard shadow stays the umbra: the shadow only grows
-// outwards, never into the umbra, which is why this row sees half of every penumbra.
+// outwards, never into the umbra, which is why this row sees half of every penumbra; Lawlor 2006
+// measures it against that half (Fig. 11; penumbra/metrics.h, halfPenumbraTruth, PenumbraHalf::Outer).
 //
 // Our implementation: the smoothies are the outer halves of the silhouette ribbons of plm.h. With the
 // strip as wide as the widest physical penumbra, the remapped alpha is the distance from the edge

@@ -3,7 +3,9 @@
 // Vref lies in the open interval (0.01, 0.99).
 #include "penumbra/metrics.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <gtest/gtest.h>
 
@@ -141,6 +143,54 @@ TEST(CompareVisibility, SizeMismatchIsAnError) {
   Image<float> v(2, 2), ref(3, 2);
   Image<uint8_t> mask(2, 2, 1);
   EXPECT_THROW(compareVisibility(v, ref, mask), Error);
+}
+
+
+// Lawlor 2006, Sec. 2: a straight occluder edge under a distant light symmetric about its centre.
+// Seen from a receiver at edge offset u (in light radii, u < 0 inside the hard shadow of the centre
+// sample), the occluder hides the part of the light with x > u. The outer half-penumbra truth is the
+// visible fraction of the half x > 0 (covered first as the receiver moves into the shadow), the inner
+// one that of the half x < 0; both are counted here over a fine grid on the light, independently of
+// halfPenumbraTruth's formula, which only sees the full V.
+double diskVisibleFraction(double u) {  // closed form: the area of the unit disk with x < u, over pi
+  u = std::clamp(u, -1.0, 1.0);
+  return (u * std::sqrt(1.0 - u * u) + std::asin(u) + std::numbers::pi / 2.0) / std::numbers::pi;
+}
+
+TEST(HalfPenumbraTruth, StraightEdgeUnderADistantDiskLight) {
+  constexpr int kOffsets = 41, kGrid = 801;
+  Image<float> v(kOffsets, 1);
+  for (int i = 0; i < kOffsets; ++i) v(i, 0) = static_cast<float>(diskVisibleFraction(-1.2 + 2.4 * i / (kOffsets - 1)));
+  const Image<float> outer = halfPenumbraTruth(v, PenumbraHalf::Outer);
+  const Image<float> inner = halfPenumbraTruth(v, PenumbraHalf::Inner);
+  for (int i = 0; i < kOffsets; ++i) {
+    const double u = -1.2 + 2.4 * i / (kOffsets - 1);
+    size_t right = 0, rightVisible = 0, left = 0, leftVisible = 0;
+    for (int a = 0; a < kGrid; ++a)
+      for (int b = 0; b < kGrid; ++b) {
+        const double x = -1.0 + 2.0 * (a + 0.5) / kGrid, y = -1.0 + 2.0 * (b + 0.5) / kGrid;
+        if (x * x + y * y > 1.0) continue;
+        (x > 0.0 ? right : left) += 1;
+        if (x < u) (x > 0.0 ? rightVisible : leftVisible) += 1;
+      }
+    SCOPED_TRACE(u);
+    // Grid error: one column of the half disk, 1/(kGrid/2) of its width, at most ~0.004 of its area.
+    EXPECT_NEAR(outer(i, 0), static_cast<double>(rightVisible) / right, 4e-3);
+    EXPECT_NEAR(inner(i, 0), static_cast<double>(leftVisible) / left, 4e-3);
+    // The halves average to the full truth.
+    EXPECT_NEAR(0.5 * (outer(i, 0) + inner(i, 0)), v(i, 0), 1e-6);
+  }
+}
+
+TEST(HalfPenumbraTruth, StraightEdgeUnderADistantRectLight) {
+  // A square light [-1, 1]^2 with the edge parallel to a side: V = (u + 1) / 2 across the penumbra,
+  // the outer half's visible fraction is clamp(u, 0, 1) and the inner half's clamp(u + 1, 0, 1).
+  for (double u = -1.5; u <= 1.5; u += 0.125) {
+    const float v = static_cast<float>(std::clamp((u + 1.0) / 2.0, 0.0, 1.0));
+    SCOPED_TRACE(u);
+    EXPECT_FLOAT_EQ(halfPenumbraVisibility(v, PenumbraHalf::Outer), static_cast<float>(std::clamp(u, 0.0, 1.0)));
+    EXPECT_FLOAT_EQ(halfPenumbraVisibility(v, PenumbraHalf::Inner), static_cast<float>(std::clamp(u + 1.0, 0.0, 1.0)));
+  }
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 // leaks (reference V < 0.05, V > 0.5) and no more speckle (ErrorStats::speckle) than `hard`, counts
 // within a stated pixel margin. Where a technique misses it, kRecordedMisses records how often, with
 // the paper's reason or as open work; the test fails when a technique misses more often than recorded
-// and when a recorded miss no longer happens (so the record cannot go stale).
+// and when a recorded miss no longer happens (so the record cannot go stale). smoothies and kirsch,
+// which draw one half of the penumbra each, are also held to their paper's comparison: against their
+// half of the truth (Lawlor 2006, Fig. 11), below `hard` against the same half.
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -158,15 +160,29 @@ struct RecordedMisses {
 };
 const RecordedMisses kRecordedMisses[] = {
     {"smoothies", "rmse8", 43,
-     "outer penumbra only (Chan and Durand 2003): it keeps the hard shadow whole and fades outwards, so it only "
-     "trades the hard edge's error outside for error inside; Lawlor's Fig. 10 puts it below the hard shadow map, "
-     "which we do not reproduce on real meshes (open)"},
-    {"smoothies", "speckle", 7, "open"},
+     "outer penumbra only (Chan and Durand 2003): Lawlor 2006 measures it against the outer half, \"they only compute "
+     "one half of the penumbra\" (Fig. 10; Fig. 11: \"compared with the outer and inner penumbra respectively\"); "
+     "against the full truth its fade from 0 at the hard edge, where the truth is 1/2, moves hard's error inwards. "
+     "Against its half it beats hard (HalfPenumbraTechniquesBeatHardAgainstTheirHalf)"},
+    {"smoothies", "speckle", 7,
+     "method: the hard map's isolated texels stay (the hard shadow is its umbra) and nearest-texel lookups of a "
+     "strip buffer whose winner changes from texel to texel (Chan and Durand 2003 read it unfiltered); 184 of its "
+     "446 specks on the corpus lie on pixels where hard has one"},
     {"kirsch", "rmse8", 37,
-     "inner penumbra only (Kirsch and Doellner 2003): the hard shadow's outline stays the shadow's outer border, "
-     "so half of every penumbra is missing; Lawlor's Fig. 10 puts it below the hard shadow map (open)"},
-    {"kirsch", "umbra leaks", 18, "open: its fade from the hard edge inwards lights umbra pixels near thin parts"},
-    {"kirsch", "speckle", 13, "open"},
+     "inner penumbra only (Kirsch and Doellner 2003): Lawlor 2006 measures it against the inner half, \"they only "
+     "compute one half of the penumbra\" (Fig. 10; Fig. 11: \"compared with the outer and inner penumbra "
+     "respectively\"). Against its half it beats hard (HalfPenumbraTechniquesBeatHardAgainstTheirHalf)"},
+    {"kirsch", "umbra leaks", 18,
+     "method: its attenuation takes \"the distance of the occluding point to the shadowed point\" (Kirsch and "
+     "Doellner's abstract), the depth map's point over the pixel; on a rounded occluder that is its top, nearer the "
+     "light than the silhouette that bounds the shadow, so the fade is too wide and reaches into the umbra (\"The "
+     "shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts\"); 200 of "
+     "the 299 pixels where it leaks and hard does not fall to V <= 0.5 with the silhouette edge's depth "
+     "(docs/real-meshes.md)"},
+    {"kirsch", "speckle", 13,
+     "method: the hard map's isolated lit texels stay lit (outside the hard shadow V = 1), and dark pixels are left "
+     "alone in the too-wide fade of its umbra leaks; 217 of its 505 specks on the corpus lie on pixels where hard "
+     "has one"},
     {"pcf", "speckle", 23,
      "open: its 3x3 texel box leaves thin shadow lines of one to two pixels that the reference blurs away"},
     {"pcf", "umbra leaks", 1, "open"},
@@ -210,6 +226,57 @@ TEST(RealMeshCorpus, SoftTechniquesBeatHardWithoutLeaksOrSpeckle) {
     for (const RecordedMisses& r : kRecordedMisses) known = known || (key.first == r.technique && key.second == r.measure);
     EXPECT_TRUE(known || count == 0) << key.first << " misses the bar on " << key.second << " in " << count << " cases";
   }
+}
+
+// smoothies (Chan and Durand 2003) and kirsch (Kirsch and Doellner 2003) each draw one half of the
+// penumbra, and Lawlor 2006 measures them so: "Smoothies and Kirsch and Döllner are compared with the
+// outer and inner penumbra respectively" (Fig. 11). Against its half truth (halfPenumbraTruth,
+// metrics.h), each must beat `hard` measured against the same half truth, on every case it takes, but
+// for the cases named in kHalfPenumbraMisses, which must keep missing (so the record cannot go stale).
+struct HalfPenumbraMiss {
+  const char* technique;
+  const char* label;  //!< "scene/light N"
+  const char* why;
+};
+const HalfPenumbraMiss kHalfPenumbraMisses[] = {
+    // Measured (RMSE8 against the outer half truth, smoothies / hard): light 0 41.60 / 30.84, light 1
+    // 37.61 / 29.74 (light 2 27.26 / 28.51 and light 3 16.12 / 18.99 pass).
+    {"smoothies", "teapots/light 0",
+     "the outer half-penumbra model puts V = 1/2 at the hard edge (Lawlor, Sec. 2: a half-infinite occluder); "
+     "teapots floating under a light wider than they are leave most of the light visible at their hard edge "
+     "(docs/small-occluders.md), and the fade from 0 there is darker than the truth by more than hard's 1 is too "
+     "bright"},
+    {"smoothies", "teapots/light 1", "as light 0: the disk light of radius 1.2 is wider than the teapots"},
+};
+
+TEST(RealMeshCorpus, HalfPenumbraTechniquesBeatHardAgainstTheirHalf) {
+  const std::pair<const char*, PenumbraHalf> kHalves[] = {{"smoothies", PenumbraHalf::Outer},
+                                                          {"kirsch", PenumbraHalf::Inner}};
+  std::string table = "scene/light technique: RMSE8 / umbra leaks / speckle against its half truth (hard's)\n";
+  for (const auto& [name, half] : kHalves) {
+    size_t misses = 0, cases = 0;
+    for (const Case& c : corpus()) {
+      const TechniqueRun& run = c.runs.at(name);
+      if (!run.error) continue;
+      const Image<float> truth = halfPenumbraTruth(c.reference, half);
+      const ErrorStats e = compareVisibility(run.v, truth, c.mask);
+      const ErrorStats h = compareVisibility(c.runs.at("hard").v, truth, c.mask);
+      table += fmt::format("{} {}: {:.2f} ({:.2f}) / {} ({}) / {} ({})\n", label(c), name, e.rmse8, h.rmse8, e.umbraLeaks,
+                           h.umbraLeaks, e.speckle, h.speckle);
+      ++cases;
+      const bool beats = e.rmse8 < h.rmse8;
+      misses += beats ? 0 : 1;
+      const HalfPenumbraMiss* recorded = nullptr;
+      for (const HalfPenumbraMiss& m : kHalfPenumbraMisses)
+        if (name == std::string(m.technique) && label(c) == m.label) recorded = &m;
+      if (recorded)
+        EXPECT_FALSE(beats) << label(c) << " " << name << " beats hard against its half truth now: drop the record";
+      else
+        EXPECT_TRUE(beats) << label(c) << " " << name << " against its half truth: " << e.rmse8 << ", hard " << h.rmse8;
+    }
+    std::printf("[ measured ] %s against its half truth misses in %zu of %zu cases\n", name, misses, cases);
+  }
+  std::fputs(table.c_str(), stdout);
 }
 
 // parker (Parker, Shirley and Smits 1998) keeps each object as its own inner object, so its shadow is
