@@ -40,8 +40,14 @@ int runBench(const BenchOptions& options) {
   for (const std::string& name : names) {
     const TechniqueInfo& info = findTechnique(name);
     given.push_back(gatherParams(setup, info, options.frame, true));
-    resolveParams(info.name, info.params, given.back());
   }
+  std::vector<PlannedRun> planned;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
+    planned.push_back({&info, resolveParams(info.name, info.params, given[i]), options.repeat});
+  }
+  checkResources(setup, planned, 1, options.frame.force);
+  if (!options.jsonPath.empty()) checkWritableFolderOf(options.jsonPath);
 
   const Light& light = setupLight(setup);
   fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,

@@ -50,6 +50,8 @@ struct FrameOptions {
   std::vector<std::string> params;  //!< "key=value" (render) or "technique.key=value" (compare, bench)
   int threads = 0;                  //!< 0: oneTBB's default (every core)
   std::string name;                 //!< stem of the output files; empty: the scene's name (made safe either way)
+  bool force = false;               //!< --force: go on past the memory and time checks (checkResources)
+  std::optional<double> maxMeshMiB; //!< --max-mesh-size: the mesh file size limit, MiB (default: kDefaultMaxMeshBytes)
 };
 // Adds --scene, --width, --height, --light, --spp, --seed, --threads (and --param) to a subcommand.
 void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp);
@@ -65,6 +67,21 @@ struct Setup {
 // Loads the scene and checks the light index and image size. Throws Error with the fix.
 Setup loadSetup(const FrameOptions& options);
 const Light& setupLight(const Setup& setup);
+
+// The planned runs of a command, checked before any heavy work (the G-buffer included): the memory
+// of the G-buffer, of `keptImages` V images and of the largest technique's buffers (its
+// ResourceEstimate) against the machine's memory (physical, or the cgroup's limit when lower), and
+// the rays and light-map texels of all runs together against a time budget. Over either, an Error
+// names the technique, its parameters and the estimate, and says --force goes on; with --force, a
+// warning instead.
+struct PlannedRun {
+  const TechniqueInfo* info = nullptr;
+  Params params;
+  int repeat = 1;
+};
+void checkResources(const Setup& setup, const std::vector<PlannedRun>& runs, int keptImages, bool force);
+// The memory this process may use: physical memory, or the cgroup's limit when lower, bytes.
+double machineMemoryBytes();
 
 // Scene-file parameters of the technique, then --spp / --seed where the technique has them, then
 // the command line's key=value pairs (`prefixed`: "technique.key=value", others skipped).
@@ -120,6 +137,9 @@ class ReferenceCache {
   ReferenceCache(std::string dir, const Setup& setup, const Params& referenceParams);
   // The entry, or nullopt with `why` saying why not (missing, unreadable, another key).
   std::optional<CachedTruth> load(std::string& why) const;
+  // Why the cache cannot be written (its folder cannot be created, or a file cannot be made in it),
+  // found without writing an entry; nullopt when it can. Asked before the truth is rendered.
+  std::optional<std::string> whyUnwritable() const;
   // Throws Error naming the directory when it cannot be written.
   void store(const Image<float>& v, const PassTimings& timings,
              const std::vector<std::pair<std::string, double>>& stats) const;
@@ -135,6 +155,9 @@ void makeOutputDir(const std::string& dir);
 // names one of the scene's input files (the scene file, its meshes), compared by identity.
 std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file);
 void refuseInputOverwrite(const Setup& setup, const std::string& path);
+// Throws Error, before any work, when the folder `path` would be written into does not exist or
+// cannot be written.
+void checkWritableFolderOf(const std::string& path);
 
 // Holds an exclusive lock on an output folder for the lifetime of the object (flock on
 // DIR/.penumbra.lock), so two runs cannot mix their files in one folder: the second is refused at

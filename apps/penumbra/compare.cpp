@@ -208,6 +208,35 @@ int runCompare(const CompareOptions& options) {
   makeOutputDir(options.outDir);
   const OutputLock lock(options.outDir);
   StagedReport staged(options.outDir, setup);
+
+  // The cache is looked up, and checked for writing, before any rendering: an unwritable cache is
+  // said now (the run goes on without storing the truth), and a cached truth costs no rays below.
+  std::optional<ReferenceCache> cache;
+  if (!options.noCache)
+    cache.emplace(options.cacheDir.empty() ? (fs::path(options.outDir) / "cache").string() : options.cacheDir, setup,
+                  truthParams);
+  std::string why = "--no-cache";
+  std::optional<CachedTruth> cached = cache ? cache->load(why) : std::nullopt;
+  if (cached && (cached->v.width() != setup.width || cached->v.height() != setup.height)) {
+    why = "its image size differs";
+    cached.reset();
+  }
+  bool storeTruth = false;
+  if (cache && !cached) {
+    const std::optional<std::string> unwritable = cache->whyUnwritable();
+    if (unwritable) fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", *unwritable);
+    storeTruth = !unwritable;
+  }
+
+  // Memory and time, before the G-buffer: every planned run with the V images the report keeps.
+  std::vector<PlannedRun> planned;
+  if (!cached) planned.push_back({&referenceInfo, truthParams, 1});
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
+    planned.push_back({&info, resolveParams(info.name, info.params, given[i]), 1});
+    for (const ParamSet& atSize : sweepGiven[i]) planned.push_back({&info, resolveParams(info.name, info.params, atSize), 1});
+  }
+  checkResources(setup, planned, static_cast<int>(planned.size()) + 1, options.frame.force);
   const std::string& reportDir = staged.dir();
   const std::string stem = setup.stem + "_";
 
@@ -238,22 +267,12 @@ int runCompare(const CompareOptions& options) {
     }
   };
 
-  // The truth: from the cache when this exact setup was rendered before.
+  // The truth: from the cache when this exact setup was rendered before (looked up above).
   ReportRow truth;
   truth.technique = kReference;
   truth.label = rowLabel(referenceInfo, truthParams);
   truth.params = describeParams(truthParams);
   Image<float> vTruth;
-  std::optional<ReferenceCache> cache;
-  if (!options.noCache)
-    cache.emplace(options.cacheDir.empty() ? (fs::path(options.outDir) / "cache").string() : options.cacheDir, setup,
-                  truthParams);
-  std::string why = "--no-cache";
-  std::optional<CachedTruth> cached = cache ? cache->load(why) : std::nullopt;
-  if (cached && (cached->v.width() != setup.width || cached->v.height() != setup.height)) {
-    why = "its image size differs";
-    cached.reset();
-  }
   if (cached) {
     fmt::print("truth: reused {} ({}; rendered earlier in {:.1f} ms)\n", cache->path(), joinParams(truth.params),
                cached->timings.total());
@@ -268,7 +287,7 @@ int runCompare(const CompareOptions& options) {
     vTruth = std::move(run.v);
     truth.timings = run.timings;
     truth.stats = run.stats;
-    if (cache) {
+    if (cache && storeTruth) {
       try {
         cache->store(vTruth, truth.timings, truth.stats);
       } catch (const Error& e) {

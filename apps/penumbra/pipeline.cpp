@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -44,6 +45,13 @@ void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& pa
   app.add_option("--param,-p", options.params, paramHelp);
   app.add_option("--threads", options.threads, "worker threads (0: every core)")->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_flag("--force", options.force,
+               "go on past the up-front checks: a run estimated to need more memory than the machine has, or more "
+               "than 1e10 rays or light-map texels (about a quarter of an hour on 2 cores)");
+  app.add_option("--max-mesh-size", options.maxMeshMiB,
+                 fmt::format("largest mesh file imported, MiB (default {}); a larger file is refused before it is read",
+                             kDefaultMaxMeshBytes >> 20))
+      ->check(CLI::PositiveNumber);
   app.add_option("--name", options.name,
                  "stem of the output file names (default: the scene's name); either is made a safe file name "
                  "(letters, digits, '-', '_', '.'; others become '_')");
@@ -51,7 +59,9 @@ void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& pa
 
 Setup loadSetup(const FrameOptions& options) {
   Setup setup;
-  setup.scene = loadScene(options.scene);
+  SceneLoadOptions load;
+  if (options.maxMeshMiB) load.maxMeshBytes = static_cast<uint64_t>(*options.maxMeshMiB * 1024.0 * 1024.0);
+  setup.scene = loadScene(options.scene, load);
   if (setup.scene.source.rfind("built-in:", 0) != 0) setup.sceneFile = setup.scene.source;
   const Scene& scene = setup.scene;
   // Check the scene file's "techniques" section whole, including techniques not run now: a typo in
@@ -114,6 +124,72 @@ ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const Frame
     if (kv.substr(0, dot) == info.name) given.setFromKeyValue(kv.substr(dot + 1), "command line (--param)");
   }
   return given;
+}
+
+// Beyond this many shadow rays or light-map texels a run is long enough to ask for --force: 1e10 rays
+// take about 15 minutes on 2 cores (the reference traced 1.1e7 rays a second on torus, 2 busy cores).
+constexpr double kRayBudget = 1.0e10;
+constexpr double kTexelBudget = 1.0e10;
+// G-buffer bytes per pixel: position, shading and face normals (3 x 12), object and triangle ids, depth.
+constexpr double kGBufferBytesPerPixel = 48.0;
+
+double machineMemoryBytes() {
+  double bytes = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+  // A container's limit (cgroup v2) is what the kernel enforces with the OOM killer.
+  if (std::FILE* f = std::fopen("/sys/fs/cgroup/memory.max", "r")) {
+    char text[64] = {};
+    if (std::fgets(text, sizeof text, f)) {
+      char* end = nullptr;
+      const double limit = std::strtod(text, &end);
+      if (end != text && limit > 0.0) bytes = std::min(bytes, limit);
+    }
+    std::fclose(f);
+  }
+  return bytes;
+}
+
+namespace {
+std::string formatBytes(double bytes) {
+  if (bytes >= 1024.0 * 1024.0 * 1024.0) return fmt::format("{:.1f} GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+  return fmt::format("{:.0f} MiB", bytes / (1024.0 * 1024.0));
+}
+}  // namespace
+
+void checkResources(const Setup& setup, const std::vector<PlannedRun>& runs, int keptImages, bool force) {
+  const double pixels = static_cast<double>(setup.width) * static_cast<double>(setup.height);
+  const double frameBytes = pixels * (kGBufferBytesPerPixel + 4.0 * keptImages);
+  const double memory = machineMemoryBytes();
+  double rays = 0.0, texels = 0.0;
+  std::string heaviest;  // the run that traces or renders the most, for the message
+  double heaviestWork = 0.0;
+  std::vector<std::string> problems;
+  for (const PlannedRun& run : runs) {
+    const ResourceEstimate e = run.info->estimate(run.params, setup.width, setup.height);
+    const double bytes = frameBytes + e.bytes;
+    if (bytes > memory)
+      problems.push_back(fmt::format("{} needs about {} of memory ({}{}), more than the {} this machine has", run.info->name,
+                                     formatBytes(bytes), e.drivers.empty() ? "" : e.drivers + ", ",
+                                     fmt::format("{} x {} pixels", setup.width, setup.height), formatBytes(memory)));
+    const double work = std::max(e.rays / kRayBudget, e.texels / kTexelBudget) * run.repeat;
+    rays += e.rays * run.repeat;
+    texels += e.texels * run.repeat;
+    if (work > heaviestWork) {
+      heaviestWork = work;
+      heaviest = fmt::format("{} ({})", run.info->name, e.drivers);
+    }
+  }
+  // Over the time budget: the run's total, naming the heaviest run and what sets it.
+  const auto overBudget = [&](const char* verb, double amount, const char* noun, double budget) {
+    problems.push_back(fmt::format("the run would {} about {:.2g} {}, over the time budget of {:.0e} (about a quarter of "
+                                   "an hour on 2 cores); the most by {}",
+                                   verb, amount, noun, budget, heaviest));
+  };
+  if (rays > kRayBudget) overBudget("trace", rays, "shadow rays", kRayBudget);
+  if (texels > kTexelBudget) overBudget("render", texels, "light-map texels", kTexelBudget);
+  if (problems.empty()) return;
+  const std::string text = fmt::format("{}", fmt::join(problems, "; "));
+  if (!force) fail("{}; lower those parameters (or --width/--height), or pass --force to run it anyway", text);
+  fmt::print(stderr, "penumbra: warning: {}; going on (--force)\n", text);
 }
 
 double median(std::vector<double> values) {
@@ -181,6 +257,14 @@ void refuseInputOverwrite(const Setup& setup, const std::string& path) {
       fail("refusing to write '{}': it is {} '{}'; choose another output path", path,
            input == setup.scene.inputFiles.front() && setup.sceneFile ? "the input scene file" : "an input file,",
            input);
+}
+
+void checkWritableFolderOf(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(parent, ec)) fail("cannot write '{}': the folder '{}' does not exist", path, parent.string());
+  if (::access(parent.c_str(), W_OK) != 0)
+    fail("cannot write '{}': the folder '{}' is not writable ({})", path, parent.string(), std::strerror(errno));
 }
 
 std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file) {

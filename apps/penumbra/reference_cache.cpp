@@ -11,7 +11,12 @@
 // (truncated, edited) is reported and rendered anew, not trusted. Each file is written beside its
 // target and renamed into place (penumbra/output_file.h), the image first, so an interrupted run
 // leaves no half-written entry.
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -111,6 +116,19 @@ std::optional<CachedTruth> ReferenceCache::load(std::string& why) const {
     why = fmt::format("it cannot be read ({})", e.what());
     return std::nullopt;
   }
+}
+
+std::optional<std::string> ReferenceCache::whyUnwritable() const {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec || !fs::is_directory(dir_))
+    return fmt::format("cannot create the reference cache directory '{}': {}", dir_, ec ? ec.message() : "a file of that name exists");
+  std::string probe = (fs::path(dir_) / ".write-probe-XXXXXX").string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) return fmt::format("cannot write in the reference cache directory '{}': {}", dir_, std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return std::nullopt;
 }
 
 void ReferenceCache::store(const Image<float>& v, const PassTimings& timings,

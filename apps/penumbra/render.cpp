@@ -24,7 +24,7 @@ int runRender(const RenderOptions& options) {
   const TechniqueInfo& info = findTechnique(options.technique);
   const Setup setup = loadSetup(options.frame);
   const ParamSet given = gatherParams(setup, info, options.frame, false);
-  resolveParams(info.name, info.params, given);  // a bad value fails before any output or work
+  const Params params = resolveParams(info.name, info.params, given);  // a bad value fails before any output or work
   // The shorthands only apply where they mean something; say so rather than drop them silently.
   if (options.frame.spp && !info.hasParam("spp"))
     fmt::print(stderr, "penumbra: note: technique '{}' has no parameter 'spp'; --spp has no effect\n", info.name);
@@ -35,6 +35,10 @@ int runRender(const RenderOptions& options) {
   const std::string base = setup.stem + "_" + info.name;
   const std::string pngPath = outputPath(setup, options.outDir, base + ".png");
   const std::string exrPath = outputPath(setup, options.outDir, base + "_v.exr");
+
+  checkResources(setup, {{&info, params, 1}}, 1, options.frame.force);
+  // The folder is made (and its failure said) before the work, not after it.
+  makeOutputDir(options.outDir);
 
   const Light& light = setupLight(setup);
   fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
@@ -51,7 +55,6 @@ int runRender(const RenderOptions& options) {
   fmt::print("{:<16} {:>10.2f} ms\n", "total", run.timings.total());
   for (const auto& [k, v] : run.stats) fmt::print("{:<16} {:>10.4g}\n", k, v);
 
-  makeOutputDir(options.outDir);
   writePng(pngPath, shade(setup.scene, light, gbuffer, run.v));
   writeExr(exrPath, run.v);
   fmt::print("wrote {}\nwrote {}\n", pngPath, exrPath);

@@ -12,6 +12,16 @@
 
 namespace penumbra {
 
+// What one run of a technique will take, estimated from its parameters and the image size before any
+// work, so that a caller can refuse what cannot fit in memory and warn about what will take long
+// (the CLI does both, with --force to go on). Measured peaks, not bounds: within about 10%.
+struct ResourceEstimate {
+  double bytes = 0.0;   //!< peak memory of the technique's own buffers beyond the G-buffer, bytes
+  double rays = 0.0;    //!< shadow rays traced
+  double texels = 0.0;  //!< light-map texels rendered, each map counted once
+  std::string drivers;  //!< the parameters that set it, as the user writes them: "map_size=8192, samples=1024"
+};
+
 struct TechniqueInfo {
   std::string name;     //!< "reference", "hard", ...
   std::string summary;  //!< one line
@@ -19,6 +29,7 @@ struct TechniqueInfo {
   std::string lights;   //!< the light shapes it takes and how it treats them, a concave polygon included
   std::vector<ParamSpec> params;
   std::function<std::unique_ptr<ShadowTechnique>(const Params&)> create;
+  std::function<ResourceEstimate(const Params&, int width, int height)> estimate;  //!< set by the registry for every technique
 
   bool hasParam(const std::string& param) const;
 };

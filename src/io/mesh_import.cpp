@@ -125,7 +125,7 @@ void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
 
 }  // namespace
 
-Mesh importMesh(const std::string& path) {
+Mesh importMesh(const std::string& path, uint64_t maxBytes) {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);
   if (ec || !std::filesystem::exists(status)) {
@@ -140,6 +140,10 @@ Mesh importMesh(const std::string& path) {
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) fail("{}: cannot read the mesh file ({})", path, ec.message());
   if (size == 0) fail("{}: the mesh file is empty; expected triangles", path);
+  if (size > maxBytes)
+    fail("{}: the mesh file is {} bytes, over the limit of {} bytes ({:.4g} MiB); raise it with --max-mesh-size MiB if the "
+         "file is meant to be this large",
+         path, size, maxBytes, static_cast<double>(maxBytes) / (1024.0 * 1024.0));
   checkPlyHeader(path);
   checkDeclaredCounts(path, size);
 

@@ -530,7 +530,8 @@ Mat4 readFit(const Field& field, const Mesh& mesh) {
 }
 
 // `inputFiles` gains the mesh file the object reads, if any.
-Object readObject(const Field& field, size_t index, const std::string& baseDir, std::vector<std::string>& inputFiles) {
+Object readObject(const Field& field, size_t index, const std::string& baseDir, std::vector<std::string>& inputFiles,
+                  const SceneLoadOptions& options) {
   const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "fit", "analytic_sphere"});
   Object object;
   object.name = o.required("name").string();
@@ -555,7 +556,7 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir, 
     std::filesystem::path path(file);
     if (path.is_relative()) path = std::filesystem::path(baseDir) / path;
     inputFiles.push_back(path.lexically_normal().string());
-    object.mesh = withPath(*m, [&] { return importMesh(inputFiles.back()); });
+    object.mesh = withPath(*m, [&] { return importMesh(inputFiles.back(), options.maxMeshBytes); });
   } else {
     object.mesh = readInlineMesh(o.required("inline"));
   }
@@ -696,7 +697,8 @@ std::string readFileText(const std::string& path) {
 
 // ---------------------------------------------------------------------------------------------
 
-Scene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir) {
+Scene parseScene(const std::string& jsonText, const std::string& source, const std::string& baseDir,
+                 const SceneLoadOptions& options) {
   const json root = parseJson(jsonText, source);
   const Field rootField(root, "", source);
   if (!root.is_object()) fail("{}: expected a JSON object at the top level, got {}", source, rootField.describe());
@@ -737,7 +739,7 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
   std::map<int32_t, size_t> idToIndex;
   for (size_t i = 0; i < objects.value().size(); ++i) {
     const Field f = objects.element(i);
-    Object object = readObject(f, i, baseDir, scene.inputFiles);
+    Object object = readObject(f, i, baseDir, scene.inputFiles, options);
     if (auto [it, inserted] = idToIndex.emplace(object.id, i); !inserted)
       f.error("duplicate object id {} (objects[{}] has it too; an object without 'id' takes its index); expected unique ids",
               object.id, it->second);
@@ -822,10 +824,10 @@ std::vector<BuiltinScene> builtinScenes() {
   return scenes;
 }
 
-Scene loadScene(const std::string& nameOrPath) {
+Scene loadScene(const std::string& nameOrPath, const SceneLoadOptions& options) {
   for (const auto& [stem, text] : detail::embeddedScenes()) {
     if (stem != nameOrPath) continue;
-    Scene scene = parseScene(std::string(text), fmt::format("built-in:{}", stem), ".");
+    Scene scene = parseScene(std::string(text), fmt::format("built-in:{}", stem), ".", options);
     return scene;
   }
   std::error_code ec;
@@ -836,7 +838,7 @@ Scene loadScene(const std::string& nameOrPath) {
   }
   const std::string text = readFileText(nameOrPath);
   const std::filesystem::path parent = std::filesystem::path(nameOrPath).parent_path();
-  Scene scene = parseScene(text, nameOrPath, parent.empty() ? "." : parent.string());
+  Scene scene = parseScene(text, nameOrPath, parent.empty() ? "." : parent.string(), options);
   scene.inputFiles.insert(scene.inputFiles.begin(), nameOrPath);
   return scene;
 }

@@ -2,6 +2,7 @@
 // `TechniqueInfo <name>TechniqueInfo()` plus one line here.
 #include "penumbra/registry.h"
 
+#include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "penumbra/error.h"
@@ -53,6 +54,59 @@ std::string lightHandling(const std::string& name) {
   return {};
 }
 
+// Bytes per texel of each light map, measured as the peak resident memory of `penumbra render` at
+// map_size 4096 less that at 1024, divided by the texels added (tiny scene, 8 x 8 image).
+constexpr double kDepthMapBytes = 8.0;        // hard, pcf, pcss: depth + object id
+constexpr double kBrabecBytes = 9.0;          // depth + id + tile summaries and scratch
+constexpr double kRibbonMapBytes = 60.0;      // plm: depth, limits, ribbons and their scratch
+constexpr double kHalfRibbonMapBytes = 34.0;  // smoothies, kirsch: the hard map and one ribbon layer
+constexpr double kHeidrichPointBytes = 40.0;  // per sample point: depth, id, two visibility layers, skins
+
+ResourceEstimate mapEstimate(const Params& params, double maps, double bytesPerTexel, const std::string& extra = {}) {
+  const auto size = static_cast<double>(params.getInt("map_size"));
+  ResourceEstimate e;
+  e.bytes = size * size * bytesPerTexel;
+  e.texels = size * size * maps;
+  e.drivers = fmt::format("map_size={}{}", params.getInt("map_size"), extra);
+  return e;
+}
+
+// How much memory and work a run of technique `name` takes (ResourceEstimate); kept here, beside the
+// list, like lightHandling, so every technique has one (registry_test.cpp checks it).
+std::function<ResourceEstimate(const Params&, int, int)> resourceEstimate(const std::string& name) {
+  using Estimate = std::function<ResourceEstimate(const Params&, int, int)>;
+  const auto pixels = [](int w, int h) { return static_cast<double>(w) * static_cast<double>(h); };
+  if (name == "reference")
+    return Estimate([=](const Params& p, int w, int h) {
+      return ResourceEstimate{0.0, pixels(w, h) * static_cast<double>(p.getInt("spp")), 0.0,
+                              fmt::format("{} x {} pixels x spp={}", w, h, p.getInt("spp"))};
+    });
+  if (name == "raytraced-hard" || name == "parker")
+    return Estimate([=](const Params&, int w, int h) {
+      return ResourceEstimate{0.0, pixels(w, h), 0.0, fmt::format("{} x {} pixels", w, h)};
+    });
+  if (name == "hard" || name == "pcf" || name == "pcss")
+    return Estimate([](const Params& p, int, int) { return mapEstimate(p, 1.0, kDepthMapBytes); });
+  if (name == "brabec") return Estimate([](const Params& p, int, int) { return mapEstimate(p, 1.0, kBrabecBytes); });
+  if (name == "plm") return Estimate([](const Params& p, int, int) { return mapEstimate(p, 1.0, kRibbonMapBytes); });
+  if (name == "smoothies" || name == "kirsch")
+    return Estimate([](const Params& p, int, int) { return mapEstimate(p, 1.0, kHalfRibbonMapBytes); });
+  if (name == "multisample")
+    return Estimate([](const Params& p, int, int) {
+      // Every sample's depth map is kept (4 bytes a texel) beside one full map being rendered.
+      const auto samples = static_cast<double>(p.getInt("samples"));
+      return mapEstimate(p, samples, 4.0 * samples + kDepthMapBytes, fmt::format(", samples={}", p.getInt("samples")));
+    });
+  if (name == "heidrich")
+    return Estimate([](const Params& p, int, int) {
+      const auto points = static_cast<double>(p.getInt("subdivisions") + 1);
+      return mapEstimate(p, points, kHeidrichPointBytes * points, fmt::format(", subdivisions={}", p.getInt("subdivisions")));
+    });
+  // none, ssv, wedges: buffers of the scene's size (edges, a light-space grid of at most 1024^2
+  // cells), no light map, no rays.
+  return Estimate([](const Params&, int, int) { return ResourceEstimate{}; });
+}
+
 }  // namespace
 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
@@ -74,7 +128,10 @@ const std::vector<TechniqueInfo>& techniqueRegistry() {
       ssvTechniqueInfo(),
       wedgesTechniqueInfo(),
     };
-    for (TechniqueInfo& info : infos) info.lights = lightHandling(info.name);
+    for (TechniqueInfo& info : infos) {
+      info.lights = lightHandling(info.name);
+      info.estimate = resourceEstimate(info.name);
+    }
     return infos;
   }();
   return registry;

@@ -630,6 +630,84 @@ TEST_F(CliTest, TheCacheDoesNotTrustAnEditedImage) {
   EXPECT_EQ(uncached.code, 0) << uncached.output;
   EXPECT_NE(uncached.output.find("penumbra: warning: "), std::string::npos) << uncached.output;
   EXPECT_TRUE(exists("out2/report/index.html")) << uncached.output;
+  // ... said before the truth is rendered, not after.
+  EXPECT_LT(uncached.output.find("penumbra: warning: "), uncached.output.find("truth: rendering")) << uncached.output;
+}
+
+// The reproductions of runs too large for the machine: refused before any work (no G-buffer, no
+// output), naming the technique, the parameters that set the estimate and --force. The estimates
+// agree with the sizes worked out by hand: 1024 maps of 8192^2 four-byte depths are 256 GiB; 65
+// sample points of heidrich at 8192^2 hold about 170 GB.
+TEST_F(CliTest, RunsTooLargeForTheMachineAreRefusedUpFront) {
+  const Result multisample = run("render --scene torus -t multisample -p samples=1024 -p map_size=8192 --out o");
+  EXPECT_EQ(multisample.code, 1) << multisample.output;
+  EXPECT_NE(multisample.output.find("multisample needs about 256.5 GiB"), std::string::npos) << multisample.output;
+  EXPECT_NE(multisample.output.find("map_size=8192, samples=1024"), std::string::npos) << multisample.output;
+  EXPECT_NE(multisample.output.find("--force"), std::string::npos) << multisample.output;
+  EXPECT_EQ(multisample.output.find("scene torus"), std::string::npos) << "refused after starting work: " << multisample.output;
+  EXPECT_FALSE(exists("o")) << "nothing is written for a refused run";
+
+  const Result heidrich = run("render --scene linear -t heidrich -p subdivisions=64 -p map_size=8192 --out o");
+  EXPECT_EQ(heidrich.code, 1) << heidrich.output;
+  EXPECT_NE(heidrich.output.find("heidrich needs about 162.5 GiB"), std::string::npos) << heidrich.output;
+
+  // Rays: the time budget. compare counts the truth and every row.
+  const Result rays = run("render --scene torus -t reference --width 8192 --height 8192 --spp 65536 --out o");
+  EXPECT_EQ(rays.code, 1) << rays.output;
+  EXPECT_NE(rays.output.find("4.4e+12 shadow rays"), std::string::npos) << rays.output;
+  EXPECT_NE(rays.output.find("spp=65536"), std::string::npos) << rays.output;
+  const Result truth = run("compare --scene torus -t hard --width 8192 --height 8192 --spp 4096 --out c");
+  EXPECT_EQ(truth.code, 1) << truth.output;
+  EXPECT_NE(truth.output.find("the most by reference (8192 x 8192 pixels x spp=4096)"), std::string::npos) << truth.output;
+  EXPECT_EQ(truth.output.find("truth: rendering"), std::string::npos) << truth.output;
+  const Result bench = run("bench --scene torus -t reference --spp 65536 --width 1024 --height 1024 --repeat 5");
+  EXPECT_EQ(bench.code, 1) << bench.output;
+  EXPECT_NE(bench.output.find("shadow rays"), std::string::npos) << bench.output;
+
+  // Within the machine and the budget, --force changes nothing.
+  const Result forced = run("render --scene torus -t hard --width 32 --height 32 --force --out o");
+  EXPECT_EQ(forced.code, 0) << forced.output;
+  EXPECT_EQ(forced.output.find("warning"), std::string::npos) << forced.output;
+}
+
+// Mesh files are size-checked before import, with a limit the user can raise.
+TEST_F(CliTest, MeshFilesAreSizeCheckedBeforeImport) {
+  std::string obj = "v 0 1 0\nv 1 1 0\nv 0 1 1\n";
+  while (obj.size() < 4096) obj += "# padding to make the file a few KiB\n";
+  obj += "f 1 2 3\n";
+  write("tri.obj", obj);
+  write("m.json", sceneJson(kLight, R"([{"name": "ground", "primitive": {"type": "plane", "size": [4, 4]}},
+    {"name": "tri", "mesh": "tri.obj"}])"));
+  const Result refused = run("render --scene m.json -t hard --width 16 --height 16 --max-mesh-size 0.002 --out o");
+  EXPECT_EQ(refused.code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("tri.obj: the mesh file is " + std::to_string(obj.size()) + " bytes, over the limit of 2097 bytes"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("--max-mesh-size"), std::string::npos) << refused.output;
+  const Result raised = run("render --scene m.json -t hard --width 16 --height 16 --max-mesh-size 1 --out o");
+  EXPECT_EQ(raised.code, 0) << raised.output;
+  // A file over the default limit (1 GiB; sparse, so it costs no disk) is refused at once, unread.
+  {
+    std::ofstream big(dir_ / "big.obj");
+    big.seekp((std::streamoff{1} << 30) + 1);
+    big << '\n';
+  }
+  write("big.json", sceneJson(kLight, R"([{"name": "big", "mesh": "big.obj"}])"));
+  const Result big = run("render --scene big.json -t hard --width 16 --height 16 --out o");
+  EXPECT_EQ(big.code, 1) << big.output;
+  EXPECT_NE(big.output.find("big.obj: the mesh file is 1073741826 bytes, over the limit of 1073741824 bytes (1024 MiB)"), std::string::npos) << big.output;
+}
+
+// Errors that can be known before rendering are reported before rendering: an output folder that
+// cannot be made, a bench JSON path in a missing folder.
+TEST_F(CliTest, OutputErrorsComeBeforeTheWork) {
+  write("plain.txt", "a file, not a folder");
+  const Result render = run("render --scene torus -t reference --width 32 --height 32 --out plain.txt/o");
+  EXPECT_EQ(render.code, 1) << render.output;
+  EXPECT_NE(render.output.find("cannot create output directory 'plain.txt/o'"), std::string::npos) << render.output;
+  EXPECT_EQ(render.output.find("technique reference"), std::string::npos) << "rendered first: " << render.output;
+  const Result bench = run("bench --scene torus -t hard --width 32 --height 32 --repeat 1 --json missing/b.json");
+  EXPECT_EQ(bench.code, 1) << bench.output;
+  EXPECT_NE(bench.output.find("the folder 'missing' does not exist"), std::string::npos) << bench.output;
+  EXPECT_EQ(bench.output.find("scene torus"), std::string::npos) << "benchmarked first: " << bench.output;
 }
 
 }  // namespace

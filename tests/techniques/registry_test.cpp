@@ -149,6 +149,29 @@ TEST(Registry, EveryTechniqueSaysHowItTreatsAConcavePolygonLight) {
   }
 }
 
+// Every technique estimates its cost (the CLI's up-front check): finite, and following the
+// parameters that set it — a light map's memory grows with its texel count, rays with the pixels.
+TEST(Registry, EveryTechniqueEstimatesItsCost) {
+  for (const TechniqueInfo& info : techniqueRegistry()) {
+    ASSERT_TRUE(info.estimate) << info.name << " has no resource estimate in registry.cpp";
+    const Params defaults = resolveParams(info.name, info.params, {});
+    const ResourceEstimate e = info.estimate(defaults, 64, 32);
+    EXPECT_TRUE(std::isfinite(e.bytes) && e.bytes >= 0.0 && std::isfinite(e.rays) && e.rays >= 0.0 &&
+                std::isfinite(e.texels) && e.texels >= 0.0)
+        << info.name;
+    if (info.hasParam("map_size")) {
+      ParamSet doubled;
+      doubled.set("map_size", int64_t{2048}, "test");
+      const ResourceEstimate big = info.estimate(resolveParams(info.name, info.params, doubled), 64, 32);
+      EXPECT_NEAR(big.bytes, 4.0 * e.bytes, 1e-6 * e.bytes) << info.name << ": a map of 2048^2 holds 4x the texels of 1024^2";
+      EXPECT_NE(big.drivers.find("map_size=2048"), std::string::npos) << info.name << ": " << big.drivers;
+    }
+    if (e.rays > 0.0) EXPECT_GE(info.estimate(defaults, 128, 32).rays, 2.0 * e.rays - 1e-9) << info.name;
+  }
+  const TechniqueInfo& reference = findTechnique("reference");
+  EXPECT_EQ(reference.estimate(resolveParams("reference", reference.params, {}), 64, 32).rays, 64.0 * 32.0 * 256.0);
+}
+
 TEST(Registry, EmptySceneIsFullyLitForEveryTechnique) {
   Scene scene;
   scene.lights.push_back(Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f));
