@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "fuzz/corpus_files.h"
 #include "fuzz/fuzz_inputs.h"
 #include "penumbra/error.h"
 #include "penumbra/scene_io.h"
@@ -20,20 +21,9 @@
 namespace penumbra {
 namespace {
 
-const std::filesystem::path kCorpus = std::filesystem::path(PENUMBRA_SOURCE_DIR) / "tests/fuzz/corpus";
-
-std::vector<uint8_t> readBytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::vector<std::filesystem::path> corpusFiles(const std::string& target) {
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(kCorpus / target))
-    if (entry.is_regular_file()) files.push_back(entry.path());
-  std::sort(files.begin(), files.end());
-  return files;
-}
+using fuzz::corpusFiles;
+using fuzz::readBytes;
+const std::filesystem::path kCorpus = fuzz::kCorpusRoot;
 
 class ScratchDir {
  public:

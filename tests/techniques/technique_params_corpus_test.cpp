@@ -3,33 +3,24 @@
 // libFuzzer target calls (tests/fuzz/technique_params_inputs.h): each input must end in V in [0, 1]
 // or in a penumbra::Error, nothing else. The seeds whose outcome is known by construction are also
 // checked for it, so the replay would notice an entry point that refuses everything.
-#include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "fuzz/corpus_files.h"
 #include "fuzz/technique_params_inputs.h"
 
 namespace penumbra {
 namespace {
 
-const std::filesystem::path kCorpus = std::filesystem::path(PENUMBRA_SOURCE_DIR) / "tests/fuzz/corpus/technique_params";
-
-std::vector<uint8_t> readBytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using fuzz::readBytes;
+const std::filesystem::path kCorpus = fuzz::kCorpusRoot / "technique_params";
 
 TEST(TechniqueParamsCorpus, EveryInputEndsInVisibilityOrAnError) {
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(kCorpus))
-    if (entry.is_regular_file()) files.push_back(entry.path());
-  std::sort(files.begin(), files.end());
+  const std::vector<std::filesystem::path> files = fuzz::corpusFiles("technique_params");
   ASSERT_GE(files.size(), 20u) << "the corpus lives in " << kCorpus;
   for (const auto& file : files) {
     const std::vector<uint8_t> bytes = readBytes(file);
