@@ -171,7 +171,6 @@ const RecordedMisses kRecordedMisses[] = {
      "open: its 3x3 texel box leaves thin shadow lines of one to two pixels that the reference blurs away"},
     {"pcf", "umbra leaks", 1, "open"},
     {"pcss", "speckle", 8, "open: its 16-tap blocker search is noisy where thin parts cast narrow shadows"},
-    {"pcss", "umbra leaks", 3, "open"},
     {"multisample", "speckle", 2, "open"},
     {"plm", "speckle", 5, "open"},
     {"heidrich", "speckle", 3, "open"},
