@@ -41,9 +41,17 @@
 // Approximations (the sketch's): the blockers are replaced by one plane at their mean depth (so
 // overlapping occluders at different depths get one penumbra width); the light is a disk of radius
 // `light_size` facing the receivers — by default Light::extent(), the radius of the circle holding
-// the emitter (exact for sphere and disk lights, the circumscribed disk of a rect or polygon, half
-// the length of a segment); the map is taken from the centre sample, so blockers hidden behind
-// others from the centre are missed. Receiver-plane compare and bias as in shadow_map.h.
+// the emitter (exact for sphere and disk lights, the circumscribed disk of a polygon). Segment and
+// rect lights keep their own shape, as the sketch's similar triangles hold for any light shape
+// (through a blocker point the receiver sees the light's outline, point-reflected and scaled): a
+// segment's taps lie evenly along the segment's image in the map (the direction of its light-space
+// x-y part; radius by default that part's length, half the segment foreshortened as the map sees
+// it), so its shadow blurs along the segment only and stays as sharp as a point light's across it;
+// a rect's taps cover the parallelogram of its light-space x-y half-edges (radius by default the
+// larger of its half-diagonals there), where the circumscribed disk would blur a segment's shadow
+// across it and a rect's up to sqrt(2) too wide. Neither pattern turns per pixel (`rotate` is for
+// the disks). The map is taken from the centre sample, so blockers hidden behind others from the
+// centre are missed. Receiver-plane compare and bias as in shadow_map.h.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -65,7 +73,7 @@ struct PcssOptions {
   int mapSize = 1024;                //!< texels per side of the light map, in [16, 8192]
   int blockerSamples = 16;           //!< taps of the blocker search, in [1, 1024]
   int filterSamples = 32;            //!< taps of the PCF filter, in [1, 1024]
-  std::optional<float> lightSize;    //!< light radius, world units (directional: tan of the half angle); empty = Light::extent()
+  std::optional<float> lightSize;    //!< light radius, world units (directional: tan of the half angle); empty = Light::extent() (segment, rect: as the map sees it, file comment)
   bool rotate = true;                //!< rotate the sample disks per pixel by a hash
   float bilinearMaxRadius = 4.0f;    //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel), >= 0
   DepthBias bias;                    //!< depth-compare bias (shadow_map.h)
@@ -74,7 +82,11 @@ struct PcssOptions {
 class PcssTechnique final : public ShadowTechnique {
  public:
   explicit PcssTechnique(const PcssOptions& options)
-      : options_(options), blockerDisk_(vogelDisk(options.blockerSamples)), filterDisk_(vogelDisk(options.filterSamples)) {}
+      : options_(options),
+        blockerDisk_(vogelDisk(options.blockerSamples)),
+        filterDisk_(vogelDisk(options.filterSamples)),
+        blockerLine_(linePattern(options.blockerSamples)),
+        filterLine_(linePattern(options.filterSamples)) {}
 
   std::string_view name() const override { return "pcss"; }
 
@@ -83,6 +95,29 @@ class PcssTechnique final : public ShadowTechnique {
     Timer timer;
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
     createShadowMap(scene, light, options_.mapSize, map_);
+    // Segment and rect lights: the taps lie on the light's own image in the map (see the file
+    // comment), not on the disk that circumscribes it.
+    lineDirection_.reset();
+    rectPatterns_ = false;
+    if (light.shape() == LightShape::Segment) {
+      const Vec3 lsU = map_.lsFrame.toLocal(0.5f * (light.b() - light.a()));
+      const Vec2 across(lsU.x, -lsU.y);  // map s grows with light-space x, t falls with y
+      const float length = glm::length(across);
+      if (length > 0.0f) {
+        lineDirection_ = across / length;
+        if (!options_.lightSize) lightSize_ = length;
+      }
+    } else if (light.shape() == LightShape::Rect) {
+      const Vec3 lsU = map_.lsFrame.toLocal(light.u()), lsV = map_.lsFrame.toLocal(light.v());
+      const Vec2 U(lsU.x, -lsU.y), V(lsV.x, -lsV.y);
+      const float radius = std::max(glm::length(U + V), glm::length(U - V));
+      if (radius > 0.0f) {
+        rectPatterns_ = true;
+        if (!options_.lightSize) lightSize_ = radius;
+        blockerRect_ = rectPattern(options_.blockerSamples, U / radius, V / radius);
+        filterRect_ = rectPattern(options_.filterSamples, U / radius, V / radius);
+      }
+    }
     zMin_ = minMapDepth(map_);
     // The search radius's factors that do not depend on the pixel (one division per pixel fewer).
     searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;
@@ -134,13 +169,18 @@ class PcssTechnique final : public ShadowTechnique {
     const float zr = r.lsDepth;
     // In texels: the world radius at the receiver's depth over the texel size there.
     const float searchRadius = searchScale_ * (zr - zMin_) / r.texelWorld;
-    const Vec2 rotation = options_.rotate ? rotations_(x, y) : Vec2(1.0f, 0.0f);
-    const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerDisk_, rotation);
+    // The disks turn per pixel; a segment's line and a rect's pattern keep the light's orientation.
+    const Vec2 rotation = lineDirection_            ? *lineDirection_
+                          : !rectPatterns_ && options_.rotate ? rotations_(x, y)
+                                                              : Vec2(1.0f, 0.0f);
+    const std::vector<Vec2>& blockerPattern = lineDirection_ ? blockerLine_ : rectPatterns_ ? blockerRect_ : blockerDisk_;
+    const std::vector<Vec2>& filterPattern = lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
+    const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerPattern, rotation);
     // No blocker: lit. Every search tap blocked: umbra. The filter disk lies inside the search disk
     // (z_b >= zMin makes w <= the search radius), so filtering would find (nearly) only blockers
     // too; skipping it halves the cost of PCSS in shadowed regions (NVIDIA's PCSS sample does the
     // same).
-    if (blockers.blockers == 0 || blockers.blockers == static_cast<int>(blockerDisk_.size())) {
+    if (blockers.blockers == 0 || blockers.blockers == static_cast<int>(blockerPattern.size())) {
       ++counts[kSearchOnly];
       return blockers.blockers == 0 ? 1.0f : 0.0f;
     }
@@ -153,14 +193,40 @@ class PcssTechnique final : public ShadowTechnique {
     const float filterRadius = widthTexels > 0.0f ? std::min(widthTexels, maxRadius) : 0.0f;
     if (filterRadius <= options_.bilinearMaxRadius) {
       ++counts[kFilterBilinear];
-      return pcfDisk(map_, r, filterRadius, filterDisk_, rotation);
+      return pcfDisk(map_, r, filterRadius, filterPattern, rotation);
     }
     ++counts[kFilterNearest];
-    return pcfDiskNearest(map_, r, filterRadius, filterDisk_, rotation);
+    return pcfDiskNearest(map_, r, filterRadius, filterPattern, rotation);
   }
 
+  // n offsets evenly spread over [-1, 1] x {0}, the midpoints of n equal pieces (a segment light's
+  // taps, turned onto its image in the map).
+  static std::vector<Vec2> linePattern(int n) {
+    std::vector<Vec2> pattern(static_cast<size_t>(std::max(n, 0)));
+    for (int i = 0; i < n; ++i)
+      pattern[static_cast<size_t>(i)] = Vec2((2.0f * static_cast<float>(i) + 1.0f) / static_cast<float>(n) - 1.0f, 0.0f);
+    return pattern;
+  }
+
+  // n offsets a U + b V spread over the parallelogram of half-edges U, V (a rect light's image in
+  // the map, scaled to its circumscribed radius): (a, b) on a Fibonacci lattice of [-1, 1]^2, a the
+  // midpoints of n equal pieces and b stepping by the golden ratio, so every row and column of the
+  // rect is sampled evenly.
+  static std::vector<Vec2> rectPattern(int n, const Vec2& U, const Vec2& V) {
+    std::vector<Vec2> pattern(static_cast<size_t>(std::max(n, 0)));
+    for (int i = 0; i < n; ++i) {
+      const float a = 2.0f * (static_cast<float>(i) + 0.5f) / static_cast<float>(n) - 1.0f;
+      const float g = static_cast<float>(i) * 0.6180339887f + 0.5f;
+      const float b = 2.0f * (g - std::floor(g)) - 1.0f;
+      pattern[static_cast<size_t>(i)] = a * U + b * V;
+    }
+    return pattern;
+  }
   PcssOptions options_;
-  std::vector<Vec2> blockerDisk_, filterDisk_;
+  std::vector<Vec2> blockerDisk_, filterDisk_, blockerLine_, filterLine_;
+  std::optional<Vec2> lineDirection_;  //!< segment lights: the unit direction of the segment's image in the map
+  bool rectPatterns_ = false;          //!< rect lights: blockerRect_ and filterRect_ replace the disks
+  std::vector<Vec2> blockerRect_, filterRect_;
   PixelRotations rotations_;
   LightMap map_;
   float lightSize_ = 0.0f;
@@ -182,11 +248,11 @@ TechniqueInfo pcssTechniqueInfo() {
       ParamSpec{.name = "filter_samples", .type = ParamType::Int, .defaultValue = int64_t{32}, .min = 1.0, .max = 1024.0, .choices = {},
                 .unit = "samples", .help = "taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"},
       ParamSpec{.name = "light_size", .type = ParamType::Float, .defaultValue = 0.0, .min = 1e-6, .max = 1e6, .choices = {}, .unit = "world units",
-                .help = "light radius (directional: tan of half the angular diameter); auto = the light's extent",
+                .help = "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its half-length, rect: its larger half-diagonal, both foreshortened as the map sees them)",
                 .autoDefault = true},
       ParamSpec{.name = "rotate", .type = ParamType::Bool, .defaultValue = true, .min = std::nullopt,
                 .max = std::nullopt, .choices = {}, .unit = "",
-                .help = "rotate the sample disks per pixel by a hash (noise instead of banding)"},
+                .help = "rotate the sample disks per pixel by a hash (noise instead of banding); segment and rect lights keep their orientation"},
       ParamSpec{.name = "bilinear_max_radius", .type = ParamType::Float, .defaultValue = 4.0, .min = 0.0,
                 .max = static_cast<double>(kMaxShadowMapSize), .choices = {}, .unit = "texels",
                 .help = "filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "

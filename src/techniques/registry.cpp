@@ -38,7 +38,7 @@ std::string lightHandling(const std::string& name) {
       {"hard", "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can lie off the emitter"},
       {"raytraced-hard", "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can lie off the emitter"},
       {"pcf", "every shape, as a point at its centre sample (a concave polygon: its area centroid); the kernel does not follow the light's size"},
-      {"pcss", "every shape; light_size defaults to Light::extent(), so a polygon, concave or not, is the disk around its centroid that holds it"},
+      {"pcss", "every shape; light_size defaults to Light::extent(), so a polygon, concave or not, is the disk around its centroid that holds it; a segment is a line of taps along its image in the map, a rect the parallelogram of its image"},
       {"multisample", "every shape, sampled over its emitting area; a concave polygon uniformly by area, so its shape is kept"},
       {"brabec", "every shape; r_max follows Light::extent(), so a polygon, concave or not, is the disk around its centroid that holds it"},
       {"plm", "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its centroid; segment refused"},
