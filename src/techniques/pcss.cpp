@@ -128,38 +128,39 @@ class PcssTechnique final : public ShadowTechnique {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
     Timer timer;
     v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
-    std::array<std::atomic<int64_t>, kPathCount> counts{};
+    std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
     // As forEachReceiverPixel, with per-range counts of the paths the pixels took.
     tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-      std::array<int64_t, kPathCount> local{};
+      std::array<int64_t, kPathCount + 1> local{};
       for (int y = rows.begin(); y < rows.end(); ++y) {
         float* out = v.row(y);
         for (int x = 0; x < gbuffer.width(); ++x)
           if (gbuffer.hit(x, y)) out[x] = pixelVisibility(gbuffer, x, y, local);
       }
-      for (size_t k = 0; k < kPathCount; ++k) counts[k] += local[k];
+      for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
     timings_.add("visibility", timer.elapsedMs());
     int64_t total = 0;
-    for (const auto& c : counts) total += c;
-    for (size_t k = 0; k < kPathCount; ++k)
+    for (size_t k = 0; k < kPathCount; ++k) total += counts[k];
+    for (size_t k = 0; k <= kPathCount; ++k)
       pathFractions_[k] = total > 0 ? static_cast<double>(counts[k]) / static_cast<double>(total) : 0.0;
   }
 
   PassTimings timings() const override { return timings_; }
   std::vector<std::pair<std::string, double>> stats() const override {
     std::vector<std::pair<std::string, double>> s = {{"light_size", lightSize_}, {"min_map_depth", zMin_}};
-    for (size_t k = 0; k < kPathCount; ++k) s.emplace_back(kPathNames[k], pathFractions_[k]);
+    for (size_t k = 0; k <= kPathCount; ++k) s.emplace_back(kPathNames[k], pathFractions_[k]);
     return s;
   }
 
  private:
   // Where a pixel's V was decided, reported as fractions of the receiver pixels (stats()).
-  enum Path : size_t { kNoSearch, kSearchOnly, kFilterBilinear, kFilterNearest, kPathCount };
-  static constexpr std::array<const char*, kPathCount> kPathNames = {"frac_no_search", "frac_search_only",
-                                                                     "frac_filter_bilinear", "frac_filter_nearest"};
+  // kClamped counts, beside the paths, the pixels whose search or filter radius was clamped to the map.
+  enum Path : size_t { kNoSearch, kSearchOnly, kFilterBilinear, kFilterNearest, kPathCount, kClamped = kPathCount };
+  static constexpr std::array<const char*, kPathCount + 1> kPathNames = {
+      "frac_no_search", "frac_search_only", "frac_filter_bilinear", "frac_filter_nearest", "frac_clamped_to_map"};
 
-  float pixelVisibility(const GBuffer& gbuffer, int x, int y, std::array<int64_t, kPathCount>& counts) const {
+  float pixelVisibility(const GBuffer& gbuffer, int x, int y, std::array<int64_t, kPathCount + 1>& counts) const {
     const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
     if (!r.inMap || !(r.lsDepth > zMin_)) {
       ++counts[kNoSearch];
@@ -175,6 +176,7 @@ class PcssTechnique final : public ShadowTechnique {
                                                               : Vec2(1.0f, 0.0f);
     const std::vector<Vec2>& blockerPattern = lineDirection_ ? blockerLine_ : rectPatterns_ ? blockerRect_ : blockerDisk_;
     const std::vector<Vec2>& filterPattern = lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
+    counts[kClamped] += searchRadius > maxRadius;
     const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerPattern, rotation);
     // No blocker: lit. Every search tap blocked: umbra. The filter disk lies inside the search disk
     // (z_b >= zMin makes w <= the search radius), so filtering would find (nearly) only blockers
@@ -191,6 +193,7 @@ class PcssTechnique final : public ShadowTechnique {
     // penumbra, and a filter radius outside [0, map size] would read outside the map.
     const float widthTexels = penumbraWorld / r.texelWorld;
     const float filterRadius = widthTexels > 0.0f ? std::min(widthTexels, maxRadius) : 0.0f;
+    counts[kClamped] += widthTexels > maxRadius && !(searchRadius > maxRadius);
     if (filterRadius <= options_.bilinearMaxRadius) {
       ++counts[kFilterBilinear];
       return pcfDisk(map_, r, filterRadius, filterPattern, rotation);
@@ -233,7 +236,7 @@ class PcssTechnique final : public ShadowTechnique {
   float zMin_ = 0.0f;
   float searchScale_ = 0.0f;  //!< lightSize_ (orthographic) or lightSize_ / zMin_ (perspective)
   PassTimings timings_;
-  std::array<double, kPathCount> pathFractions_{};
+  std::array<double, kPathCount + 1> pathFractions_{};
 };
 
 TechniqueInfo pcssTechniqueInfo() {
@@ -248,7 +251,7 @@ TechniqueInfo pcssTechniqueInfo() {
       ParamSpec{.name = "filter_samples", .type = ParamType::Int, .defaultValue = int64_t{32}, .min = 1.0, .max = 1024.0, .choices = {},
                 .unit = "samples", .help = "taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"},
       ParamSpec{.name = "light_size", .type = ParamType::Float, .defaultValue = 0.0, .min = 1e-6, .max = 1e6, .choices = {}, .unit = "world units",
-                .help = "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its half-length, rect: its larger half-diagonal, both foreshortened as the map sees them)",
+                .help = "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)",
                 .autoDefault = true},
       ParamSpec{.name = "rotate", .type = ParamType::Bool, .defaultValue = true, .min = std::nullopt,
                 .max = std::nullopt, .choices = {}, .unit = "",

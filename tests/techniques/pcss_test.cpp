@@ -232,6 +232,23 @@ TEST(Pcss, LightsWiderThanTheSceneStayInsideTheMap) {
     const Image<float> v = runTechnique("pcss", scene, gbuffer, {size, "map_size=256"});
     for (size_t i = 0; i < v.size(); ++i) ASSERT_TRUE(v[i] >= 0.0f && v[i] <= 1.0f) << i << " " << v[i];
   }
+  // The clamp is the documented rule, and the run says how often it applied (stat frac_clamped_to_map).
+  const auto clampedFraction = [&](const char* size) {
+    auto pcss = createTechnique("pcss", [&] {
+      ParamSet given;
+      given.setFromKeyValue(size, "test");
+      given.setFromKeyValue("map_size=256", "test");
+      return given;
+    }());
+    Image<float> v;
+    pcss->prepare(scene, scene.lights[0]);
+    pcss->visibility(gbuffer, v);
+    for (const auto& [name, value] : pcss->stats())
+      if (name == "frac_clamped_to_map") return value;
+    return -1.0;
+  };
+  EXPECT_GT(clampedFraction("light_size=1000000"), 0.5);
+  EXPECT_EQ(clampedFraction("light_size=0.5"), 0.0);
 }
 
 }  // namespace
