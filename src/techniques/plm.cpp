@@ -208,6 +208,10 @@ struct MeshEdges {
 
 struct EdgeCache::Impl {
   std::vector<std::optional<MeshEdges>> meshes;  //!< per object index
+  // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
+  // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
+  std::vector<uint8_t> front, isSilhouette;
+  std::vector<Edge> candidates;
 };
 
 EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
@@ -219,9 +223,9 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   EdgeCache& edgeCache = cache ? *cache : local;
   edgeCache.impl_->meshes.resize(scene.objects.size());
   std::vector<Edge> edges;
-  std::vector<uint8_t> front;
-  std::vector<Edge> candidates;
-  std::vector<uint8_t> isSilhouette;
+  std::vector<uint8_t>& front = edgeCache.impl_->front;
+  std::vector<uint8_t>& isSilhouette = edgeCache.impl_->isSilhouette;
+  std::vector<Edge>& candidates = edgeCache.impl_->candidates;
   for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
     const Object& object = scene.objects[objectIndex];
     const size_t firstEdge = edges.size();
