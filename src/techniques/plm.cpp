@@ -75,6 +75,10 @@
 #include <memory>
 #include <optional>
 
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -469,32 +473,70 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           const int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = out.row(j);
-          // Two passes over the span: the geometry of every texel without branches (the compiler
-          // vectorizes it), then the candidates that beat the texel's current winner through the
-          // filters, which only drop candidates and read other images.
+          // Two passes over the span: the geometry of every texel without branches (four texels to
+          // an SSE vector, the same operations in the same order as the scalar tail, so the same
+          // values bit for bit), then the candidates that beat the texel's current winner through
+          // the filters, which only drop candidates and read other images.
           const int count = si1 - si0 + 1;
           if (count <= 0) continue;
           float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
-          for (int m = 0; m < count; ++m) {
+          const float aqy = y - e.a.y, by = y - e.b.y;
+          int m = 0;
+#if defined(__SSE4_1__)
+          {
+            const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
+            const __m128 ax = _mm_set1_ps(e.a.x), bx = _mm_set1_ps(e.b.x), dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y);
+            const __m128 vAqy = _mm_set1_ps(aqy), vBy = _mm_set1_ps(by), vInvLength2 = _mm_set1_ps(invLength2);
+            const __m128 outX = _mm_set1_ps(e.outward.x), outY = _mm_set1_ps(e.outward.y);
+            const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
+            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB), dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
+            const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
+            const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
+            const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
+            for (; m + 4 <= count; m += 4) {
+              const __m128 qx = _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
+              const __m128 aqx = _mm_sub_ps(qx, ax);
+              const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
+              const __m128 u = _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
+              const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
+              const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
+              const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
+              const __m128 oy = _mm_blendv_ps(_mm_blendv_ps(sy, vBy, beyondB), vAqy, beforeA);
+              const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
+              const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
+              const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
+              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero), _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
+              const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
+              const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
+              const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
+              // outer ? wantOuter : wantInner (one of the two at least is wanted)
+              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
+              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted), _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
+              _mm_storeu_ps(spanU + m, u);
+              _mm_storeu_ps(spanC + m, c);
+              _mm_storeu_ps(spanDistance + m, distance);
+              _mm_storeu_ps(spanP + m, _mm_blendv_ps(inf, p, take));
+              const int outerBits = _mm_movemask_ps(outer);
+              for (int lane = 0; lane < 4; ++lane) spanOuter[m + lane] = static_cast<uint8_t>((outerBits >> lane) & 1);
+            }
+          }
+#endif
+          for (; m < count; ++m) {
             const float qx = static_cast<float>(si0 + m) + 0.5f;
-            const float aqx = qx - e.a.x, aqy = y - e.a.y;
+            const float aqx = qx - e.a.x;
             const float along = (aqx * d.x + aqy * d.y) * invLength2;
             const float u = std::min(std::max(along, 0.0f), 1.0f);
             // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
             // corner, so they tie there.
             const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
-            const float bx = qx - e.b.x, by = y - e.b.y, sx = aqx - u * d.x, sy = aqy - u * d.y;
-            const float ox = beforeA ? aqx : (beyondB ? bx : sx);
-            const float oy = beforeA ? aqy : (beyondB ? by : sy);
+            const float ox = beforeA ? aqx : (beyondB ? qx - e.b.x : aqx - u * d.x);
+            const float oy = beforeA ? aqy : (beyondB ? by : aqy - u * d.y);
             const float distance = std::sqrt(ox * ox + oy * oy);
             const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
-            const float across = aqx * e.outward.x + aqy * e.outward.y;
-            const bool outer = (endSide > 0.0f) | ((endSide == 0.0f) & (across >= 0.0f));
-            const float cMid = e.zetaA + u * (e.zetaB - e.zetaA);
-            const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : cMid);
+            const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
+            const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
             const float p = c + distance * space.ratePerTexel;
-            const float current = prio[m];
-            const bool take = !(distance > h) & (outer ? wantOuter : wantInner) & (p < current);
+            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m];
             spanU[m] = u;
             spanC[m] = c;
             spanDistance[m] = distance;
