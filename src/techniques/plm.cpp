@@ -66,6 +66,8 @@
 // contact with the receiver the depth bias lights the shadow, as in every shadow map. Lights: directional disks (an
 // orthographic map, as the paper) and sphere, disk, rect and polygon lights through the perspective
 // transform of plm.h; segment lights are rejected.
+// Cost: the fit of b traces rays (on `engine`, 121k triangles, about a third of prepare); the scene's
+// BVH for it is kept between prepares while every mesh's geometry is the same to the bit.
 // Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
 // (texels added to every ribbon's half-width), illumination_table (bool).
 #include "techniques/plm.h"

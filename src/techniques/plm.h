@@ -41,6 +41,11 @@
 // edge listed first, and edges
 // are binned to tiles processed in parallel in edge order, so the result is the same for any thread
 // count.
+//
+// Cost (docs/real-meshes.md, "Cost at 1024²"). The welding and edge matching depend on the geometry
+// alone and are kept between prepares (EdgeCache); an edge whose every candidate the hidden-shadow
+// test would drop is not rasterized at all (most silhouettes of a dense model lie behind its own
+// front); neither changes a texel.
 #pragma once
 
 #include <cstdint>
