@@ -83,6 +83,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
@@ -184,15 +185,17 @@ struct MeshEdges {
                            v[(k + 2) % 3]});
     }
     // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
-    std::sort(records.begin(), records.end(),
-              [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
+    // (key, use) orders the records totally (a use is one triangle's one edge), so a parallel sort
+    // gives the one order.
+    tbb::parallel_sort(records.begin(), records.end(),
+                       [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
     std::vector<std::pair<uint32_t, uint32_t>> order;  // (first use, first record) per edge
     for (size_t i = 0; i < records.size();) {
       order.emplace_back(records[i].use, static_cast<uint32_t>(i));
       const uint64_t key = records[i].key;
       while (i < records.size() && records[i].key == key) ++i;
     }
-    std::sort(order.begin(), order.end());
+    tbb::parallel_sort(order.begin(), order.end());  // first uses are distinct: one order
     a.clear();
     b.clear();
     firstUse.clear();
