@@ -65,9 +65,9 @@ class KirschTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
-    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Inner,
-                          options_.marginTexels, plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_,
-                          widths_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
+                          plm::RibbonSides::Inner, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_, widths_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -97,6 +97,7 @@ class KirschTechnique final : public ShadowTechnique {
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> widths_;
   Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
   PassTimings timings_;
 };
 

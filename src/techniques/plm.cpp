@@ -66,6 +66,8 @@
 // contact with the receiver the depth bias lights the shadow, as in every shadow map. Lights: directional disks (an
 // orthographic map, as the paper) and sphere, disk, rect and polygon lights through the perspective
 // transform of plm.h; segment lights are rejected.
+// Cost: the fit of b traces rays (on `engine`, 121k triangles, about a third of prepare); the scene's
+// BVH for it is kept between prepares while every mesh's geometry is the same to the bit.
 // Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
 // (texels added to every ribbon's half-width), illumination_table (bool).
 #include "techniques/plm.h"
@@ -75,8 +77,13 @@
 #include <memory>
 #include <optional>
 
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
@@ -85,6 +92,7 @@
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
 #include "raster/rasterizer.h"
+#include "rt/outer_objects.h"
 #include "techniques/shadow_map.h"
 
 namespace penumbra {
@@ -131,12 +139,6 @@ namespace {
 // the two rasterizations of one surface stays well inside it).
 constexpr float kBelowEdge = 1e-5f;
 
-struct EdgeUse {
-  uint32_t opposite[2] = {0, 0};  //!< world vertex opposite the edge in its first two triangles
-  int front = 0, back = 0;
-  int firstFront = -1;            //!< which of the two (0, 1) faces the light, -1 none
-};
-
 uint64_t edgeKey(uint32_t a, uint32_t b) {
   return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
 }
@@ -145,21 +147,28 @@ uint64_t edgeKey(uint32_t a, uint32_t b) {
 struct EdgeRecord {
   uint64_t key;
   uint32_t use;
+  uint32_t triangle;  //!< index among the mesh's kept triangles
   uint32_t opposite;  //!< the triangle's third (welded) vertex
-  bool front;
 };
 
 }  // namespace
 
-std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space) {
-  std::vector<Edge> edges;
-  for (const Object& object : scene.objects) {
-    const size_t firstEdge = edges.size();
-    std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
-    const Mesh& mesh = object.mesh;
-    // Weld by exact position: primitives repeat vertices where normals differ (a box's corners).
-    std::vector<Vec3> positions;
+// One mesh's edges, which depend on its geometry alone: vertices welded by exact position
+// (primitives repeat vertices where normals differ: a box's corners), the triangles kept (neither
+// two welded corners alike nor a degenerate normal) with their normal and centroid, and each edge's
+// uses by those triangles in triangle order, the edges in order of first use.
+struct MeshEdges {
+  rt::MeshFingerprint key;
+  std::vector<Vec3> positions;       //!< welded
+  std::vector<Vec3> normals, centroids;  //!< per kept triangle
+  std::vector<uint32_t> a, b;        //!< per edge: welded end points, a < b
+  std::vector<uint32_t> firstUse;    //!< per edge, and one past the last: its uses in the two arrays below
+  std::vector<uint32_t> useTriangle, useOpposite;
+
+  void build(const Mesh& mesh) {
     const std::vector<uint32_t> canonical = weldVertices(mesh.positions, positions);
+    normals.clear();
+    centroids.clear();
     std::vector<EdgeRecord> records;
     records.reserve(3 * mesh.triangles.size());
     for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
@@ -168,71 +177,136 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
       if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
       const Vec3 n = mesh.faceNormal(ti);
       if (!(glm::dot(n, n) > 0.0f)) continue;  // degenerate
-      const Vec3 centroid = (positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f;
-      const Vec3 toLight = light.isDirectional() ? light.direction() : light.center() - centroid;
-      const bool front = glm::dot(n, toLight) > 0.0f;
+      const auto kept = static_cast<uint32_t>(normals.size());
+      normals.push_back(n);
+      centroids.push_back((positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f);
       for (int k = 0; k < 3; ++k)
-        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)),
-                           v[(k + 2) % 3], front});
+        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)), kept,
+                           v[(k + 2) % 3]});
     }
     // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
-    std::stable_sort(records.begin(), records.end(), [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key; });
-    struct EdgeUses {
-      uint32_t firstUse;
-      uint64_t key;
-      EdgeUse use;
-    };
-    std::vector<EdgeUses> uses;
+    // (key, use) orders the records totally (a use is one triangle's one edge), so a parallel sort
+    // gives the one order.
+    tbb::parallel_sort(records.begin(), records.end(),
+                       [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
+    std::vector<std::pair<uint32_t, uint32_t>> order;  // (first use, first record) per edge
     for (size_t i = 0; i < records.size();) {
-      EdgeUses e{records[i].use, records[i].key, {}};
-      for (; i < records.size() && records[i].key == e.key; ++i) {
-        EdgeUse& use = e.use;
-        const int slot = use.front + use.back;
-        if (slot < 2) {
-          use.opposite[slot] = records[i].opposite;
-          if (records[i].front && use.firstFront < 0) use.firstFront = slot;
+      order.emplace_back(records[i].use, static_cast<uint32_t>(i));
+      const uint64_t key = records[i].key;
+      while (i < records.size() && records[i].key == key) ++i;
+    }
+    tbb::parallel_sort(order.begin(), order.end());  // first uses are distinct: one order
+    a.clear();
+    b.clear();
+    firstUse.clear();
+    useTriangle.clear();
+    useOpposite.clear();
+    for (const auto& [use, first] : order) {
+      const uint64_t key = records[first].key;
+      a.push_back(static_cast<uint32_t>(key >> 32));
+      b.push_back(static_cast<uint32_t>(key & 0xffffffffu));
+      firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
+      for (size_t i = first; i < records.size() && records[i].key == key; ++i) {
+        useTriangle.push_back(records[i].triangle);
+        useOpposite.push_back(records[i].opposite);
+      }
+    }
+    firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
+  }
+};
+
+struct EdgeCache::Impl {
+  std::vector<std::optional<MeshEdges>> meshes;  //!< per object index
+  // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
+  // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
+  std::vector<uint8_t> front, isSilhouette;
+  std::vector<Edge> candidates;
+};
+
+EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
+EdgeCache::~EdgeCache() = default;
+
+std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space,
+                                  EdgeCache* cache) {
+  EdgeCache local;
+  EdgeCache& edgeCache = cache ? *cache : local;
+  edgeCache.impl_->meshes.resize(scene.objects.size());
+  std::vector<Edge> edges;
+  std::vector<uint8_t>& front = edgeCache.impl_->front;
+  std::vector<uint8_t>& isSilhouette = edgeCache.impl_->isSilhouette;
+  std::vector<Edge>& candidates = edgeCache.impl_->candidates;
+  for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
+    const Object& object = scene.objects[objectIndex];
+    const size_t firstEdge = edges.size();
+    std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
+    std::optional<MeshEdges>& cached = edgeCache.impl_->meshes[objectIndex];
+    const rt::MeshFingerprint key = rt::meshFingerprint(object.mesh);
+    if (!cached || !(cached->key == key)) {
+      cached.emplace();
+      cached->build(object.mesh);
+      cached->key = key;
+    }
+    const MeshEdges& topology = *cached;
+    const std::vector<Vec3>& positions = topology.positions;
+    // A triangle faces the light when its normal points to the light's centre (directional: along its direction).
+    front.resize(topology.normals.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, front.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t t = range.begin(); t < range.end(); ++t) {
+        const Vec3 toLight = light.isDirectional() ? light.direction() : light.center() - topology.centroids[t];
+        front[t] = glm::dot(topology.normals[t], toLight) > 0.0f ? 1 : 0;
+      }
+    });
+    const size_t edgeCount = topology.a.size();
+    candidates.resize(edgeCount);
+    isSilhouette.assign(edgeCount, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, edgeCount, 1024), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const uint32_t u0 = topology.firstUse[k], u1 = topology.firstUse[k + 1];
+        const int count = static_cast<int>(u1 - u0);
+        int frontCount = 0;
+        for (uint32_t u = u0; u < u1; ++u) frontCount += front[topology.useTriangle[u]];
+        if (!(count == 1 || (frontCount > 0 && frontCount < count))) continue;
+        // The third vertices of the edge's first two triangles, and which of the two (0, 1) faces the light.
+        const int slots = std::min(count, 2);
+        int firstFront = -1;
+        for (int slot = 0; slot < slots && firstFront < 0; ++slot)
+          if (front[topology.useTriangle[u0 + static_cast<uint32_t>(slot)]]) firstFront = slot;
+        const Vec3& pa = positions[topology.a[k]];
+        const Vec3& pb = positions[topology.b[k]];
+        const Vec3 sa = map.project(pa), sb = map.project(pb);
+        if (!map.orthographic && !(sa.z > 0.0f && sb.z > 0.0f)) continue;  // behind a local light
+        Edge e;
+        e.a = Vec2(sa.x, sa.y);
+        e.b = Vec2(sb.x, sb.y);
+        const Vec2 d = e.b - e.a;
+        const float length = glm::length(d);
+        if (!(length > 1e-6f) || !std::isfinite(length)) continue;  // seen end-on
+        Vec2 normal(-d.y / length, d.x / length);
+        // The inner side holds the (front-facing) triangle's third vertex.
+        int order[2], orderCount = 0;
+        if (firstFront >= 0) order[orderCount++] = firstFront;
+        for (int slot = 0; slot < slots; ++slot)
+          if (slot != firstFront) order[orderCount++] = slot;
+        float side = 0.0f;
+        for (int q = 0; q < orderCount && !(std::abs(side) > 1e-6f * length); ++q) {
+          const Vec3 so = map.project(positions[topology.useOpposite[u0 + static_cast<uint32_t>(order[q])]]);
+          if (!map.orthographic && !(so.z > 0.0f)) continue;
+          side = glm::dot(Vec2(so.x, so.y) - e.a, normal);
         }
-        (records[i].front ? use.front : use.back) += 1;
+        if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
+        e.outward = side > 0.0f ? -normal : normal;
+        e.zetaA = space.zeta(sa.z);
+        e.zetaB = space.zeta(sb.z);
+        e.objectId = object.id;
+        candidates[k] = e;
+        isSilhouette[k] = 1;
       }
-      uses.push_back(e);
-    }
-    std::sort(uses.begin(), uses.end(), [](const EdgeUses& x, const EdgeUses& y) { return x.firstUse < y.firstUse; });
-    for (const EdgeUses& edgeUses : uses) {
-      const uint64_t key = edgeUses.key;
-      const EdgeUse& use = edgeUses.use;
-      const int count = use.front + use.back;
-      if (!(count == 1 || (use.front > 0 && use.back > 0))) continue;
-      const Vec3& pa = positions[static_cast<uint32_t>(key >> 32)];
-      const Vec3& pb = positions[static_cast<uint32_t>(key & 0xffffffffu)];
-      const Vec3 sa = map.project(pa), sb = map.project(pb);
-      if (!map.orthographic && !(sa.z > 0.0f && sb.z > 0.0f)) continue;  // behind a local light
-      Edge e;
-      e.a = Vec2(sa.x, sa.y);
-      e.b = Vec2(sb.x, sb.y);
-      const Vec2 d = e.b - e.a;
-      const float length = glm::length(d);
-      if (!(length > 1e-6f) || !std::isfinite(length)) continue;  // seen end-on
-      Vec2 normal(-d.y / length, d.x / length);
-      // The inner side holds the (front-facing) triangle's third vertex.
-      const int slots = std::min(count, 2);
-      int candidates[2], candidateCount = 0;
-      if (use.firstFront >= 0) candidates[candidateCount++] = use.firstFront;
-      for (int slot = 0; slot < slots; ++slot)
-        if (slot != use.firstFront) candidates[candidateCount++] = slot;
-      float side = 0.0f;
-      for (int q = 0; q < candidateCount && !(std::abs(side) > 1e-6f * length); ++q) {
-        const Vec3 so = map.project(positions[use.opposite[candidates[q]]]);
-        if (!map.orthographic && !(so.z > 0.0f)) continue;
-        side = glm::dot(Vec2(so.x, so.y) - e.a, normal);
+    });
+    for (size_t k = 0; k < edgeCount; ++k)
+      if (isSilhouette[k]) {
+        edges.push_back(candidates[k]);
+        ends.emplace_back(topology.a[k], topology.b[k]);
       }
-      if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
-      e.outward = side > 0.0f ? -normal : normal;
-      e.zetaA = space.zeta(sa.z);
-      e.zetaB = space.zeta(sb.z);
-      e.objectId = object.id;
-      edges.push_back(e);
-      ends.emplace_back(static_cast<uint32_t>(key >> 32), static_cast<uint32_t>(key & 0xffffffffu));
-    }
     // Corners: where exactly two silhouette edges of the object meet, the corner is convex when the
     // other edge leaves towards this edge's inner side.
     // (vertex, 2 * edge + (0: a, 1: b)), grouped by vertex.
@@ -317,7 +391,40 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
   };
   std::vector<Box> boxes(edges.size());
   std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
+  // An edge whose every candidate the hidden-shadow test drops (below) is not rasterized: where the
+  // topmost surface kHiddenProbeTexels beyond each point of the edge lies above the edge's nearest
+  // end (a contour behind the object's own front, most silhouettes of a dense model). Probed at
+  // quarter-texel steps along the edge, each with the 3 x 3 texels around it (every probe texel of
+  // the per-texel test lies within them), and against the edge's least depth, so that a skipped
+  // edge is one the per-texel test would have dropped everywhere.
+  const auto hidden = [&](const Edge& e) {
+    const Image<float>* top = filter.topDepth;
+    if (!top) return false;
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float cBound = cMin - 1e-5f * std::abs(cMin);  // below every c of the edge, rounding included
+    const Vec2 d = e.b - e.a;
+    const int steps = std::max(1, static_cast<int>(std::ceil(4.0f * glm::length(d))));
+    if (steps > 4 * mapSize) return false;
+    for (int q = 0; q <= steps; ++q) {
+      const float u = static_cast<float>(q) / static_cast<float>(steps);
+      const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
+      const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int x = pi + di, y = pj + dj;
+          if (x < 0 || y < 0 || x >= mapSize || y >= mapSize) return false;
+          const float depth = (*top)(x, y);
+          if (!(std::isfinite(depth) && space.zeta(depth) < cBound)) return false;
+        }
+    }
+    return true;
+  };
+  std::vector<uint8_t> skip(edges.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) skip[k] = hidden(edges[k]) ? 1 : 0;
+  });
   for (size_t k = 0; k < edges.size(); ++k) {
+    if (skip[k]) continue;
     const Edge& e = edges[k];
     const float cMin = std::min(e.zetaA, e.zetaB);
     const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
@@ -335,8 +442,13 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
   }
   const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
+    // The tile's priorities (texels are the tile's alone: no other task writes them), and one span's geometry.
+    float priority[kTile * kTile];
+    float spanU[kTile], spanC[kTile], spanDistance[kTile], spanP[kTile];
+    uint8_t spanOuter[kTile];
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
+      std::fill(priority, priority + kTile * kTile, kInfinity);
       for (uint32_t k : bins[static_cast<size_t>(tile)]) {
         const Edge& e = edges[k];
         const Box& box = boxes[k];
@@ -344,21 +456,103 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
         const float invLength2 = 1.0f / glm::dot(d, d);
         const int i0 = std::max(box.i0, ti * kTile), i1 = std::min(box.i1, ti * kTile + kTile - 1);
         const int j0 = std::max(box.j0, tj * kTile), j1 = std::min(box.j1, tj * kTile + kTile - 1);
+        const float xLo = std::min(e.a.x, e.b.x), xHi = std::max(e.a.x, e.b.x);
+        const float yLo = std::min(e.a.y, e.b.y), yHi = std::max(e.a.y, e.b.y);
+        const float h = box.halfWidth;
         for (int j = j0; j <= j1; ++j) {
+          // The texels of the row within h of the segment lie within h of its bounding box and
+          // within h of its line: only that span is visited (widened by a texel against rounding;
+          // the exact test below decides).
+          const float y = static_cast<float>(j) + 0.5f;
+          const float dy = std::max({0.0f, yLo - y, y - yHi});
+          if (dy > h + 1.0f) continue;
+          const float reach = std::sqrt(std::max(h * h - dy * dy, 0.0f));
+          float spanLo = xLo - reach, spanHi = xHi + reach;
+          if (std::abs(e.outward.x) > 1e-3f) {
+            // |(q - a) . n| <= h along the row, solved for q.x.
+            const float across = (y - e.a.y) * e.outward.y;
+            const float x0 = e.a.x + (-h - across) / e.outward.x, x1 = e.a.x + (h - across) / e.outward.x;
+            spanLo = std::max(spanLo, std::min(x0, x1));
+            spanHi = std::min(spanHi, std::max(x0, x1));
+          }
+          const int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
+          const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = out.row(j);
-          for (int i = i0; i <= i1; ++i) {
-            const Vec2 q(static_cast<float>(i) + 0.5f, static_cast<float>(j) + 0.5f);
-            const Vec2 aq = q - e.a;
-            const float along = glm::dot(aq, d) * invLength2;
-            const float u = std::clamp(along, 0.0f, 1.0f);
+          // Two passes over the span: the geometry of every texel without branches (four texels to
+          // an SSE vector, the same operations in the same order as the scalar tail, so the same
+          // values bit for bit), then the candidates that beat the texel's current winner through
+          // the filters, which only drop candidates and read other images.
+          const int count = si1 - si0 + 1;
+          if (count <= 0) continue;
+          float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
+          const float aqy = y - e.a.y, by = y - e.b.y;
+          int m = 0;
+#if defined(__SSE4_1__)
+          {
+            const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
+            const __m128 ax = _mm_set1_ps(e.a.x), bx = _mm_set1_ps(e.b.x), dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y);
+            const __m128 vAqy = _mm_set1_ps(aqy), vBy = _mm_set1_ps(by), vInvLength2 = _mm_set1_ps(invLength2);
+            const __m128 outX = _mm_set1_ps(e.outward.x), outY = _mm_set1_ps(e.outward.y);
+            const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
+            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB), dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
+            const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
+            const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
+            const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
+            for (; m + 4 <= count; m += 4) {
+              const __m128 qx = _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
+              const __m128 aqx = _mm_sub_ps(qx, ax);
+              const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
+              const __m128 u = _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
+              const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
+              const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
+              const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
+              const __m128 oy = _mm_blendv_ps(_mm_blendv_ps(sy, vBy, beyondB), vAqy, beforeA);
+              const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
+              const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
+              const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
+              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero), _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
+              const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
+              const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
+              const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
+              // outer ? wantOuter : wantInner (one of the two at least is wanted)
+              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
+              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted), _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
+              _mm_storeu_ps(spanU + m, u);
+              _mm_storeu_ps(spanC + m, c);
+              _mm_storeu_ps(spanDistance + m, distance);
+              _mm_storeu_ps(spanP + m, _mm_blendv_ps(inf, p, take));
+              const int outerBits = _mm_movemask_ps(outer);
+              for (int lane = 0; lane < 4; ++lane) spanOuter[m + lane] = static_cast<uint8_t>((outerBits >> lane) & 1);
+            }
+          }
+#endif
+          for (; m < count; ++m) {
+            const float qx = static_cast<float>(si0 + m) + 0.5f;
+            const float aqx = qx - e.a.x;
+            const float along = (aqx * d.x + aqy * d.y) * invLength2;
+            const float u = std::min(std::max(along, 0.0f), 1.0f);
             // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
             // corner, so they tie there.
-            const Vec2 offset = along <= 0.0f ? aq : along >= 1.0f ? q - e.b : aq - u * d;
-            const float distance = glm::length(offset);
-            if (distance > box.halfWidth) continue;
-            const float endSide = along <= 0.0f ? e.endSideA : along >= 1.0f ? e.endSideB : 0.0f;
-            const bool outer = endSide != 0.0f ? endSide > 0.0f : glm::dot(aq, e.outward) >= 0.0f;
-            if (outer ? !wantOuter : !wantInner) continue;
+            const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
+            const float ox = beforeA ? aqx : (beyondB ? qx - e.b.x : aqx - u * d.x);
+            const float oy = beforeA ? aqy : (beyondB ? by : aqy - u * d.y);
+            const float distance = std::sqrt(ox * ox + oy * oy);
+            const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
+            const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
+            const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
+            const float p = c + distance * space.ratePerTexel;
+            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m];
+            spanU[m] = u;
+            spanC[m] = c;
+            spanDistance[m] = distance;
+            spanP[m] = take ? p : kInfinity;
+            spanOuter[m] = outer ? 1 : 0;
+          }
+          for (int m = 0; m < count; ++m) {
+            if (!(spanP[m] < prio[m])) continue;
+            const int i = si0 + m;
+            const float u = spanU[m], c = spanC[m], distance = spanDistance[m], p = spanP[m];
+            const bool outer = spanOuter[m] != 0;
             const Image<int32_t>* coverage = filter.coverage;
             const bool ownObject = !coverage || (*coverage)(i, j) == e.objectId;
             if (!outer && !ownObject) continue;
@@ -367,7 +561,6 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
             const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
             if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId) continue;
-            const float c = along <= 0.0f ? e.zetaA : along >= 1.0f ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA);
             if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
             if (const Image<float>* top = filter.topDepth) {
               // Depths as zeta; an empty texel (infinite depth) lies below everything.
@@ -375,8 +568,8 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               if ((outer || !ownObject) && above((*top)(i, j))) continue;
               if (probeInMap && above((*top)(pi, pj))) continue;
             }
-            const float p = c + distance * space.ratePerTexel;
-            if (p < row[i].priority) row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
+            prio[m] = p;
+            row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
           }
         }
       }
@@ -435,7 +628,7 @@ class PlmTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     light_ = light;
-    edges_ = plm::silhouetteEdges(scene, light, map_, space_);
+    edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
@@ -445,22 +638,28 @@ class PlmTechnique final : public ShadowTechnique {
     limits_.reset(n, n, PlmTexel{});
     std::vector<int>& needLower = needLower_;  // texels whose ribbon needs the lower limit b
     needLower.clear();
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const float depth = map_.lsDepth(i, j);
-        const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
-        PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
-        const plm::RibbonTexel& r = ribbons(i, j);
-        if (r.covered()) {
-          texel.c = r.c;
-          texel.pi = r.w * space_.ratePerTexel;
-          texel.edge = r.edge;
-          if (r.w > 0.0f)  // raise g (step 2; see the file comment)
-            texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
-          needLower.push_back(j * n + i);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < n; ++i) {
+          const float depth = map_.lsDepth(i, j);
+          const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
+          PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
+          const plm::RibbonTexel& r = ribbons(i, j);
+          if (r.covered()) {
+            texel.c = r.c;
+            texel.pi = r.w * space_.ratePerTexel;
+            texel.edge = r.edge;
+            if (r.w > 0.0f)  // raise g (step 2; see the file comment)
+              texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
+          }
+          limits_(i, j) = texel;
         }
-        limits_(i, j) = texel;
-      }
+    });
+    for (int j = 0; j < n; ++j) {
+      const plm::RibbonTexel* row = ribbons.row(j);
+      for (int i = 0; i < n; ++i)
+        if (row[i].covered()) needLower.push_back(j * n + i);
+    }
     if (!needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
     // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
@@ -592,7 +791,17 @@ class PlmTechnique final : public ShadowTechnique {
   // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
   // more of this one than its edge accounts for, shadows the receivers (see the file comment).
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
-    const RayScene rays(scene);
+    // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
+    // positions and triangles are the same to the bit (a static scene under a moving light).
+    std::vector<rt::MeshFingerprint> key;
+    key.reserve(scene.objects.size());
+    for (const Object& object : scene.objects) key.push_back(rt::meshFingerprint(object.mesh));
+    if (!rays_ || key != raysKey_) {
+      rays_.reset();
+      rays_ = std::make_unique<RayScene>(scene);
+      raysKey_ = std::move(key);
+    }
+    const RayScene& rays = *rays_;
     const int n = map_.size;
     Vec2 pattern[kProfileSamples];
     for (int q = 0; q < kProfileSamples; ++q)
@@ -660,6 +869,9 @@ class PlmTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> ribbons_;
   std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
+  std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
+  std::vector<rt::MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
   PassTimings timings_;
 };
 

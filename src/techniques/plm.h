@@ -41,9 +41,15 @@
 // edge listed first, and edges
 // are binned to tiles processed in parallel in edge order, so the result is the same for any thread
 // count.
+//
+// Cost (docs/real-meshes.md, "Cost at 1024²"). The welding and edge matching depend on the geometry
+// alone and are kept between prepares (EdgeCache); an edge whose every candidate the hidden-shadow
+// test would drop is not rasterized at all (most silhouettes of a dense model lie behind its own
+// front); neither changes a texel.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "penumbra/image.h"
@@ -85,7 +91,25 @@ struct Edge {
   int32_t neighbourA = -1, neighbourB = -1;
 };
 
-std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space);
+// The meshes' welded vertices and edge adjacency, which depend on the geometry alone: a technique
+// passes the same cache to every prepare, and a mesh whose positions and triangles are the same to
+// the bit (rt::meshFingerprint) as at the cache's last use is not welded and matched again; only
+// the faces' orientation to the light and the silhouettes are found again.
+class EdgeCache {
+ public:
+  EdgeCache();
+  ~EdgeCache();
+  EdgeCache(const EdgeCache&) = delete;
+  EdgeCache& operator=(const EdgeCache&) = delete;
+
+ private:
+  friend std::vector<Edge> silhouetteEdges(const Scene&, const Light&, const LightMap&, const Space&, EdgeCache*);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space,
+                                  EdgeCache* cache = nullptr);
 
 inline constexpr float kRibbonBorderTexels = 1.5f;
 

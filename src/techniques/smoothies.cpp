@@ -63,8 +63,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
-    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_), space_, map_.size, plm::RibbonSides::Outer,
-                          options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
+                          plm::RibbonSides::Outer, options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
     timings_.add("prepare", timer.elapsedMs());
   }
 
@@ -94,6 +94,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> smoothies_;
   Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
   PassTimings timings_;
 };
 

@@ -1,0 +1,110 @@
+// Prepare against triangle count, for every single-sample technique, on a real mesh: the built-in
+// `wuson` scene (assimp-testmodels' Wuson, fitted onto its ground plane) with every triangle of
+// every object split into 4 (edge midpoints, shared between neighbours, so the mesh stays connected
+// and its shape is unchanged) 0 to 3 times: 1x, 4x, 16x and 64x the triangles (3.7k to 239k). The shape being the
+// same, the silhouette edges grow as the square root of the triangles (each silhouette edge is
+// split in two per level) while the welding, edge matching and rasterization grow with the
+// triangles themselves.
+//
+// Each iteration makes the technique afresh and times two prepares under light 0 (rect; heidrich
+// under light 4, a segment, the only shape it takes): the first, which builds every cache a
+// technique keeps while the geometry is unchanged (plm's, smoothies' and kirsch's edge adjacency,
+// plm's and parker's BVH), and the second, a steady-state frame as `penumbra bench` quotes it.
+// Counters: triangles; first_ms and prepare_ms, the means of the two; first_us_per_triangle and
+// prepare_us_per_triangle, the same per triangle: flat across the sizes when prepare grows linearly
+// with the triangle count, falling where a part of it does not depend on the triangles (the passes
+// over the 1024^2 map of the shadow-map techniques), rising where it grows faster. Compare within
+// one run only (the machines are shared and noisy).
+#include "bench_common.h"
+
+#include <map>
+#include <utility>
+
+namespace penumbra {
+namespace {
+
+// Every triangle split into 4 at its edges' midpoints; midpoints shared by the two triangles of an
+// edge (keyed by the edge's vertex pair), shading normals interpolated where the mesh has them.
+Mesh subdivide(const Mesh& mesh) {
+  Mesh out;
+  out.positions = mesh.positions;
+  out.normals = mesh.normals;
+  const bool hasNormals = mesh.normals.size() == mesh.positions.size();
+  std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
+  const auto midpoint = [&](uint32_t a, uint32_t b) {
+    const auto key = std::minmax(a, b);
+    auto it = midpoints.find(key);
+    if (it != midpoints.end()) return it->second;
+    const auto index = static_cast<uint32_t>(out.positions.size());
+    out.positions.push_back(0.5f * (mesh.positions[a] + mesh.positions[b]));
+    if (hasNormals) {
+      const Vec3 n = mesh.normals[a] + mesh.normals[b];
+      out.normals.push_back(glm::dot(n, n) > 0.0f ? glm::normalize(n) : mesh.normals[a]);
+    }
+    midpoints.emplace(key, index);
+    return index;
+  };
+  out.triangles.reserve(4 * mesh.triangles.size());
+  for (const glm::uvec3& t : mesh.triangles) {
+    const uint32_t ab = midpoint(t.x, t.y), bc = midpoint(t.y, t.z), ca = midpoint(t.z, t.x);
+    out.triangles.emplace_back(t.x, ab, ca);
+    out.triangles.emplace_back(ab, t.y, bc);
+    out.triangles.emplace_back(ca, bc, t.z);
+    out.triangles.emplace_back(ab, bc, ca);
+  }
+  if (!hasNormals) out.normals.clear();
+  return out;
+}
+
+// `wuson` with its triangles times `factor` (1, 4 or 16); built once per factor.
+const Scene& refinedWuson(int factor) {
+  static std::map<int, Scene> cache;  // benchmark-only cache
+  auto it = cache.find(factor);
+  if (it != cache.end()) return it->second;
+  Scene scene = loadScene("wuson");
+  for (int f = 1; f < factor; f *= 4)
+    for (Object& object : scene.objects) object.mesh = subdivide(object.mesh);
+  return cache.emplace(factor, std::move(scene)).first->second;
+}
+
+void prepareScaling(benchmark::State& state, const std::string& technique) {
+  const Scene& scene = refinedWuson(static_cast<int>(state.range(0)));
+  const Light& light = scene.lights.at(technique == "heidrich" ? 4 : 0);
+  size_t triangles = 0;
+  for (const Object& o : scene.objects) triangles += o.mesh.triangles.size();
+  double firstMs = 0.0, steadyMs = 0.0;
+  for (auto _ : state) {
+    // A fresh technique: its first prepare builds every cache; the second is a steady-state frame.
+    auto t = bench::makeTechnique(technique);
+    Timer timer;
+    t->prepare(scene, light);
+    firstMs += timer.elapsedMs();
+    timer.reset();
+    t->prepare(scene, light);
+    steadyMs += timer.elapsedMs();
+  }
+  const double n = static_cast<double>(state.iterations()), perTriangle = 1000.0 / static_cast<double>(triangles);
+  state.counters["triangles"] = static_cast<double>(triangles);
+  state.counters["first_ms"] = firstMs / n;
+  state.counters["first_us_per_triangle"] = firstMs / n * perTriangle;
+  state.counters["prepare_ms"] = steadyMs / n;
+  state.counters["prepare_us_per_triangle"] = steadyMs / n * perTriangle;
+}
+
+#define PENUMBRA_PREPARE_SCALING(name)                                          \
+  BENCHMARK_CAPTURE(prepareScaling, name, std::string(#name))                   \
+      ->Arg(1)->Arg(4)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime()
+
+PENUMBRA_PREPARE_SCALING(hard);
+PENUMBRA_PREPARE_SCALING(pcss);
+PENUMBRA_PREPARE_SCALING(brabec);
+PENUMBRA_PREPARE_SCALING(plm);
+PENUMBRA_PREPARE_SCALING(smoothies);
+PENUMBRA_PREPARE_SCALING(kirsch);
+PENUMBRA_PREPARE_SCALING(heidrich);
+PENUMBRA_PREPARE_SCALING(parker);
+
+#undef PENUMBRA_PREPARE_SCALING
+
+}  // namespace
+}  // namespace penumbra
