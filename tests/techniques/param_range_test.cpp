@@ -62,7 +62,6 @@ std::vector<ParamValue> sweepValues(const ParamSpec& spec) {
   std::vector<ParamValue> out;
   for (double x : points) {
     if (spec.type == ParamType::Int) {
-      // pcf's kernel must be odd: a value the schema refuses is skipped by the caller's resolve.
       out.emplace_back(static_cast<int64_t>(std::llround(x)));
     } else {
       out.emplace_back(x);
