@@ -1,6 +1,6 @@
 // `penumbra bench`: per-pass wall-clock times (median over --repeat runs) of techniques on one
 // scene, with the time relative to a baseline measured in the same run (the machines are shared
-// and noisy, so only same-run ratios are comparable; DESIGN.md, "Conventions"). Micro-benchmarks
+// and noisy, so only same-run ratios are comparable; docs/architecture.md, "Conventions"). Micro-benchmarks
 // of individual kernels live in bench/ (Google Benchmark).
 #include <algorithm>
 #include <cstdio>

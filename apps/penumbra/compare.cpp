@@ -1,5 +1,5 @@
 // `penumbra compare`: every chosen technique against the ray-traced reference on the same
-// G-buffer (DESIGN.md, "Data flow"), written as a report a person opens to choose a technique:
+// G-buffer (docs/architecture.md, "Data flow"), written as a report a person opens to choose a technique:
 // DIR/report/index.html (sortable table, plots, images beside it), compare.json (every number of
 // the page), compare.md, and per technique the shaded image (PNG), V (EXR and PNG) and the signed
 // error map against the reference (PNG).

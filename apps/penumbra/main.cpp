@@ -1,5 +1,5 @@
-// The `penumbra` command-line tool: render, compare, bench, scenes, techniques (DESIGN.md,
-// "Layout"). Every bad input ends here as one line "penumbra: error: <message>" on stderr and a
+// The `penumbra` command-line tool: render, compare, bench, scenes, techniques (docs/architecture.md,
+// "Command-line tool"). Every bad input ends here as one line "penumbra: error: <message>" on stderr and a
 // non-zero exit code: 1 for penumbra::Error, CLI11's own code for a malformed command line.
 #include <cstdio>
 #include <exception>

@@ -1,4 +1,4 @@
-// The camera G-buffer (DESIGN.md): per pixel, hit flag, world position, shading normal, object id,
+// The camera G-buffer (docs/architecture.md): per pixel, hit flag, world position, shading normal, object id,
 // triangle id and view depth. Every technique consumes the same G-buffer, so differences in the
 // output are differences of the techniques alone.
 #pragma once

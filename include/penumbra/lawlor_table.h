@@ -1,5 +1,5 @@
 // The reproduction of Lawlor 2006's Fig. 10 and Fig. 11 ("Interpolation-friendly soft shadow maps",
-// CGVR, Sec. 4; papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md): RMSE8 of each
+// CGVR, Sec. 4; docs/papers.md): RMSE8 of each
 // technique row at each shadow-map size against a dense Monte Carlo truth on the `triangle` scene,
 // and the row of V images and signed difference images at one map size.
 //

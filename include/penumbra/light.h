@@ -1,4 +1,4 @@
-// Lights: the emitters of DESIGN.md ("Lights"), with the operations every technique and the
+// Lights: the emitters of docs/architecture.md ("Lights"), with the operations every technique and the
 // reference need — the centre sample, uniform stratified sampling of the emitting area as seen from
 // a point, the light's size, and its unshadowed irradiance.
 //
@@ -135,9 +135,10 @@ class Light {
   // Unshadowed irradiance at p with unit normal n (only for shading; never for V).
   float irradiance(const Vec3& wsP, const Vec3& wsN) const;
 
-  // Light space (DESIGN.md): origin at the centre sample, +z along the light's axis towards the
-  // scene. Planar lights use their normal (flipped to face the scene); spheres and segments point at
-  // the scene's centre; a directional light's +z is -direction. x and y complete a right-handed frame.
+  // Light space (docs/architecture.md, "Spaces"): origin at the centre sample, +z along the light's
+  // axis towards the scene. Planar lights use their normal (flipped to face the scene); spheres and
+  // segments point at the scene's centre; a directional light's +z is -direction. x and y complete a
+  // right-handed frame.
   Frame lightFrame(const Bounds3& sceneBounds) const;
 
  private:

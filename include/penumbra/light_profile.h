@@ -1,8 +1,8 @@
 // The visibility-to-illumination table of Lawlor 2006 ("Interpolation-friendly soft shadow maps",
-// CGVR; papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md, Appendix A and Fig. 12).
+// CGVR, Appendix A and Fig. 12; docs/papers.md).
 //
 // Several single-sample techniques (plm, smoothies, kirsch) compute l, the fraction of the light's
-// *diameter* left visible by a straight occluder edge (Lawlor's Equation 1). V (DESIGN.md) is the
+// *diameter* left visible by a straight occluder edge (Lawlor's Equation 1). V (docs/architecture.md) is the
 // fraction of the emitting *area*, weighted by the light's radiance profile. For a light whose
 // radiance depends on the radius alone, V is a fixed function f(l) of l along a straight edge, which
 // the table stores: V = f(l), odd-symmetric about (1/2, 1/2), f(l) = 1 - f(1 - l).

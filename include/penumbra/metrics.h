@@ -1,5 +1,5 @@
-// The error metric of DESIGN.md: RMSE8 and penumbra RMSE8 against the reference, over the error
-// mask (pixels that hit geometry whose normal faces the light centre).
+// The error metric (docs/architecture.md, "Vocabulary"): RMSE8 and penumbra RMSE8 against the
+// reference, over the error mask (pixels that hit geometry whose normal faces the light centre).
 #pragma once
 
 #include <cstdint>

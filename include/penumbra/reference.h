@@ -1,4 +1,4 @@
-// The `reference` technique (DESIGN.md, "Reference"): V estimated by stratified Monte Carlo ray
+// The `reference` technique (docs/architecture.md, "Reference"): V estimated by stratified Monte Carlo ray
 // tracing over the light's emitting area with Embree occlusion rays, deterministic for a seed, with
 // a per-pixel standard error. Declared here (rather than only registered) so that callers can read
 // the standard-error image of the last run.

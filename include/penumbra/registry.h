@@ -34,7 +34,7 @@ struct TechniqueInfo {
   bool hasParam(const std::string& param) const;
 };
 
-// All registered techniques, in the order of DESIGN.md's table.
+// All registered techniques, in the order of docs/architecture.md's table.
 const std::vector<TechniqueInfo>& techniqueRegistry();
 
 // The technique called `name`; throws Error listing the known names otherwise.

@@ -30,8 +30,8 @@ Srgb8 unmeasuredColor();
 Image<Vec3> signedErrorMap(const Image<float>& v, const Image<float>& reference, const Image<uint8_t>& mask,
                            double range);
 
-// The row with the most mask pixels whose reference V is in the penumbra (0.01, 0.99) (DESIGN.md,
-// "Penumbra RMSE8"); ties go to the topmost row; with no penumbra at all, the middle row.
+// The row with the most mask pixels whose reference V is in the penumbra (0.01, 0.99) (docs/architecture.md,
+// "Vocabulary"); ties go to the topmost row; with no penumbra at all, the middle row.
 int mostPenumbraRow(const Image<float>& reference, const Image<uint8_t>& mask);
 
 }  // namespace penumbra

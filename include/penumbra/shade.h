@@ -1,4 +1,4 @@
-// Shading of one frame (DESIGN.md, "Data flow"): radiance = albedo * (ambient + E_unshadowed * V),
+// Shading of one frame (docs/architecture.md, "Data flow"): radiance = albedo * (ambient + E_unshadowed * V),
 // a diffuse surface lit by one light whose unshadowed irradiance E is scaled by the visibility V of
 // a technique. Only for looking at results: the error metric compares V, never these colours.
 #pragma once

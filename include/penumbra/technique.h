@@ -1,4 +1,4 @@
-// The one interface every soft-shadow technique implements (DESIGN.md, "Techniques").
+// The one interface every soft-shadow technique implements (docs/architecture.md, "Techniques").
 // prepare() does the light-space work for one light (shadow maps, BVHs, ...); visibility() writes
 // V in [0, 1] for every camera pixel of the G-buffer (1 where the pixel sees nothing).
 #pragma once

@@ -1,5 +1,5 @@
-// The error metric of DESIGN.md ("Definitions"): RMSE8 = sqrt(mean((V - Vref)^2)) * 255 over the error
-// mask, the unit of the Lawlor 2006 comparison table (papers/lawlor-2006..., Fig. 10). Sums are
+// The error metric (docs/architecture.md, "Vocabulary"): RMSE8 = sqrt(mean((V - Vref)^2)) * 255 over the
+// error mask, the unit of the Lawlor 2006 comparison table (Fig. 10). Sums are
 // accumulated in double so the metric does not depend on image size through float round-off.
 #include "penumbra/metrics.h"
 
@@ -13,7 +13,7 @@ namespace penumbra {
 
 namespace {
 
-// Bounds of the open interval that counts a value as "in the penumbra" (DESIGN.md).
+// Bounds of the open interval that counts a value as "in the penumbra" (docs/architecture.md, "Vocabulary").
 constexpr float kPenumbraLow = 0.01f;
 constexpr float kPenumbraHigh = 0.99f;
 

@@ -1,5 +1,5 @@
 // Report writers (include/penumbra/report.h): JSON via nlohmann::json, Markdown and plain-text
-// tables by hand (the HTML page is html_report.cpp). Errors are in the units of DESIGN.md (RMSE8:
+// tables by hand (the HTML page is html_report.cpp). Errors are in the units of docs/architecture.md (RMSE8:
 // 8-bit steps of V, max error: V), times in milliseconds; the ratio to the baseline is total time
 // over the baseline's total time. Scan-line profiles are written rounded to 1e-4 in V (well below
 // the 1/255 step of RMSE8), the same values the page plots.

@@ -12,7 +12,8 @@ namespace penumbra {
 
 namespace {
 
-// Bounds of "in the penumbra" from DESIGN.md's penumbra RMSE8 (the same open interval as metrics.cpp).
+// Bounds of "in the penumbra" from the penumbra RMSE8 (docs/architecture.md, "Vocabulary"): the same
+// open interval as metrics.cpp.
 constexpr float kPenumbraLow = 0.01f;
 constexpr float kPenumbraHigh = 0.99f;
 

@@ -1,5 +1,5 @@
 // Shading for display (include/penumbra/shade.h): radiance = albedo * (ambient + E_unshadowed * V)
-// (DESIGN.md, "Data flow"). Approximations: diffuse surfaces only, one light, no interreflection;
+// (docs/architecture.md, "Data flow"). Approximations: diffuse surfaces only, one light, no interreflection;
 // the ambient term is constant (scene.ambient times the peak irradiance). Units: irradiance as
 // Light::irradiance returns it; the output is relative radiance, exposure-normalized to [0, 1]
 // for a fully lit receiver (values above 1 are clipped by the PNG writer).

@@ -1,7 +1,7 @@
 // renderLightMap and LightMap's projections (include/penumbra/raster.h): the scene seen from the
 // light's centre sample, as the depth map of Brabec & Seidel 2002 (Sec. 3) and of the shadow-map
-// family. Light space is DESIGN.md's: origin at the centre sample, +z along the light's axis
-// (Light::lightFrame) towards the scene, and lsDepth is the light-space z itself (linear, world
+// family. Light space (docs/architecture.md, "Spaces"): origin at the centre sample, +z along the
+// light's axis (Light::lightFrame) towards the scene, and lsDepth is the light-space z itself (linear, world
 // units), not an NDC value.
 //
 // Fitting (so that every object lands in the map with as fine texels as possible):

@@ -833,7 +833,7 @@ TechniqueInfo brabecTechniqueInfo() {
   TechniqueInfo info;
   info.name = "brabec";
   info.summary = "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer penumbra";
-  info.source = "papers/brabec-seidel-2002-single-sample-soft-shadows-using-depth-maps.md";
+  info.source = "Brabec & Seidel 2002, Single sample soft shadows using depth maps";
   info.params.push_back(mapSizeParamSpec(1024));
   info.params.push_back(biasConstantParamSpec());
   info.params.push_back(biasSlopeParamSpec());

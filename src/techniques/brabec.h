@@ -1,6 +1,6 @@
 // `brabec`: single-sample soft shadows from a light-space depth + object-id map (Brabec & Seidel
-// 2002, "Single Sample Soft Shadows using Depth Maps", Graphics Interface; papers/brabec-seidel-2002-
-// single-sample-soft-shadows-using-depth-maps.md). Internals are declared here so the tests can run
+// 2002, "Single Sample Soft Shadows using Depth Maps", Graphics Interface; docs/papers.md). Internals
+// are declared here so the tests can run
 // the scalar oracle search against the vectorized one and the exhaustive pass against the
 // interpolated one.
 //

@@ -1,6 +1,6 @@
 // `heidrich`: soft shadow maps for linear lights (Heidrich, Brabec, Seidel 2000, "Soft shadow maps for
-// linear lights", Rendering Techniques 2000, pp. 269-280; the slides in papers/ are the source followed
-// here, slide titles quoted).
+// linear lights", Rendering Techniques 2000, pp. 269-280; the talk's slides are the source followed
+// here, slide titles quoted; docs/papers.md).
 //
 // The light is a segment. Each sample point of it gets a two-channel shadow map ("Visibility Map"):
 // the depth channel of a point light there, and a visibility channel holding, in the penumbra, the

@@ -1,5 +1,6 @@
 // `heidrich`: soft shadow maps for linear lights (Heidrich, Brabec, Seidel 2000, "Soft shadow maps for
-// linear lights", Rendering Techniques 2000, pp. 269-280; papers/heidrich-brabec-seidel-2000-...-slides).
+// linear lights", Rendering Techniques 2000, pp. 269-280; its talk's slides are the source followed,
+// docs/papers.md).
 // Declared here (rather than only registered) so that tests can run the stages on their own and read
 // the maps and counters of a run. See heidrich.cpp for the algorithm, its approximations and its
 // parameters.

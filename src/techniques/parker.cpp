@@ -1,5 +1,5 @@
-// `parker`: Parker, Shirley and Smits 1998, "Single Sample Soft Shadows" (papers/parker-shirley-
-// smits-1998-single-sample-soft-shadows.md). One shadow ray per pixel to the light's centre; the
+// `parker`: Parker, Shirley and Smits 1998, "Single Sample Soft Shadows" (University of Utah,
+// 1998; docs/papers.md). One shadow ray per pixel to the light's centre; the
 // shadow of a soft-edged object from a point light stands in for the soft shadow of the real object
 // from the area light (Section 3, Figure 1):
 //  - inner object = the object itself (Figure 2: anything smaller leaks light between touching
@@ -250,7 +250,7 @@ TechniqueInfo parkerTechniqueInfo() {
   TechniqueInfo info;
   info.name = "parker";
   info.summary = "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the penumbra";
-  info.source = "papers/parker-shirley-smits-1998-single-sample-soft-shadows.md";
+  info.source = "Parker, Shirley & Smits 1998, Single sample soft shadows";
   info.params = {
       ParamSpec{.name = "falloff", .type = ParamType::String, .defaultValue = std::string("bernstein"), .min = std::nullopt,
                 .max = std::nullopt, .choices = {"bernstein", "sinusoid"}, .unit = "",

@@ -1,6 +1,5 @@
 // `plm`: penumbra limit maps (Lawlor 2006, "Interpolation-friendly soft shadow maps", CGVR;
-// papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md), and the silhouette-ribbon stages
-// of plm.h shared with `smoothies` and `kirsch`.
+// docs/papers.md), and the silhouette-ribbon stages of plm.h shared with `smoothies` and `kirsch`.
 //
 // The map (Sec. 2, 2.1) holds four quantities per texel, all in PLM space's zeta (plm.h):
 //  c   the depth of the occluder edge casting the texel's soft shadow (none: zetaNone),

@@ -1,5 +1,5 @@
 // Shared stages of the silhouette-ribbon techniques — `plm` (Lawlor 2006, "Interpolation-friendly
-// soft shadow maps", CGVR, Sec. 2-3; papers/lawlor-2006-interpolation-friendly-soft-shadow-maps.md),
+// soft shadow maps", CGVR, Sec. 2-3; docs/papers.md),
 // `smoothies` (Chan & Durand 2003) and `kirsch` (Kirsch & Döllner 2003): the light-space depth
 // parameterization in which a straight occluder edge casts a planar penumbra limit, the silhouette
 // edges of the scene seen from the light, and the rasterization of their soft-shadow ribbons.

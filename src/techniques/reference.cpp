@@ -1,4 +1,4 @@
-// `reference`: the ground truth every technique is measured against (DESIGN.md, "Reference").
+// `reference`: the ground truth every technique is measured against (docs/architecture.md, "Reference").
 // V(p) is estimated by Monte Carlo over the light's emitting area: spp points from Light::sample with
 // correlated multi-jittered samples (Kensler 2013; stratified in 2D and in both 1D projections), one
 // Embree occlusion ray to each, V = sum(w_i vis_i) / sum(w_i) with the light's profile weights w_i.

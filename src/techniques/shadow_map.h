@@ -13,7 +13,7 @@
 //    every path gives the same V); and a nearest-blocker ring search (the
 //    search of Brabec & Seidel 2002, Sec. 3.2).
 //
-// Conventions (DESIGN.md "Light space", include/penumbra/raster.h): map coordinates (s, t) in texels,
+// Conventions (docs/architecture.md, "Spaces"; include/penumbra/raster.h): map coordinates (s, t) in texels,
 // texel (i, j) covers [i, i+1) x [j, j+1) and its depth was rasterized at its centre (i+0.5, j+0.5);
 // light-space depth z is the distance along the light's axis, in world units.
 //

@@ -1,4 +1,4 @@
-// Tests of src/eval/metrics.cpp against hand-computed values of DESIGN.md's formulas:
+// Tests of src/eval/metrics.cpp against hand-computed values of docs/architecture.md's formulas:
 // RMSE8 = sqrt(mean((V - Vref)^2)) * 255 over the mask; penumbra RMSE8 over mask pixels where V or
 // Vref lies in the open interval (0.01, 0.99).
 #include "penumbra/metrics.h"
