@@ -78,10 +78,12 @@ class ConvexPartsTechnique final : public ShadowTechnique {
     if (prepared_ <= 1) return instances_.empty() ? PassTimings{} : instances_[0]->timings();
     PassTimings sum;
     for (size_t k = 0; k < prepared_; ++k)
-      for (const auto& [pass, ms] : instances_[k]->timings().passes) {
-        auto it = std::find_if(sum.passes.begin(), sum.passes.end(), [&](const auto& p) { return p.first == pass; });
-        if (it == sum.passes.end()) sum.add(pass, ms);
-        else it->second += ms;
+      for (const auto& entry : instances_[k]->timings().passes) {
+        // A named element, not a structured binding: lambdas capture bindings only from C++20 compilers
+        // newer than Debian's clang (make fuzz).
+        auto it = std::find_if(sum.passes.begin(), sum.passes.end(), [&](const auto& p) { return p.first == entry.first; });
+        if (it == sum.passes.end()) sum.add(entry.first, entry.second);
+        else it->second += entry.second;
       }
     return sum;
   }
@@ -90,10 +92,10 @@ class ConvexPartsTechnique final : public ShadowTechnique {
     if (prepared_ <= 1) return instances_.empty() ? std::vector<std::pair<std::string, double>>{} : instances_[0]->stats();
     std::vector<std::pair<std::string, double>> sum;
     for (size_t k = 0; k < prepared_; ++k)
-      for (const auto& [key, value] : instances_[k]->stats()) {
-        auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& p) { return p.first == key; });
-        if (it == sum.end()) sum.emplace_back(key, value);
-        else it->second += value;
+      for (const auto& entry : instances_[k]->stats()) {
+        auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& p) { return p.first == entry.first; });
+        if (it == sum.end()) sum.push_back(entry);
+        else it->second += entry.second;
       }
     sum.emplace_back("light_parts", static_cast<double>(prepared_));
     return sum;
