@@ -209,6 +209,30 @@ TEST_F(CliTest, TechniquesListsParameters) {
     EXPECT_NE(r.output.find("\n  lights: " + info.lights + "\n"), std::string::npos) << info.name << "\n" << r.output;
 }
 
+// docs/techniques.md lists every parameter as `penumbra techniques` prints it (the schema is the one
+// source; the page must follow it): "--param NAME REST" there is "- `NAME` REST" in the page.
+TEST_F(CliTest, TheTechniquesPageListsEveryParameterAsTheSchemaHasIt) {
+  const Result r = run("techniques");
+  ASSERT_EQ(r.code, 0);
+  std::ifstream in(std::string(PENUMBRA_SOURCE_DIR) + "/docs/techniques.md");
+  std::stringstream page;
+  page << in.rdbuf();
+  ASSERT_FALSE(page.str().empty());
+  std::istringstream lines(r.output);
+  std::string line;
+  size_t checked = 0;
+  const std::string marker = "  --param ";
+  while (std::getline(lines, line)) {
+    if (line.rfind(marker, 0) != 0) continue;
+    const std::string rest = line.substr(marker.size());
+    const size_t space = rest.find(' ');
+    const std::string expected = "- `" + rest.substr(0, space) + "`" + rest.substr(space);
+    EXPECT_NE(page.str().find(expected + "\n"), std::string::npos) << "docs/techniques.md lacks or differs on:\n" << expected;
+    ++checked;
+  }
+  EXPECT_GT(checked, 50u);
+}
+
 TEST_F(CliTest, RenderWritesPngAndExr) {
   const Result r = run("render --scene torus -t reference --threads 1 " + kTiny);
   ASSERT_EQ(r.code, 0) << r.output;
