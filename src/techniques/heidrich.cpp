@@ -669,7 +669,7 @@ TechniqueInfo heidrichTechniqueInfo() {
   info.summary =
       "soft shadow maps for linear lights: a depth + visibility map per sample point, skin polygons of the "
       "depth discontinuities warped into the other view and Gouraud-shaded (segment lights)";
-  info.source = "Heidrich, Brabec, Seidel 2000";
+  info.source = "Heidrich, Brabec & Seidel 2000, Soft shadow maps for linear lights";
   info.params = {
       mapSizeParamSpec(),
       ParamSpec{.name = "subdivisions", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 1.0, .max = 64.0,

@@ -231,6 +231,9 @@ TEST_F(CliTest, TheTechniquesPageListsEveryParameterAsTheSchemaHasIt) {
     ++checked;
   }
   EXPECT_GT(checked, 50u);
+  // Its table of techniques names each one's source as the registry does.
+  for (const TechniqueInfo& info : techniqueRegistry())
+    EXPECT_NE(page.str().find("| `" + info.name + "` | " + info.source + " |"), std::string::npos) << info.name;
 }
 
 TEST_F(CliTest, RenderWritesPngAndExr) {
