@@ -572,38 +572,4 @@ float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexel
   return std::clamp(sum / static_cast<float>(pattern.size()), 0.0f, 1.0f);  // rounding of the weights
 }
 
-NearestBlocker findNearestBlocker(const LightMap& map, const ShadowReceiver& r, float maxRadiusTexels) {
-  NearestBlocker best;
-  if (!r.inMap) return best;
-  const int ci = static_cast<int>(std::floor(r.s)), cj = static_cast<int>(std::floor(r.t));
-  float bestDistance = kInfinity;
-  const int maxRing = static_cast<int>(std::ceil(maxRadiusTexels)) + 1;
-  for (int ring = 0; ring <= std::min(maxRing, 2 * map.size); ++ring) {
-    // (s, t) lies in texel (ci, cj), within half a texel of its centre on each axis, so no texel of
-    // this ring or beyond is nearer than ring - 0.5.
-    const float ringMin = static_cast<float>(ring) - 0.5f;
-    if (ringMin > bestDistance || ringMin > maxRadiusTexels) break;
-    for (int dj = -ring; dj <= ring; ++dj) {
-      const bool edgeRow = dj == -ring || dj == ring;
-      const int step = edgeRow ? 1 : std::max(1, 2 * ring);
-      for (int di = -ring; di <= ring; di += step) {
-        const int i = ci + di, j = cj + dj;
-        if (i < 0 || j < 0 || i >= map.size || j >= map.size) continue;
-        const float d = map.lsDepth(i, j);
-        if (!(d < blockerThreshold(r, i, j))) continue;
-        const float ds = static_cast<float>(i) + 0.5f - r.s, dt = static_cast<float>(j) + 0.5f - r.t;
-        const float distance = std::sqrt(ds * ds + dt * dt);
-        if (distance <= maxRadiusTexels && distance < bestDistance) {
-          bestDistance = distance;
-          best.found = true;
-          best.distanceTexels = distance;
-          best.lsDepth = d;
-          best.objectId = map.objectId.empty() ? kNoObject : map.objectId(i, j);
-        }
-      }
-    }
-  }
-  return best;
-}
-
 }  // namespace penumbra

@@ -223,18 +223,6 @@ inline float pcfDiskNearest(const LightMap& map, const ShadowReceiver& r, float 
   return pcfDiskNearest(depthTexels(map), r, radiusTexels, pattern, rotation);
 }
 
-struct NearestBlocker {
-  bool found = false;
-  float distanceTexels = 0.0f;  //!< from (r.s, r.t) to the blocker texel's centre
-  float lsDepth = 0.0f;         //!< the blocker's depth
-  int32_t objectId = kNoObject;
-};
-
-// The blocker texel nearest to (r.s, r.t) (Euclidean, texel centres) within maxRadiusTexels:
-// square rings of growing radius, stopped once no nearer texel can follow (Brabec & Seidel 2002,
-// Sec. 3.2's search). Ties go to the first texel in row-major ring order.
-NearestBlocker findNearestBlocker(const LightMap& map, const ShadowReceiver& r, float maxRadiusTexels);
-
 // Runs f(x, y) -> V for every pixel of the G-buffer that sees geometry, in parallel over rows;
 // V = 1 where the pixel sees nothing. Deterministic: every pixel is computed on its own.
 template <class F>

@@ -255,37 +255,6 @@ TEST(ShadowMap, PcfDiskOfAHalfPlaneIsAboutHalfLit) {
   EXPECT_NEAR(pcfDisk(m, lit, 8.0f, disk, Vec2(1, 0)), exact, 0.02);
 }
 
-TEST(ShadowMap, NearestBlockerMatchesABruteForceScan) {
-  LightMap m = orthoMap(48);
-  for (int j = 0; j < m.size; ++j)
-    for (int i = 0; i < m.size; ++i)
-      if (hash32(static_cast<uint64_t>(j * m.size + i)) % 50 == 0) {
-        m.lsDepth(i, j) = 1.0f;
-        m.objectId(i, j) = j * m.size + i;
-      }
-  for (int k = 0; k < 200; ++k) {
-    const float x = (static_cast<float>(hash32(2 * k) % 10000) / 10000.0f - 0.5f) * 40.0f;
-    const float y = (static_cast<float>(hash32(2 * k + 1) % 10000) / 10000.0f - 0.5f) * 40.0f;
-    const float maxRadius = 1.0f + static_cast<float>(k % 9);
-    const ShadowReceiver r = makeReceiver(m, Vec3(x, y, 5.0f), kFacingLight, DepthBias{});
-    ASSERT_TRUE(r.inMap);
-    float best = kInfinity;
-    for (int j = 0; j < m.size; ++j)
-      for (int i = 0; i < m.size; ++i) {
-        if (!(m.lsDepth(i, j) < 5.0f)) continue;
-        const float d = std::hypot(static_cast<float>(i) + 0.5f - r.s, static_cast<float>(j) + 0.5f - r.t);
-        if (d <= maxRadius) best = std::min(best, d);
-      }
-    const NearestBlocker found = findNearestBlocker(m, r, maxRadius);
-    ASSERT_EQ(found.found, best < kInfinity) << "receiver " << k;
-    if (found.found) {
-      EXPECT_NEAR(found.distanceTexels, best, 1e-5f) << "receiver " << k;
-      EXPECT_EQ(found.lsDepth, 1.0f);
-      EXPECT_NE(found.objectId, kNoObject);
-    }
-  }
-}
-
 TEST(ShadowMap, VogelDiskSpreadsUniformlyOverTheUnitDisk) {
   const std::vector<Vec2> disk = vogelDisk(32);
   ASSERT_EQ(disk.size(), 32u);
