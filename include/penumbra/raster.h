@@ -35,11 +35,11 @@ struct LightMap {
   Image<float> lsDepth;     //!< light-space depth z (distance along +z); kInfinity where empty
   Image<int32_t> objectId;  //!< kNoObject where empty
 
-  Vec3 lightFromRender(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
+  Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
   // light-space depth z.
-  Vec3 project(const Vec3& wsP) const { return projectLightSpace(lightFromRender(wsP)); }
-  // The same for a point already in light space (lightFromRender): callers that need both skip the
+  Vec3 project(const Vec3& wsP) const { return projectLightSpace(lsFromWs(wsP)); }
+  // The same for a point already in light space (lsFromWs): callers that need both skip the
   // second transform.
   Vec3 projectLightSpace(const Vec3& lsP) const {
     const float half = 0.5f * static_cast<float>(size);

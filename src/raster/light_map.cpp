@@ -100,7 +100,7 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     float minZ = kInfinity, maxZ = -kInfinity, tanHalf = 0.0f;
     bool behind = false;
     for (const Vec3& p : wsCorners) {
-      const Vec3 l = m.lightFromRender(p);
+      const Vec3 l = m.lsFromWs(p);
       minZ = std::min(minZ, l.z);
       maxZ = std::max(maxZ, l.z);
       if (l.z > 0.0f)
@@ -142,7 +142,7 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     const Mesh& mesh = object.mesh;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
-        const Vec3 l = m.lightFromRender(mesh.positions[i]);
+        const Vec3 l = m.lsFromWs(mesh.positions[i]);
         clip[base + i] = Vec4(l.x * xyScale, l.y * xyScale, clipZScale * l.z + clipZOffset, clipWScale * l.z + clipWOffset);
         lsZ[base + i] = l.z;
       }

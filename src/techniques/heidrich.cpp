@@ -569,7 +569,7 @@ void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
   for (const LightMap& map : maps_) {
     sharedFrame_ = sharedFrame_ && map.lsFrame.x == maps_[0].lsFrame.x && map.lsFrame.y == maps_[0].lsFrame.y &&
                    map.lsFrame.z == maps_[0].lsFrame.z;
-    lsOffsets_.push_back(maps_[0].lightFromRender(map.wsOrigin));
+    lsOffsets_.push_back(maps_[0].lsFromWs(map.wsOrigin));
   }
   shadowMapsMs_ = stage.elapsedMs();
   stage.reset();
@@ -612,7 +612,7 @@ void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
     const Vec3& p = gbuffer.wsPosition(x, y);
     const Vec3& n = gbuffer.wsGeometricNormal(x, y);
-    const Vec3 lsP = map0.lightFromRender(p), lsN = map0.lsFrame.toLocal(n);
+    const Vec3 lsP = map0.lsFromWs(p), lsN = map0.lsFrame.toLocal(n);
     auto receiver = [&](size_t j) {
       return sharedFrame_ ? heidrich::receiverInMap(maps_[j], lsP - lsOffsets_[j], lsN, options_.bias)
                           : makeReceiver(maps_[j], p, n, options_.bias);

@@ -349,7 +349,7 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   for (const Object& object : scene.objects) {
     const auto offset = static_cast<uint32_t>(clip.size());
     for (const Vec3& p : object.mesh.positions) {
-      const Vec3 l = map.lightFromRender(p);
+      const Vec3 l = map.lsFromWs(p);
       clip.push_back(map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
                                       : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z));
       lsZ.push_back(l.z);
@@ -823,7 +823,7 @@ class PlmTechnique final : public ShadowTechnique {
           ray.tMin = std::nextafter(hit->t, kInfinity);
           if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
           const Vec3 wsHit = ray.origin + hit->t * ray.direction;
-          const float depth = map_.lightFromRender(wsHit).z;
+          const float depth = map_.lsFromWs(wsHit).z;
           const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
           // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
           if (!(depth > map_.lsDepth(i, j) + lift)) continue;

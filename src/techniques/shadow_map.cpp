@@ -85,7 +85,7 @@ float minMapDepth(const LightMap& map) {
 
 ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
                             const DepthBias& bias) {
-  const Vec3 lsP = map.lightFromRender(wsPosition);
+  const Vec3 lsP = map.lsFromWs(wsPosition);
   if (!map.orthographic && !(lsP.z > 0.0f)) return {};  // behind a local light: not in its map
   return receiverAt(map, map.projectLightSpace(lsP), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
 }

@@ -138,11 +138,11 @@ LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::s
   const Vec3 z = back ? -light.lightFrame(sceneBounds).z : light.lightFrame(sceneBounds).z;
   Vec3 x = ws[1] - ws[0];
   x = glm::normalize(x - z * glm::dot(x, z));
-  plane.lsFromWs.z = z;
-  plane.lsFromWs.x = x;
-  plane.lsFromWs.y = glm::cross(z, x);
+  plane.lsFrame.z = z;
+  plane.lsFrame.x = x;
+  plane.lsFrame.y = glm::cross(z, x);
   for (const Vec3& v : ws) {
-    const Vec3 l = plane.toLight(v);
+    const Vec3 l = plane.lsFromWs(v);
     plane.vertices.push_back(Vec2(l.x, l.y));
   }
   float twiceArea = 0.0f;
@@ -179,8 +179,8 @@ LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
   LightSpaceGeometry g;
   g.positions.reserve(o.topology.positions.size());
   g.normals.reserve(o.topology.faceNormals.size());
-  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.toLight(p));
-  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFromWs.toLocal(n));
+  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.lsFromWs(p));
+  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFrame.toLocal(n));
   return g;
 }
 
@@ -332,7 +332,7 @@ std::pair<const uint32_t*, const uint32_t*> UGrid::cell(const Vec2& u) const {
 bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane) {
   for (int y = 0; y < gbuffer.height(); ++y)
     for (int x = 0; x < gbuffer.width(); ++x)
-      if (gbuffer.hit(x, y) && !(plane.toLight(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
+      if (gbuffer.hit(x, y) && !(plane.lsFromWs(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
   return false;
 }
 
@@ -342,7 +342,7 @@ bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, 
   for (int y = 0; y < gbuffer.height(); ++y)
     for (int x = 0; x < gbuffer.width(); ++x) {
       if (!gbuffer.hit(x, y)) continue;
-      const Vec3 p = plane.toLight(gbuffer.wsPosition(x, y));
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
       if (!(p.z > zMin)) continue;
       const Vec2 u(p.x / p.z, p.y / p.z);
       lower = glm::min(lower, u);
@@ -358,7 +358,7 @@ std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& pla
   for (int y = 0; y < gbuffer.height(); ++y)
     for (int x = 0; x < gbuffer.width(); ++x) {
       if (!gbuffer.hit(x, y)) continue;
-      const Vec3 p = plane.toLight(gbuffer.wsPosition(x, y));
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
       if (!(p.z > zMin)) continue;
       const int c = cellOf(lower, scale, resolution, Vec2(p.x / p.z, p.y / p.z));
       if (c >= 0) deepest[size_t(c)] = std::max(deepest[size_t(c)], p.z);
@@ -520,9 +520,9 @@ class SsvTechnique final : public ShadowTechnique {
           if (!gbuffer.hit(x, y)) continue;
           const Vec3 wsP = gbuffer.wsPosition(x, y);
           // Receivers behind the light's plane see its other face.
-          const Vec3 front = sides_[0].plane.toLight(wsP);
+          const Vec3 front = sides_[0].plane.lsFromWs(wsP);
           const Side& side = sides_[front.z > 0.0f ? 0 : 1];
-          const Vec3 p = front.z > 0.0f ? front : side.plane.toLight(wsP);
+          const Vec3 p = front.z > 0.0f ? front : side.plane.lsFromWs(wsP);
           // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
           std::optional<int32_t> centreBlocker;
           auto blocker = [&]() {

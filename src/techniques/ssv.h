@@ -37,13 +37,13 @@ inline constexpr int kMaxLightVertices = 32;
 
 struct LightPlane {
   Vec3 wsOrigin{0.0f};
-  Frame lsFromWs;                //!< axes of light space in world space
+  Frame lsFrame;                  //!< axes of light space in world space
   std::vector<Vec2> vertices;    //!< the polygon in light space (z = 0), counter-clockwise in (x, y)
   float area = 0.0f;
   float extent = 0.0f;           //!< R: the largest distance of a vertex from the centre
   Vec2 lower{0.0f}, upper{0.0f}; //!< bounding rectangle in (x, y)
 
-  Vec3 toLight(const Vec3& wsP) const { return lsFromWs.toLocal(wsP - wsOrigin); }
+  Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // min / max of dot(v, dir) over the light's vertices.
   void support(const Vec2& dir, float& lo, float& hi) const {
     lo = hi = glm::dot(vertices[0], dir);

@@ -147,9 +147,9 @@ class WedgesTechnique final : public ShadowTechnique {
           if (!gbuffer.hit(x, y)) continue;
           const Vec3 wsP = gbuffer.wsPosition(x, y);
           // Receivers behind the light's plane see its other face.
-          const Vec3 front = sides_[0].plane.toLight(wsP);
+          const Vec3 front = sides_[0].plane.lsFromWs(wsP);
           const Side& side = sides_[front.z > 0.0f ? 0 : 1];
-          const Vec3 p = front.z > 0.0f ? front : side.plane.toLight(wsP);
+          const Vec3 p = front.z > 0.0f ? front : side.plane.lsFromWs(wsP);
           // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
           std::optional<int32_t> centreBlocker;
           auto blocker = [&]() {

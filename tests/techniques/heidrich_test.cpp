@@ -534,7 +534,7 @@ TEST(HeidrichStages, SharedFrameReceiverMatchesMakeReceiver) {
         const Vec3& n = s.gbuffer.wsGeometricNormal(x, y);
         const ShadowReceiver expected = makeReceiver(map, p, n, o.bias);
         const ShadowReceiver shared = heidrich::receiverInMap(
-            map, map0.lightFromRender(p) - map0.lightFromRender(map.wsOrigin), map0.lsFrame.toLocal(n), o.bias);
+            map, map0.lsFromWs(p) - map0.lsFromWs(map.wsOrigin), map0.lsFrame.toLocal(n), o.bias);
         ASSERT_EQ(shared.inMap, expected.inMap) << x << " " << y;
         if (!expected.inMap) continue;
         EXPECT_NEAR(shared.s, expected.s, 1e-3f);
@@ -600,7 +600,7 @@ TEST(HeidrichStages, SkinSpansOccluderAndReceiverDepths) {
     const float v0 = skin.value[t.x], v1 = skin.value[t.y], v2 = skin.value[t.z];
     EXPECT_TRUE(std::min({v0, v1, v2}) == 0.0f && std::max({v0, v1, v2}) == 1.0f) << "a skin triangle is mixed";
     for (uint32_t vertex : {t.x, t.y, t.z}) {
-      const float z = m.lightFromRender(skin.wsPositions[vertex]).z;
+      const float z = m.lsFromWs(skin.wsPositions[vertex]).z;
       EXPECT_NEAR(z, skin.value[vertex] == 0.0f ? 6.0f : 10.0f, 1e-4f) << "black on the occluder, white behind";
     }
   }
