@@ -37,14 +37,11 @@ int runBench(const BenchOptions& options) {
   const Setup setup = loadSetup(options.frame);
   if (!options.jsonPath.empty()) refuseInputOverwrite(setup, options.jsonPath);
   std::vector<ParamSet> given;
+  std::vector<PlannedRun> planned;
   for (const std::string& name : names) {
     const TechniqueInfo& info = findTechnique(name);
     given.push_back(gatherParams(setup, info, options.frame, true));
-  }
-  std::vector<PlannedRun> planned;
-  for (size_t i = 0; i < names.size(); ++i) {
-    const TechniqueInfo& info = findTechnique(names[i]);
-    planned.push_back({&info, resolveParams(info.name, info.params, given[i]), options.repeat});
+    planned.push_back({&info, resolveParams(info.name, info.params, given.back()), options.repeat});
   }
   checkResources(setup, planned, 1, options.frame.force);
   if (!options.jsonPath.empty()) checkWritableFolderOf(options.jsonPath);

@@ -190,20 +190,23 @@ int runCompare(const CompareOptions& options) {
   truthFrame.params.clear();
   const ParamSet truthGiven = gatherParams(setup, referenceInfo, truthFrame, true);
   const Params truthParams = resolveParams(referenceInfo.name, referenceInfo.params, truthGiven);
+  // Each technique run, resolved once here, is also what the memory and time check below counts.
   std::vector<ParamSet> given;
   std::vector<std::vector<ParamSet>> sweepGiven(names.size());
+  std::vector<PlannedRun> planned;
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     given.push_back(gatherParams(setup, info, options.frame, true));
-    resolveParams(info.name, info.params, given.back());
+    planned.push_back({&info, resolveParams(info.name, info.params, given.back()), 1});
     if (!info.hasParam(kMapSize)) continue;
     for (int size : mapSizes) {
       ParamSet atSize = given.back();
       atSize.set(kMapSize, int64_t{size}, "command line (--map-sizes)");
-      resolveParams(info.name, info.params, atSize);
+      planned.push_back({&info, resolveParams(info.name, info.params, atSize), 1});
       sweepGiven[i].push_back(std::move(atSize));
     }
   }
+  const int keptImages = static_cast<int>(planned.size()) + 1;  // every run's V and the truth's
 
   makeOutputDir(options.outDir);
   const OutputLock lock(options.outDir);
@@ -228,15 +231,10 @@ int runCompare(const CompareOptions& options) {
     storeTruth = !unwritable;
   }
 
-  // Memory and time, before the G-buffer: every planned run with the V images the report keeps.
-  std::vector<PlannedRun> planned;
+  // Memory and time, before the G-buffer: every planned run (the truth's unless cached) with the V
+  // images the report keeps.
   if (!cached) planned.push_back({&referenceInfo, truthParams, 1});
-  for (size_t i = 0; i < names.size(); ++i) {
-    const TechniqueInfo& info = findTechnique(names[i]);
-    planned.push_back({&info, resolveParams(info.name, info.params, given[i]), 1});
-    for (const ParamSet& atSize : sweepGiven[i]) planned.push_back({&info, resolveParams(info.name, info.params, atSize), 1});
-  }
-  checkResources(setup, planned, static_cast<int>(planned.size()) + 1, options.frame.force);
+  checkResources(setup, planned, keptImages, options.frame.force);
   const std::string& reportDir = staged.dir();
   const std::string stem = setup.stem + "_";
 

@@ -167,9 +167,9 @@ void checkResources(const Setup& setup, const std::vector<PlannedRun>& runs, int
     const ResourceEstimate e = run.info->estimate(run.params, setup.width, setup.height);
     const double bytes = frameBytes + e.bytes;
     if (bytes > memory)
-      problems.push_back(fmt::format("{} needs about {} of memory ({}{}), more than the {} this machine has", run.info->name,
-                                     formatBytes(bytes), e.drivers.empty() ? "" : e.drivers + ", ",
-                                     fmt::format("{} x {} pixels", setup.width, setup.height), formatBytes(memory)));
+      problems.push_back(fmt::format("{} needs about {} of memory ({}{} x {} pixels), more than the {} this machine has",
+                                     run.info->name, formatBytes(bytes), e.drivers.empty() ? "" : e.drivers + ", ",
+                                     setup.width, setup.height, formatBytes(memory)));
     const double work = std::max(e.rays / kRayBudget, e.texels / kTexelBudget) * run.repeat;
     rays += e.rays * run.repeat;
     texels += e.texels * run.repeat;

@@ -72,6 +72,15 @@ std::string attribute(const ExrAttributes& attributes, const std::string& name) 
   return {};
 }
 
+// Creates the cache folder (and its parents); the reason when that fails.
+std::optional<std::string> createCacheDir(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    return fmt::format("cannot create the reference cache directory '{}': {}", dir, ec ? ec.message() : "a file of that name exists");
+  return std::nullopt;
+}
+
 }  // namespace
 
 ReferenceCache::ReferenceCache(std::string dir, const Setup& setup, const Params& params) : dir_(std::move(dir)) {
@@ -119,10 +128,7 @@ std::optional<CachedTruth> ReferenceCache::load(std::string& why) const {
 }
 
 std::optional<std::string> ReferenceCache::whyUnwritable() const {
-  std::error_code ec;
-  fs::create_directories(dir_, ec);
-  if (ec || !fs::is_directory(dir_))
-    return fmt::format("cannot create the reference cache directory '{}': {}", dir_, ec ? ec.message() : "a file of that name exists");
+  if (std::optional<std::string> why = createCacheDir(dir_)) return why;
   std::string probe = (fs::path(dir_) / ".write-probe-XXXXXX").string();
   const int fd = ::mkstemp(probe.data());
   if (fd < 0) return fmt::format("cannot write in the reference cache directory '{}': {}", dir_, std::strerror(errno));
@@ -133,11 +139,7 @@ std::optional<std::string> ReferenceCache::whyUnwritable() const {
 
 void ReferenceCache::store(const Image<float>& v, const PassTimings& timings,
                            const std::vector<std::pair<std::string, double>>& stats) const {
-  std::error_code ec;
-  fs::create_directories(dir_, ec);
-  if (ec || !fs::is_directory(dir_))
-    fail("cannot create the reference cache directory '{}': {} (choose another with --cache-dir, or --no-cache)", dir_,
-         ec ? ec.message() : "a file of that name exists");
+  if (std::optional<std::string> why = createCacheDir(dir_)) fail("{} (choose another with --cache-dir, or --no-cache)", *why);
   nlohmann::json meta;
   meta["key"] = key_;
   nlohmann::json passes = nlohmann::json::array();

@@ -33,9 +33,16 @@
 
 namespace penumbra::fuzz {
 
-inline Light fuzzLight(uint8_t pick) {
-  const Vec3 c(0.2f, 4.0f, 0.1f);
-  switch (pick % 6) {
+// The small scene the parameter fuzzer and the parameter range sweep (tests/techniques/
+// param_range_test.cpp) run on: its lights stand at kSmallSceneLightCenter, one of each shape.
+inline const Vec3 kSmallSceneLightCenter(0.2f, 4.0f, 0.1f);
+inline constexpr int kSmallSceneLightShapes = 6;
+
+// Light `pick` (modulo kSmallSceneLightShapes): a sphere, a disk, a rect, a concave L polygon, a
+// segment and a directional light.
+inline Light smallSceneLight(uint8_t pick) {
+  const Vec3 c = kSmallSceneLightCenter;
+  switch (pick % kSmallSceneLightShapes) {
     case 0: return Light::sphere(c, 0.4f);
     case 1: return Light::disk(c, Vec3(0.0f, -1.0f, 0.0f), 0.4f);
     case 2: return Light::rect(c, Vec3(0.4f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f));
@@ -47,24 +54,23 @@ inline Light fuzzLight(uint8_t pick) {
   }
 }
 
-// A ground, a box on it and a sphere above it, 8 x 8 pixels: small enough for thousands of runs a
-// second, with a solid, a curved occluder and contact.
-inline Scene fuzzScene(const Light& light) {
+// A ground, a box resting on it, a sphere floating above it and a thin open sheet tilted over it (a
+// solid, a curved occluder and an open one, with contact), lit by `light`: small enough for
+// thousands of runs a second at 8 x 8 pixels.
+inline Scene smallScene(const Light& light) {
   Scene scene;
-  Object ground;
-  ground.id = 0;
-  ground.mesh = makePlane(4.0f, 4.0f);
-  scene.objects.push_back(std::move(ground));
-  Object box;
-  box.id = 1;
-  box.mesh = makeBox(Vec3(0.6f));
-  transformMesh(box.mesh, glm::translate(Mat4(1.0f), Vec3(-0.6f, 0.3f, 0.0f)));
-  scene.objects.push_back(std::move(box));
-  Object ball;
-  ball.id = 2;
-  ball.mesh = makeSphere(0.3f, 12, 6);
-  transformMesh(ball.mesh, glm::translate(Mat4(1.0f), Vec3(0.6f, 1.0f, 0.2f)));
-  scene.objects.push_back(std::move(ball));
+  const auto add = [&](int32_t id, Mesh mesh, const Mat4& transform) {
+    transformMesh(mesh, transform);
+    Object object;
+    object.id = id;
+    object.mesh = std::move(mesh);
+    scene.objects.push_back(std::move(object));
+  };
+  add(0, makePlane(4.0f, 4.0f), Mat4(1.0f));
+  add(1, makeBox(Vec3(0.6f)), glm::translate(Mat4(1.0f), Vec3(-0.6f, 0.3f, 0.0f)));
+  add(2, makeSphere(0.3f, 12, 6), glm::translate(Mat4(1.0f), Vec3(0.6f, 1.0f, 0.2f)));
+  add(3, makePlane(0.8f, 0.5f),
+      glm::translate(Mat4(1.0f), Vec3(0.0f, 1.6f, -0.5f)) * glm::rotate(Mat4(1.0f), radians(30.0f), Vec3(1.0f, 0.0f, 0.0f)));
   scene.lights.push_back(light);
   scene.camera.position = Vec3(0.0f, 4.0f, 4.0f);
   scene.camera.lookAt = Vec3(0.0f, 0.3f, 0.0f);
@@ -77,7 +83,7 @@ inline void techniqueParams(const uint8_t* data, size_t size) {
   if (size < 2) return;
   const std::vector<TechniqueInfo>& registry = techniqueRegistry();
   const TechniqueInfo& info = registry[data[0] % registry.size()];
-  const Light light = fuzzLight(data[1]);
+  const Light light = smallSceneLight(data[1]);
   ParamSet given;
   std::istringstream lines(std::string(reinterpret_cast<const char*>(data + 2), size - 2));
   std::string line;
@@ -91,7 +97,7 @@ inline void techniqueParams(const uint8_t* data, size_t size) {
   }
   const ResourceEstimate cost = info.estimate(params, kFuzzImageSize, kFuzzImageSize);
   if (cost.bytes > 256.0 * 1024.0 * 1024.0 || cost.rays > 1.0e7 || cost.texels > 1.0e8) return;
-  const Scene scene = fuzzScene(light);
+  const Scene scene = smallScene(light);
   const GBuffer gbuffer = renderGBuffer(scene, kFuzzImageSize, kFuzzImageSize);
   Image<float> v;
   try {

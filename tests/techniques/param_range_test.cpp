@@ -22,19 +22,15 @@
 #include <vector>
 
 #include <fmt/format.h>
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "fuzz/technique_params_inputs.h"
 #include "penumbra/error.h"
-#include "penumbra/primitives.h"
 #include "penumbra/raster.h"
 #include "penumbra/registry.h"
-#include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
 namespace {
-
-using testing::makeObject;
 
 constexpr int kImageSize = 8;
 
@@ -76,48 +72,24 @@ struct SweepLight {
   bool mapSizes = false;  //!< also runs the map_size values (see the file comment)
 };
 
-// Every shape above the scene, then lights at the ends of their own ranges: a light far smaller
-// than the scene, one far wider than it, a directional light near its widest angle and one of the
-// narrowest, a segment much longer than the scene.
+// Every shape above the small scene, then lights at the ends of their own ranges: a light far
+// smaller than the scene, one far wider than it, a directional light near its widest angle and one of
+// the narrowest, a segment much longer than the scene.
 std::vector<SweepLight> sweepLights() {
-  const Vec3 c(0.2f, 4.0f, 0.1f);
-  const Vec3 down(0.0f, -1.0f, 0.0f);
-  return {
-      {"sphere", Light::sphere(c, 0.4f)},
-      {"disk", Light::disk(c, down, 0.4f)},
-      {"rect", Light::rect(c, Vec3(0.4f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f)), true},
-      {"concave polygon",
-       Light::polygon({c + Vec3(-0.5f, 0.0f, -0.5f), c + Vec3(0.5f, 0.0f, -0.5f), c + Vec3(0.5f, 0.0f, 0.0f),
-                       c + Vec3(0.0f, 0.0f, 0.0f), c + Vec3(0.0f, 0.0f, 0.5f), c + Vec3(-0.5f, 0.0f, 0.5f)})},
-      {"segment", Light::segment(c - Vec3(0.6f, 0.0f, 0.0f), c + Vec3(0.6f, 0.0f, 0.0f)), true},
-      {"directional", Light::directional(Vec3(0.3f, 1.0f, 0.2f), radians(3.0f)), true},
-      {"tiny sphere", Light::sphere(c, 1.0e-6f)},
-      {"rect 100 wide", Light::rect(c, Vec3(50.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 50.0f))},
-      {"directional 179 degrees", Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(179.0f))},
-      {"directional 0.001 degrees", Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(0.001f))},
-      {"segment 200 long", Light::segment(c - Vec3(100.0f, 0.0f, 0.0f), c + Vec3(100.0f, 0.0f, 0.0f))},
-  };
-}
-
-// A ground, a box resting on it, a sphere floating above it (parker's analytic sphere) and a thin
-// open plane tilted over it: a solid, a curved occluder and an open one.
-Scene sweepScene(const Light& light) {
-  Scene scene;
-  scene.objects.push_back(makeObject(0, makePlane(4.0f, 4.0f)));
-  Mesh box = makeBox(Vec3(0.6f, 0.6f, 0.6f));
-  transformMesh(box, glm::translate(Mat4(1.0f), Vec3(-0.6f, 0.3f, 0.0f)));
-  scene.objects.push_back(makeObject(1, std::move(box)));
-  Mesh sphere = makeSphere(0.3f, 12, 6);
-  transformMesh(sphere, glm::translate(Mat4(1.0f), Vec3(0.6f, 1.0f, 0.2f)));
-  scene.objects.push_back(makeObject(2, std::move(sphere)));
-  Mesh sheet = makePlane(0.8f, 0.5f);
-  transformMesh(sheet, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.6f, -0.5f)) *
-                           glm::rotate(Mat4(1.0f), radians(30.0f), Vec3(1.0f, 0.0f, 0.0f)));
-  scene.objects.push_back(makeObject(3, std::move(sheet)));
-  scene.lights.push_back(light);
-  scene.camera.position = Vec3(0.0f, 4.0f, 4.0f);
-  scene.camera.lookAt = Vec3(0.0f, 0.3f, 0.0f);
-  return scene;
+  std::vector<SweepLight> lights;
+  for (uint8_t k = 0; k < fuzz::kSmallSceneLightShapes; ++k) {
+    const Light light = fuzz::smallSceneLight(k);
+    const LightShape shape = light.shape();
+    lights.push_back({std::string(toString(shape)), light,
+                      shape == LightShape::Rect || shape == LightShape::Segment || shape == LightShape::Directional});
+  }
+  const Vec3 c = fuzz::kSmallSceneLightCenter;
+  lights.push_back({"tiny sphere", Light::sphere(c, 1.0e-6f)});
+  lights.push_back({"rect 100 wide", Light::rect(c, Vec3(50.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 50.0f))});
+  lights.push_back({"directional 179 degrees", Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(179.0f))});
+  lights.push_back({"directional 0.001 degrees", Light::directional(Vec3(0.0f, 1.0f, 0.0f), radians(0.001f))});
+  lights.push_back({"segment 200 long", Light::segment(c - Vec3(100.0f, 0.0f, 0.0f), c + Vec3(100.0f, 0.0f, 0.0f))});
+  return lights;
 }
 
 // Parameters a technique takes only together (brabec's paper knobs replace its derived search
@@ -154,7 +126,7 @@ bool runOnce(const TechniqueInfo& info, const ParamSet& given, const SweepLight&
     ADD_FAILURE() << label << ": the schema refuses a value of its own range: " << e.what();
     return false;
   }
-  const Scene scene = sweepScene(light.light);
+  const Scene scene = fuzz::smallScene(light.light);
   Image<float> v;
   ++outcome.runs;
   try {
@@ -191,7 +163,7 @@ bool isRangeEnd(const ParamSpec& spec, const ParamValue& value) {
 
 TEST(ParamRanges, EveryParameterSurvivesItsRangeEndsUnderEveryLight) {
   const std::vector<SweepLight> lights = sweepLights();
-  const GBuffer gbuffer = renderGBuffer(sweepScene(lights[0].light), kImageSize, kImageSize);
+  const GBuffer gbuffer = renderGBuffer(fuzz::smallScene(lights[0].light), kImageSize, kImageSize);
   for (const TechniqueInfo& info : techniqueRegistry()) {
     Outcome outcome;
     for (const ParamSpec& spec : info.params) {
@@ -220,7 +192,7 @@ TEST(ParamRanges, EveryParameterSurvivesItsRangeEndsUnderEveryLight) {
 
 TEST(ParamRanges, TheLargestMapSize) {
   const std::vector<SweepLight> lights = sweepLights();
-  const GBuffer gbuffer = renderGBuffer(sweepScene(lights[0].light), kImageSize, kImageSize);
+  const GBuffer gbuffer = renderGBuffer(fuzz::smallScene(lights[0].light), kImageSize, kImageSize);
   for (const TechniqueInfo& info : techniqueRegistry()) {
     for (const ParamSpec& spec : info.params) {
       if (spec.name != "map_size") continue;
