@@ -20,7 +20,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "penumbra/primitives.h"
-#include "../src/rt/outer_objects.h"  // the benchmarks have no src/ include path
+#include "techniques/parker/outer_objects.h"
 
 namespace penumbra {
 namespace {

@@ -6,7 +6,7 @@
 // per pixel"). Ratios are taken within one run: plmOverHard alternates the two techniques in every
 // iteration and reports visibility_over_hard and prepare_over_hard as counters.
 //
-// lawlorTable runs the whole Fig. 10 sweep of Lawlor 2006 (include/penumbra/lawlor_table.h) once on
+// lawlorTable runs the whole Fig. 10 sweep of Lawlor 2006 (src/experiments/lawlor_table.h) once on
 // `triangle` at 512x512 against a 4096-spp truth and reports every row's RMSE8 per map size as
 // counters; with PENUMBRA_LAWLOR_OUT=<dir> set it also writes the table (JSON, Markdown) and Fig. 11's
 // images there. It takes about a minute on 2 cores: run it alone (--benchmark_filter=lawlorTable).
@@ -16,7 +16,7 @@
 #include <memory>
 #include <string>
 
-#include "penumbra/lawlor_table.h"
+#include "experiments/lawlor_table.h"
 #include "penumbra/raster.h"
 #include "penumbra/registry.h"
 #include "penumbra/scene_io.h"

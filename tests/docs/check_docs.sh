@@ -2,8 +2,8 @@
 # The documentation check, as ctest runs it (entry `docs`):
 #   tests/docs/check_docs.sh [REPO_ROOT]     (default: two folders up from this script)
 # The repository carries its own documentation (docs/architecture.md is the source of truth), so:
-#  1. every relative link in README.md and docs/*.md ([text](target) and [label]: target, outside
-#     code) names a file or folder inside the repository, and a #fragment names a heading of the
+#  1. every relative link in README.md, docs/*.md and the README.md of folders under src/
+#     ([text](target) and [label]: target, outside code) names a file or folder inside the repository, and a #fragment names a heading of the
 #     target Markdown file (GitHub's anchors: lower case, ASCII punctuation dropped, spaces to -);
 #  2. no file of the repository names a path outside it: the founding design notes, the folder of
 #     papers or the shared folder beside the checkout (the patterns below; docs/papers.md cites
@@ -32,7 +32,7 @@ anchors() {
 
 # 1. Links.
 shopt -s nullglob
-for md in README.md docs/*.md; do
+for md in README.md docs/*.md $(git ls-files "src/**/README.md" 2>/dev/null); do
   [ -f "$md" ] || continue
   dir="$(dirname "$md")"
   # Targets of inline links and reference definitions, with their line numbers; fenced blocks and
@@ -108,4 +108,4 @@ if [ "$problems" -gt 0 ]; then
   echo "check_docs: $problems problem(s)" >&2
   exit 1
 fi
-echo "check_docs: links in README.md and docs/*.md resolve; no file names a path outside the repository"
+echo "check_docs: links in README.md, docs/*.md and src/**/README.md resolve; no file names a path outside the repository"

@@ -1,0 +1,124 @@
+// `kirsch`: inner penumbrae only (Kirsch & Döllner 2003, "Real-time soft shadows using a single
+// light sample", WSCG / Journal of WSCG 11(1)), a baseline row of Lawlor 2006's Fig. 10.
+//
+// The method: a hard shadow map from the light's centre sample and a "shadow-width map" that holds,
+// for every texel covered by an occluder, how deep the texel lies inside the occluder's shadow: its
+// distance to the occluder's border in the map. A pixel outside the hard shadow is lit (V = 1); a
+// pixel in it is attenuated by a bivariate function of (1) the distance from the occluding point to
+// the pixel and (2) the shadow width at the pixel's texel, so the shadow fades from the hard edge
+// inwards over a width that grows with the occluder distance. The hard shadow's outline stays the
+// outer border of the shadow: this row sees half of every penumbra, from the inside, and Lawlor 2006
+// measures it against that half (Fig. 11; penumbra/metrics.h, halfPenumbraTruth, PenumbraHalf::Inner).
+//
+// Our implementation: the attenuation is the disk light's inner penumbra in plm.h's zeta and depth
+// rate, from the hard edge (V = 1) to the umbra (V = 0),
+//     V = 1 - sat(|w| s r / (z - c)),
+// with c the occluding point's depth (the hard map's texel, as in the paper: "the distance of the
+// occluding point to the shadowed point") and |w| the shadow width in texels. On a rounded occluder
+// that point is its top, nearer the light than the silhouette that bounds the shadow, so the fade is
+// wider than the penumbra and lights umbra pixels near the hard edge; the paper's caveat: "The
+// shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts". The shadow-width map is the inner halves of the silhouette ribbons of plm.h (distance to
+// the nearest silhouette segment, measured at texel centres, "highest penumbra limit wins") instead
+// of the paper's iterative image passes over the depth map, which estimate the same distance in whole
+// texels. Only edges on the border of their object's footprint in the map count (plm::RibbonFilter:
+// beyond the edge the map sees another object or nothing, and nothing above the edge): the paper's
+// distance is the one to the border of the shadow, and the silhouettes inside an object's footprint
+// (a fin over the crankcase, an arm over the body, a contour behind the object's own front) border
+// no lit texel — as widths they faded the middle of an umbra to nearly 1. Both maps are read at the texel holding the pixel (no filtering), then V goes through
+// Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. A
+// blocked texel no ribbon reaches lies deeper in the shadow than any penumbra: V = 0. Lights: as plm
+// (sphere, disk, rect, polygon, directional; segments rejected).
+// Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels
+// added to every ribbon's width), illumination_table (bool).
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "penumbra/error.h"
+#include "penumbra/light_profile.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "techniques/ribbon/plm.h"
+#include "techniques/shadow_map/shadow_map.h"
+
+namespace penumbra {
+namespace {
+
+struct KirschOptions {
+  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  DepthBias bias;             //!< of the hard compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every ribbon's width, in [0, 64]
+  bool illuminationTable = true;
+};
+
+class KirschTechnique final : public ShadowTechnique {
+ public:
+  explicit KirschTechnique(const KirschOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "kirsch"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    plm::emitterRadius(light, "kirsch");
+    createShadowMap(scene, light, options_.mapSize, map_);
+    space_ = plm::makeSpace(map_, light, "kirsch");
+    table_ = VisibilityToIllumination::forLight(light);
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
+                          plm::RibbonSides::Inner, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_, widths_);
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("kirsch: visibility() called before prepare()");
+    Timer timer;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
+      const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
+      const plm::RibbonTexel& width = widths_(i, j);
+      if (!width.covered()) return 0.0f;
+      const float c = space_.zeta(map_.lsDepth(i, j));  // the occluding point
+      const float z = space_.zeta(r.lsDepth);
+      const float blocked = std::clamp(-width.w * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
+      return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  KirschOptions options_;
+  LightMap map_;
+  plm::Space space_;
+  VisibilityToIllumination table_;
+  Image<plm::RibbonTexel> widths_;
+  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  PassTimings timings_;
+};
+
+}  // namespace
+
+TechniqueInfo kirschTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "kirsch";
+  info.summary = "hard shadow map plus a shadow-width map that fades the shadow inwards (inner penumbra only)";
+  info.source = "Kirsch & Döllner 2003, Real-time soft shadows using a single light sample (baseline in Lawlor 2006)";
+  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
+                 illuminationTableParamSpec()};
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    KirschOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.bias = depthBiasFromParams(params);
+    options.marginTexels = static_cast<float>(params.getFloat("margin"));
+    options.illuminationTable = params.getBool("illumination_table");
+    return std::make_unique<KirschTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,910 @@
+// `plm`: penumbra limit maps (Lawlor 2006, "Interpolation-friendly soft shadow maps", CGVR;
+// docs/papers.md), and the silhouette-ribbon stages of plm.h shared with `smoothies` and `kirsch`.
+//
+// The map (Sec. 2, 2.1) holds four quantities per texel, all in PLM space's zeta (plm.h):
+//  c   the depth of the occluder edge casting the texel's soft shadow (none: zetaNone),
+//  g   the geometry upper limit: the topmost surface, raised on the outer side of a ribbon so that it
+//      does not clip the outer penumbra away (Sec. 3.1 step 2). Deviation: raised to the outer limit
+//      of a point `margin` texels nearer the edge, c + max(w - margin, 0) s r, rather than to the
+//      texel's own limit c + p_i. Both give the same l_g (Equation 1 saturates to 1 above the outer
+//      limit), but with the limit itself in g the receiver's depth bias cut the outermost part of the
+//      penumbra to 1 (measured 3.3/255 on a straight edge at 32^2); and at the ribbon's border g
+//      still meets the depth of the map's far end, so the interpolation into texels without a ribbon
+//      (c = zetaNone) happens where every receiver lies above g,
+//  b   the geometry lower limit: below it the receivers are in shadow whatever the ribbon says
+//      ("when below deeper geometry, we must clamp to black", Sec. 2.1). Deviation: Sec. 3.1 step 3
+//      renders the back faces below c, "but throw away geometry above or near the occluder depth c
+//      to prevent a surface from occluding its own soft shadow". Which back face is "near" cannot be
+//      told from depth alone: the far side of a sphere lies up to its diameter below its outline and
+//      must not cut its inner penumbra, while the underside of a body below an arm lying on it (one
+//      closed mesh, no surface in between) must cut the arm's. We fit b instead, as Sec. 3 names
+//      the most reliable approach ("first calculate the true shadow profile (e.g., by dense sampling
+//      along each shadow ray) and then choose shadowing-function parameters to best fit this known
+//      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
+//      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light,
+//      and b is put just above the first one that sees less than half of what Equation 1 predicts
+//      for it, by at least 2 of the 16 (findLowerLimits). A receiver the map sees is lit from the
+//      light's centre, so in no umbra, and is not probed,
+//  p_i the signed penumbra limit w s r (Sec. 3), + outside the silhouette, 0 where no ribbon.
+// Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
+// topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
+// "highest penumbra limit wins", taken only where a surface lies below the edge (plm.h's
+// farthestSurface) and, on an edge's inner side, only where the light map sees the edge's object
+// (the inner side of one edge's line must not reach past a thin occluder's other edges). Deviation
+// (the clamp of Fig. 7 C, applied before the priority): a ribbon whose shadow is hidden from the
+// light's centre does not compete for the texel — on its outer side (or its inner side over another
+// object) where the topmost surface of the texel lies above the edge (a higher occluder hides what
+// lies below it), and wherever the topmost surface 1.5 texels beyond the edge lies above it (the edge
+// is not on the outline seen from the light: a contour behind the object's own front, or a fold of a
+// tessellated silhouette, whose outer side faces into the occluder). The texel goes to the best
+// remaining ribbon, or to none. Clamped after the priority instead, a texel whose winner was hidden
+// fell to the hard compare, which drew black spikes across the inner penumbra of every tessellated
+// curved occluder.
+// Evaluation, per pixel: the bilinear interpolation of the four channels at the pixel's map position
+// (the paper's single bilinear fetch) and Equation 2,
+//     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
+// with the compare with g made at the receiver's depth moved towards the light by the slope-scaled
+// bias of shadow_map.h (a receiver must not shadow itself through its own depth), and Equation 1
+// and the compares with c and b at its true depth (neither is the receiver's own surface); a
+// receiver facing away from the light's centre gets no bias (the map never holds it); where no ribbon
+// touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
+// V = f(l_g) through the visibility-to-illumination table of Appendix A (penumbra/light_profile.h)
+// when `illumination_table` is on. Deviation (Fig. 7 B, "at the transition between the small and
+// large objects' penumbras, the penumbra limit depth p_i crosses over the occluder depth c, which
+// results in a highly visible erroneous shadow transition"): where the four texels do not hold one
+// ribbon (edges that are neither the same nor neighbours on one silhouette, a texel without a ribbon,
+// or b at some of them only or jumping), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
+// the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four
+// values are interpolated. Interpolating c and p_i across such a jump drew the white lines across
+// umbrae and the ragged outlines of an interpolated b; the paper's remedy, clamping g and b
+// together at the transition (Fig. 7 C), leaves a hard edge there.
+// Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
+// rasterization and the bias); one occluder per shadow-map ray (the first penumbra wins, Sec. 3);
+// corners are rounded (the ribbon of a segment ends in a half disk); where an occluder is thinner
+// than a texel (a sharp corner) the map sees what lies under it and the shadow there is lost; near a
+// contact with the receiver the depth bias lights the shadow, as in every shadow map. Lights: directional disks (an
+// orthographic map, as the paper) and sphere, disk, rect and polygon lights through the perspective
+// transform of plm.h; segment lights are rejected.
+// Cost: the fit of b traces rays (on `engine`, 121k triangles, about a third of prepare); the scene's
+// BVH for it is kept between prepares while every mesh's geometry is the same to the bit.
+// Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
+// (texels added to every ribbon's half-width), illumination_table (bool).
+#include "techniques/ribbon/plm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <optional>
+
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "penumbra/error.h"
+#include "penumbra/light_profile.h"
+#include "techniques/silhouette/mesh_topology.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "raster/rasterizer.h"
+#include "techniques/parker/outer_objects.h"
+#include "techniques/shadow_map/shadow_map.h"
+
+namespace penumbra {
+namespace plm {
+
+float emitterRadius(const Light& light, const char* technique) {
+  switch (light.shape()) {
+    case LightShape::Sphere:
+    case LightShape::Disk: return light.radius();
+    case LightShape::Directional: return std::tan(0.5f * light.angularDiameter());
+    case LightShape::Rect:
+    case LightShape::Polygon: {
+      // The disk of equal area: Newell's area of the (planar, convex) polygon.
+      const std::vector<Vec3>& v = light.vertices();
+      Vec3 n(0.0f);
+      for (size_t i = 0; i < v.size(); ++i) n += glm::cross(v[i], v[(i + 1) % v.size()]);
+      return std::sqrt(0.5f * glm::length(n) / kPi);
+    }
+    case LightShape::Segment: break;
+  }
+  fail("{}: a {} light is not supported (it has no width across its axis, so no disk stands for it); supported: "
+       "sphere, disk, rect, polygon, directional",
+       technique, toString(light.shape()));
+}
+
+Space makeSpace(const LightMap& map, const Light& light, const char* technique) {
+  Space space;
+  const float radius = emitterRadius(light, technique);
+  space.orthographic = map.orthographic;
+  const float zNear = std::max(map.zNear, 1e-6f * std::max(map.zFar, 1e-6f));
+  const float zFar = std::max(map.zFar, zNear * (1.0f + 1e-4f));
+  space.zetaNear = space.zeta(zNear);
+  space.zetaFar = space.zeta(zFar);
+  // Deeper than anything, with the scale of the map's range (a finite value: it is interpolated).
+  space.zetaNone = space.zetaFar + 4.0f * (space.zetaFar - space.zetaNear);
+  const float texelSize = 2.0f * (map.orthographic ? map.halfWidth : map.tanHalfFov) / static_cast<float>(map.size);
+  space.ratePerTexel = texelSize / radius;
+  return space;
+}
+
+namespace {
+
+// A surface counts as below an edge when deeper by this fraction of the edge's zeta (float rounding of
+// the two rasterizations of one surface stays well inside it).
+constexpr float kBelowEdge = 1e-5f;
+
+uint64_t edgeKey(uint32_t a, uint32_t b) {
+  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
+}
+
+// One triangle's use of one edge, in triangle order (`use` increases with it).
+struct EdgeRecord {
+  uint64_t key;
+  uint32_t use;
+  uint32_t triangle;  //!< index among the mesh's kept triangles
+  uint32_t opposite;  //!< the triangle's third (welded) vertex
+};
+
+}  // namespace
+
+// One mesh's edges, which depend on its geometry alone: vertices welded by exact position
+// (primitives repeat vertices where normals differ: a box's corners), the triangles kept (neither
+// two welded corners alike nor a degenerate normal) with their normal and centroid, and each edge's
+// uses by those triangles in triangle order, the edges in order of first use.
+struct MeshEdges {
+  rt::MeshFingerprint key;
+  std::vector<Vec3> positions;       //!< welded
+  std::vector<Vec3> normals, centroids;  //!< per kept triangle
+  std::vector<uint32_t> a, b;        //!< per edge: welded end points, a < b
+  std::vector<uint32_t> firstUse;    //!< per edge, and one past the last: its uses in the two arrays below
+  std::vector<uint32_t> useTriangle, useOpposite;
+
+  void build(const Mesh& mesh) {
+    const std::vector<uint32_t> canonical = weldVertices(mesh.positions, positions);
+    normals.clear();
+    centroids.clear();
+    std::vector<EdgeRecord> records;
+    records.reserve(3 * mesh.triangles.size());
+    for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
+      const glm::uvec3& tri = mesh.triangles[ti];
+      const uint32_t v[3] = {canonical[tri.x], canonical[tri.y], canonical[tri.z]};
+      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+      const Vec3 n = mesh.faceNormal(ti);
+      if (!(glm::dot(n, n) > 0.0f)) continue;  // degenerate
+      const auto kept = static_cast<uint32_t>(normals.size());
+      normals.push_back(n);
+      centroids.push_back((positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f);
+      for (int k = 0; k < 3; ++k)
+        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)), kept,
+                           v[(k + 2) % 3]});
+    }
+    // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
+    // (key, use) orders the records totally (a use is one triangle's one edge), so a parallel sort
+    // gives the one order.
+    tbb::parallel_sort(records.begin(), records.end(),
+                       [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
+    std::vector<std::pair<uint32_t, uint32_t>> order;  // (first use, first record) per edge
+    for (size_t i = 0; i < records.size();) {
+      order.emplace_back(records[i].use, static_cast<uint32_t>(i));
+      const uint64_t key = records[i].key;
+      while (i < records.size() && records[i].key == key) ++i;
+    }
+    tbb::parallel_sort(order.begin(), order.end());  // first uses are distinct: one order
+    a.clear();
+    b.clear();
+    firstUse.clear();
+    useTriangle.clear();
+    useOpposite.clear();
+    for (const auto& [use, first] : order) {
+      const uint64_t key = records[first].key;
+      a.push_back(static_cast<uint32_t>(key >> 32));
+      b.push_back(static_cast<uint32_t>(key & 0xffffffffu));
+      firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
+      for (size_t i = first; i < records.size() && records[i].key == key; ++i) {
+        useTriangle.push_back(records[i].triangle);
+        useOpposite.push_back(records[i].opposite);
+      }
+    }
+    firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
+  }
+};
+
+struct EdgeCache::Impl {
+  std::vector<std::optional<MeshEdges>> meshes;  //!< per object index
+  // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
+  // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
+  std::vector<uint8_t> front, isSilhouette;
+  std::vector<Edge> candidates;
+};
+
+EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
+EdgeCache::~EdgeCache() = default;
+
+std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const LightMap& map, const Space& space,
+                                  EdgeCache* cache) {
+  EdgeCache local;
+  EdgeCache& edgeCache = cache ? *cache : local;
+  edgeCache.impl_->meshes.resize(scene.objects.size());
+  std::vector<Edge> edges;
+  std::vector<uint8_t>& front = edgeCache.impl_->front;
+  std::vector<uint8_t>& isSilhouette = edgeCache.impl_->isSilhouette;
+  std::vector<Edge>& candidates = edgeCache.impl_->candidates;
+  for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
+    const Object& object = scene.objects[objectIndex];
+    const size_t firstEdge = edges.size();
+    std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
+    std::optional<MeshEdges>& cached = edgeCache.impl_->meshes[objectIndex];
+    const rt::MeshFingerprint key = rt::meshFingerprint(object.mesh);
+    if (!cached || !(cached->key == key)) {
+      cached.emplace();
+      cached->build(object.mesh);
+      cached->key = key;
+    }
+    const MeshEdges& topology = *cached;
+    const std::vector<Vec3>& positions = topology.positions;
+    // A triangle faces the light when its normal points to the light's centre (directional: along its direction).
+    front.resize(topology.normals.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, front.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t t = range.begin(); t < range.end(); ++t) {
+        const Vec3 toLight = light.isDirectional() ? light.direction() : light.center() - topology.centroids[t];
+        front[t] = glm::dot(topology.normals[t], toLight) > 0.0f ? 1 : 0;
+      }
+    });
+    const size_t edgeCount = topology.a.size();
+    candidates.resize(edgeCount);
+    isSilhouette.assign(edgeCount, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, edgeCount, 1024), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const uint32_t u0 = topology.firstUse[k], u1 = topology.firstUse[k + 1];
+        const int count = static_cast<int>(u1 - u0);
+        int frontCount = 0;
+        for (uint32_t u = u0; u < u1; ++u) frontCount += front[topology.useTriangle[u]];
+        if (!(count == 1 || (frontCount > 0 && frontCount < count))) continue;
+        // The third vertices of the edge's first two triangles, and which of the two (0, 1) faces the light.
+        const int slots = std::min(count, 2);
+        int firstFront = -1;
+        for (int slot = 0; slot < slots && firstFront < 0; ++slot)
+          if (front[topology.useTriangle[u0 + static_cast<uint32_t>(slot)]]) firstFront = slot;
+        const Vec3& pa = positions[topology.a[k]];
+        const Vec3& pb = positions[topology.b[k]];
+        const Vec3 sa = map.project(pa), sb = map.project(pb);
+        if (!map.orthographic && !(sa.z > 0.0f && sb.z > 0.0f)) continue;  // behind a local light
+        Edge e;
+        e.a = Vec2(sa.x, sa.y);
+        e.b = Vec2(sb.x, sb.y);
+        const Vec2 d = e.b - e.a;
+        const float length = glm::length(d);
+        if (!(length > 1e-6f) || !std::isfinite(length)) continue;  // seen end-on
+        Vec2 normal(-d.y / length, d.x / length);
+        // The inner side holds the (front-facing) triangle's third vertex.
+        int order[2], orderCount = 0;
+        if (firstFront >= 0) order[orderCount++] = firstFront;
+        for (int slot = 0; slot < slots; ++slot)
+          if (slot != firstFront) order[orderCount++] = slot;
+        float side = 0.0f;
+        for (int q = 0; q < orderCount && !(std::abs(side) > 1e-6f * length); ++q) {
+          const Vec3 so = map.project(positions[topology.useOpposite[u0 + static_cast<uint32_t>(order[q])]]);
+          if (!map.orthographic && !(so.z > 0.0f)) continue;
+          side = glm::dot(Vec2(so.x, so.y) - e.a, normal);
+        }
+        if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
+        e.outward = side > 0.0f ? -normal : normal;
+        e.zetaA = space.zeta(sa.z);
+        e.zetaB = space.zeta(sb.z);
+        e.objectId = object.id;
+        candidates[k] = e;
+        isSilhouette[k] = 1;
+      }
+    });
+    for (size_t k = 0; k < edgeCount; ++k)
+      if (isSilhouette[k]) {
+        edges.push_back(candidates[k]);
+        ends.emplace_back(topology.a[k], topology.b[k]);
+      }
+    // Corners: where exactly two silhouette edges of the object meet, the corner is convex when the
+    // other edge leaves towards this edge's inner side.
+    // (vertex, 2 * edge + (0: a, 1: b)), grouped by vertex.
+    std::vector<std::pair<uint32_t, uint32_t>> atVertex;
+    atVertex.reserve(2 * ends.size());
+    for (uint32_t k = 0; k < ends.size(); ++k) {
+      atVertex.emplace_back(ends[k].first, 2 * k);
+      atVertex.emplace_back(ends[k].second, 2 * k + 1);
+    }
+    std::sort(atVertex.begin(), atVertex.end());
+    for (size_t i = 0; i < atVertex.size();) {
+      size_t j = i + 1;
+      while (j < atVertex.size() && atVertex[j].first == atVertex[i].first) ++j;
+      const size_t group = i, groupSize = j - i;
+      i = j;
+      if (groupSize != 2) continue;
+      for (size_t self = 0; self < 2; ++self) {
+        const uint32_t mine = atVertex[group + self].second, other = atVertex[group + 1 - self].second;
+        Edge& e = edges[firstEdge + mine / 2];
+        const Edge& o = edges[firstEdge + other / 2];
+        const Vec2 corner = (mine & 1) ? e.b : e.a;
+        const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
+        const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
+        ((mine & 1) ? e.endSideB : e.endSideA) = side;
+        ((mine & 1) ? e.neighbourB : e.neighbourA) = static_cast<int32_t>(firstEdge + other / 2);
+      }
+    }
+  }
+  return edges;
+}
+
+void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far) {
+  // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
+  // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
+  // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
+  std::vector<Vec4> clip;
+  std::vector<float> lsZ;
+  std::vector<glm::uvec3> triangles;
+  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
+  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  for (const Object& object : scene.objects) {
+    const auto offset = static_cast<uint32_t>(clip.size());
+    for (const Vec3& p : object.mesh.positions) {
+      const Vec3 l = map.lsFromWs(p);
+      clip.push_back(map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
+                                      : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z));
+      lsZ.push_back(l.z);
+    }
+    for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
+  }
+  far.reset(map.size, map.size, space.zetaNone);
+  if (triangles.empty()) return;
+  raster::RasterInput input;
+  input.width = input.height = map.size;
+  input.clipPositions = clip;
+  input.triangles = triangles;
+  // Straight from the resolved tiles, z interpolated as the rasterizer interpolates attributes:
+  // no intermediate images.
+  raster::rasterize(input, [&](const raster::TileSamples& samples) {
+    for (int j = 0; j < samples.height; ++j) {
+      float* row = far.row(samples.y0 + j) + samples.x0;
+      for (int i = 0; i < samples.width; ++i) {
+        const int k = j * raster::kTileSize + i;
+        if (samples.triangle[k] < 0) continue;
+        const glm::uvec3& t = triangles[static_cast<size_t>(samples.triangle[k])];
+        const Vec3& b = samples.barycentrics[k];
+        const float z = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];
+        row[i] = map.orthographic || z > 0.0f ? space.zeta(z) : space.zetaNone;
+      }
+    }
+  });
+}
+
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
+                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
+  out.reset(mapSize, mapSize, RibbonTexel{});
+  constexpr int kTile = 32;
+  const int tiles = (mapSize + kTile - 1) / kTile;
+  struct Box {
+    int i0, j0, i1, j1;  //!< inclusive texel bounds
+    float halfWidth;     //!< texels
+  };
+  std::vector<Box> boxes(edges.size());
+  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
+  // An edge whose every candidate the hidden-shadow test drops (below) is not rasterized: where the
+  // topmost surface kHiddenProbeTexels beyond each point of the edge lies above the edge's nearest
+  // end (a contour behind the object's own front, most silhouettes of a dense model). Probed at
+  // quarter-texel steps along the edge, each with the 3 x 3 texels around it (every probe texel of
+  // the per-texel test lies within them), and against the edge's least depth, so that a skipped
+  // edge is one the per-texel test would have dropped everywhere.
+  const auto hidden = [&](const Edge& e) {
+    const Image<float>* top = filter.topDepth;
+    if (!top) return false;
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float cBound = cMin - 1e-5f * std::abs(cMin);  // below every c of the edge, rounding included
+    const Vec2 d = e.b - e.a;
+    const int steps = std::max(1, static_cast<int>(std::ceil(4.0f * glm::length(d))));
+    if (steps > 4 * mapSize) return false;
+    for (int q = 0; q <= steps; ++q) {
+      const float u = static_cast<float>(q) / static_cast<float>(steps);
+      const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
+      const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int x = pi + di, y = pj + dj;
+          if (x < 0 || y < 0 || x >= mapSize || y >= mapSize) return false;
+          const float depth = (*top)(x, y);
+          if (!(std::isfinite(depth) && space.zeta(depth) < cBound)) return false;
+        }
+    }
+    return true;
+  };
+  std::vector<uint8_t> skip(edges.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) skip[k] = hidden(edges[k]) ? 1 : 0;
+  });
+  for (size_t k = 0; k < edges.size(); ++k) {
+    if (skip[k]) continue;
+    const Edge& e = edges[k];
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
+    // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
+    const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
+    const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
+    Box box{std::max(0, static_cast<int>(std::floor(lo.x))), std::max(0, static_cast<int>(std::floor(lo.y))),
+            std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))), std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))),
+            half};
+    boxes[k] = box;
+    if (box.i0 > box.i1 || box.j0 > box.j1) continue;
+    for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
+      for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti)
+        bins[static_cast<size_t>(tj) * tiles + ti].push_back(static_cast<uint32_t>(k));
+  }
+  const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
+    // The tile's priorities (texels are the tile's alone: no other task writes them), and one span's geometry.
+    float priority[kTile * kTile];
+    float spanU[kTile], spanC[kTile], spanDistance[kTile], spanP[kTile];
+    uint8_t spanOuter[kTile];
+    for (int tile = range.begin(); tile < range.end(); ++tile) {
+      const int ti = tile % tiles, tj = tile / tiles;
+      std::fill(priority, priority + kTile * kTile, kInfinity);
+      for (uint32_t k : bins[static_cast<size_t>(tile)]) {
+        const Edge& e = edges[k];
+        const Box& box = boxes[k];
+        const Vec2 d = e.b - e.a;
+        const float invLength2 = 1.0f / glm::dot(d, d);
+        const int i0 = std::max(box.i0, ti * kTile), i1 = std::min(box.i1, ti * kTile + kTile - 1);
+        const int j0 = std::max(box.j0, tj * kTile), j1 = std::min(box.j1, tj * kTile + kTile - 1);
+        const float xLo = std::min(e.a.x, e.b.x), xHi = std::max(e.a.x, e.b.x);
+        const float yLo = std::min(e.a.y, e.b.y), yHi = std::max(e.a.y, e.b.y);
+        const float h = box.halfWidth;
+        for (int j = j0; j <= j1; ++j) {
+          // The texels of the row within h of the segment lie within h of its bounding box and
+          // within h of its line: only that span is visited (widened by a texel against rounding;
+          // the exact test below decides).
+          const float y = static_cast<float>(j) + 0.5f;
+          const float dy = std::max({0.0f, yLo - y, y - yHi});
+          if (dy > h + 1.0f) continue;
+          const float reach = std::sqrt(std::max(h * h - dy * dy, 0.0f));
+          float spanLo = xLo - reach, spanHi = xHi + reach;
+          if (std::abs(e.outward.x) > 1e-3f) {
+            // |(q - a) . n| <= h along the row, solved for q.x.
+            const float across = (y - e.a.y) * e.outward.y;
+            const float x0 = e.a.x + (-h - across) / e.outward.x, x1 = e.a.x + (h - across) / e.outward.x;
+            spanLo = std::max(spanLo, std::min(x0, x1));
+            spanHi = std::min(spanHi, std::max(x0, x1));
+          }
+          const int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
+          const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
+          RibbonTexel* row = out.row(j);
+          // Two passes over the span: the geometry of every texel without branches (four texels to
+          // an SSE vector, the same operations in the same order as the scalar tail, so the same
+          // values bit for bit), then the candidates that beat the texel's current winner through
+          // the filters, which only drop candidates and read other images.
+          const int count = si1 - si0 + 1;
+          if (count <= 0) continue;
+          float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
+          const float aqy = y - e.a.y, by = y - e.b.y;
+          int m = 0;
+#if defined(__SSE4_1__)
+          {
+            const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
+            const __m128 ax = _mm_set1_ps(e.a.x), bx = _mm_set1_ps(e.b.x), dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y);
+            const __m128 vAqy = _mm_set1_ps(aqy), vBy = _mm_set1_ps(by), vInvLength2 = _mm_set1_ps(invLength2);
+            const __m128 outX = _mm_set1_ps(e.outward.x), outY = _mm_set1_ps(e.outward.y);
+            const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
+            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB), dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
+            const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
+            const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
+            const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
+            for (; m + 4 <= count; m += 4) {
+              const __m128 qx = _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
+              const __m128 aqx = _mm_sub_ps(qx, ax);
+              const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
+              const __m128 u = _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
+              const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
+              const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
+              const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
+              const __m128 oy = _mm_blendv_ps(_mm_blendv_ps(sy, vBy, beyondB), vAqy, beforeA);
+              const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
+              const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
+              const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
+              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero), _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
+              const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
+              const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
+              const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
+              // outer ? wantOuter : wantInner (one of the two at least is wanted)
+              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
+              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted), _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
+              _mm_storeu_ps(spanU + m, u);
+              _mm_storeu_ps(spanC + m, c);
+              _mm_storeu_ps(spanDistance + m, distance);
+              _mm_storeu_ps(spanP + m, _mm_blendv_ps(inf, p, take));
+              const int outerBits = _mm_movemask_ps(outer);
+              for (int lane = 0; lane < 4; ++lane) spanOuter[m + lane] = static_cast<uint8_t>((outerBits >> lane) & 1);
+            }
+          }
+#endif
+          for (; m < count; ++m) {
+            const float qx = static_cast<float>(si0 + m) + 0.5f;
+            const float aqx = qx - e.a.x;
+            const float along = (aqx * d.x + aqy * d.y) * invLength2;
+            const float u = std::min(std::max(along, 0.0f), 1.0f);
+            // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
+            // corner, so they tie there.
+            const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
+            const float ox = beforeA ? aqx : (beyondB ? qx - e.b.x : aqx - u * d.x);
+            const float oy = beforeA ? aqy : (beyondB ? by : aqy - u * d.y);
+            const float distance = std::sqrt(ox * ox + oy * oy);
+            const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
+            const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
+            const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
+            const float p = c + distance * space.ratePerTexel;
+            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m];
+            spanU[m] = u;
+            spanC[m] = c;
+            spanDistance[m] = distance;
+            spanP[m] = take ? p : kInfinity;
+            spanOuter[m] = outer ? 1 : 0;
+          }
+          for (int m = 0; m < count; ++m) {
+            if (!(spanP[m] < prio[m])) continue;
+            const int i = si0 + m;
+            const float u = spanU[m], c = spanC[m], distance = spanDistance[m], p = spanP[m];
+            const bool outer = spanOuter[m] != 0;
+            const Image<int32_t>* coverage = filter.coverage;
+            const bool ownObject = !coverage || (*coverage)(i, j) == e.objectId;
+            if (!outer && !ownObject) continue;
+            // The texel kHiddenProbeTexels beyond the edge's nearest point; outside the map nothing is seen.
+            const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
+            const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+            const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
+            if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId) continue;
+            if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
+            if (const Image<float>* top = filter.topDepth) {
+              // Depths as zeta; an empty texel (infinite depth) lies below everything.
+              const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
+              if ((outer || !ownObject) && above((*top)(i, j))) continue;
+              if (probeInMap && above((*top)(pi, pj))) continue;
+            }
+            prio[m] = p;
+            row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
+          }
+        }
+      }
+    }
+  });
+}
+
+}  // namespace plm
+
+namespace {
+
+struct PlmOptions {
+  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  DepthBias bias;             //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every ribbon's half-width, in [0, 64]
+  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
+};
+
+// The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
+// parameter square, one packet), the share of Equation 1's prediction below which a receiver is
+// taken as shadowed by more than the ribbon's edge, and how many surfaces along a texel's ray are
+// looked at.
+constexpr int kProfileGrid = 4;
+constexpr int kProfileSamples = kProfileGrid * kProfileGrid;
+constexpr float kProfileFraction = 0.5f;
+constexpr int kMaxProfileHits = 16;
+// Fewer samples than Equation 1 predicts by at least this many (2/16 of the light): a prediction
+// below it cannot be told from no light by 16 samples, and is left alone.
+constexpr float kProfileMinDeficit = 2.0f;
+static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
+
+// Classes of the 2x2 footprint of a bilinear fetch (PlmTechnique::footprint2x2_).
+constexpr uint8_t kFootprintMixed = 0, kFootprintRibbonFree = 1, kFootprintOneRibbon = 2;
+
+// Beyond this spread of b over the four texels of a fetch, relative to the receiver's distance to
+// it, the texels' b are not interpolated (oneRibbon).
+constexpr float kTransitionSpread = 1.0f / 16.0f;
+
+// One texel of the penumbra limit map (Sec. 2.2 stores the same four in RGBA).
+struct PlmTexel {
+  float c, g, b, pi;
+  int32_t edge;  //!< the ribbon's edge (index into edges_); -1 where no ribbon
+};
+
+class PlmTechnique final : public ShadowTechnique {
+ public:
+  explicit PlmTechnique(const PlmOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "plm"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
+    createShadowMap(scene, light, options_.mapSize, map_);
+    space_ = plm::makeSpace(map_, light, "plm");
+    table_ = VisibilityToIllumination::forLight(light);
+    light_ = light;
+    edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
+    const std::vector<plm::Edge>& edges = edges_;
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
+    const Image<plm::RibbonTexel>& ribbons = ribbons_;
+    const int n = map_.size;
+    limits_.reset(n, n, PlmTexel{});
+    std::vector<int>& needLower = needLower_;  // texels whose ribbon needs the lower limit b
+    needLower.clear();
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < n; ++i) {
+          const float depth = map_.lsDepth(i, j);
+          const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
+          PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
+          const plm::RibbonTexel& r = ribbons(i, j);
+          if (r.covered()) {
+            texel.c = r.c;
+            texel.pi = r.w * space_.ratePerTexel;
+            texel.edge = r.edge;
+            if (r.w > 0.0f)  // raise g (step 2; see the file comment)
+              texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
+          }
+          limits_(i, j) = texel;
+        }
+    });
+    for (int j = 0; j < n; ++j) {
+      const plm::RibbonTexel* row = ribbons.row(j);
+      for (int i = 0; i < n; ++i)
+        if (row[i].covered()) needLower.push_back(j * n + i);
+    }
+    if (!needLower.empty()) findLowerLimits(scene, light, needLower);
+    // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
+    // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
+    // at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without the
+    // depth test of b, which needs the receiver), or neither.
+    g_.reset(n, n, 0.0f);
+    footprint2x2_.reset(n, n, kFootprintMixed);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        const int j1 = std::min(j + 1, n - 1);
+        for (int i = 0; i < n; ++i) {
+          const int i1 = std::min(i + 1, n - 1);
+          g_(i, j) = limits_(i, j).g;
+          const PlmTexel &t00 = limits_(i, j), &t10 = limits_(i1, j), &t01 = limits_(i, j1), &t11 = limits_(i1, j1);
+          if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone)
+            footprint2x2_(i, j) = kFootprintRibbonFree;
+          else if (continuousRibbon(t00, t10, t01, t11))
+            footprint2x2_(i, j) = kFootprintOneRibbon;
+        }
+      }
+    });
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("plm: visibility() called before prepare()");
+    Timer timer;
+    const int n = map_.size;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const Vec3& position = gbuffer.wsPosition(x, y);
+      const Vec3& normal = gbuffer.wsGeometricNormal(x, y);
+      ShadowReceiver r = makeReceiver(map_, position, normal, options_.bias);
+      if (!r.inMap) return 1.0f;
+      // A surface that faces away from the light's centre is never the one the map holds at its
+      // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
+      // the compare: the bias would only lift it above the surface that covers it.
+      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f) r.bias = 0.0f;
+      // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
+      const float fs = r.s - 0.5f, ft = r.t - 0.5f;
+      const float is = std::floor(fs), it = std::floor(ft);
+      const float ws = fs - is, wt = ft - it;
+      const int i0 = std::clamp(static_cast<int>(is), 0, n - 1), i1 = std::clamp(static_cast<int>(is) + 1, 0, n - 1);
+      const int j0 = std::clamp(static_cast<int>(it), 0, n - 1), j1 = std::clamp(static_cast<int>(it) + 1, 0, n - 1);
+      const auto lerp2 = [&](float a00, float a10, float a01, float a11) {
+        const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
+        return top + wt * (bottom - top);
+      };
+      const float g = lerp2(g_(i0, j0), g_(i1, j0), g_(i0, j1), g_(i1, j1));
+      const float biased = r.lsDepth - r.bias;
+      const float zc = space_.orthographic || biased > 0.0f ? space_.zeta(biased) : -kInfinity;
+      // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
+      // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The flag's
+      // 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
+      const uint8_t footprint = footprint2x2_(i0, j0);
+      if (footprint == kFootprintRibbonFree) return zc < g ? 1.0f : 0.0f;
+      const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
+      if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
+      const float z = space_.zeta(r.lsDepth);
+      if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
+        // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
+        // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
+        const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
+        const int is[4] = {i0, i1, i0, i1}, js[4] = {j0, j0, j1, j1};
+        const float weights[4] = {(1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
+        float sum = 0.0f;
+        for (int k = 0; k < 4; ++k) {
+          const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
+          const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
+          const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
+          const float lg = equation2(*texels[k], zk, zck);
+          sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
+        }
+        return sum;
+      }
+      const PlmTexel texel{lerp2(t00.c, t10.c, t01.c, t11.c), g, lerp2(t00.b, t10.b, t01.b, t11.b),
+                           lerp2(t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
+      const float lg = equation2(texel, z, zc);
+      return options_.illuminationTable ? table_(lg) : lg;
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
+  // receiver at depth z. The compare with g is made at zc, z moved towards the light by the bias;
+  // those with c and b at z itself: the bias keeps a surface from shadowing itself through its own
+  // depth in g, and neither the edge nor the lower limit is the receiver's surface (biased, a
+  // receiver just under a part of the occluder rose above the b that clamps it). A texel without a
+  // ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
+  float equation2(const PlmTexel& t, float z, float zc) const {
+    if (t.c >= space_.zetaNone) return zc < t.g ? 1.0f : 0.0f;
+    const float l = std::clamp(0.5f + 0.5f * t.pi / std::max(z - t.c, 1e-30f), 0.0f, 1.0f);
+    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (z < t.c) + (z < t.b) - 1.0f, 0.0f, 1.0f);
+  }
+
+  // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
+  // interpolated (the paper's fetch): every texel's edge is the same as, or shares an end with, every
+  // other's (c and p_i are continuous along a silhouette polyline), and b is absent at all four or
+  // present at all four; and, for a receiver at z, bContinuous.
+  bool continuousRibbon(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11) const {
+    const PlmTexel* t[4] = {&t00, &t10, &t01, &t11};
+    for (int k = 0; k < 4; ++k) {
+      if (t[k]->edge < 0) return false;
+      const plm::Edge& e = edges_[static_cast<size_t>(t[k]->edge)];
+      for (int m = k + 1; m < 4; ++m)
+        if (t[m]->edge != t[k]->edge && t[m]->edge != e.neighbourA && t[m]->edge != e.neighbourB) return false;
+    }
+    const bool anyB = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b)) < space_.zetaNone;
+    const bool allB = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b)) < space_.zetaNone;
+    return anyB == allB;
+  }
+
+  // b, where present, spreads over at most kTransitionSpread of the receiver's distance to it: the
+  // fitted b jumps where the receivers below change, and interpolated across the jump it put the
+  // receiver on either side of it by the sub-texel position alone.
+  bool bContinuous(const PlmTexel& t00, const PlmTexel& t10, const PlmTexel& t01, const PlmTexel& t11, float z) const {
+    const float bMin = std::min(std::min(t00.b, t10.b), std::min(t01.b, t11.b));
+    if (bMin >= space_.zetaNone) return true;
+    const float bMax = std::max(std::max(t00.b, t10.b), std::max(t01.b, t11.b));
+    return bMax - bMin <= kTransitionSpread * std::abs(z - bMin);
+  }
+
+  // b (step 3) for the listed texels, fitted to the shadow along the texel's light ray: from a
+  // texel's size below c down, each surface that faces the light is a receiver of this texel's
+  // shadow. Its visibility is measured just above it with kProfileSamples rays to the light
+  // (stratified over the emitter, one packet), and b is put there at the first one that sees less
+  // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
+  // more of this one than its edge accounts for, shadows the receivers (see the file comment).
+  void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
+    // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
+    // positions and triangles are the same to the bit (a static scene under a moving light).
+    std::vector<rt::MeshFingerprint> key;
+    key.reserve(scene.objects.size());
+    for (const Object& object : scene.objects) key.push_back(rt::meshFingerprint(object.mesh));
+    if (!rays_ || key != raysKey_) {
+      rays_.reset();
+      rays_ = std::make_unique<RayScene>(scene);
+      raysKey_ = std::move(key);
+    }
+    const RayScene& rays = *rays_;
+    const int n = map_.size;
+    Vec2 pattern[kProfileSamples];
+    for (int q = 0; q < kProfileSamples; ++q)
+      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid, (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const int i = texels[k] % n, j = texels[k] / n;
+        PlmTexel& texel = limits_(i, j);
+        // Only receivers below the surface the map sees are probed: none where that is the deepest.
+        const float seenDepth = map_.lsDepth(i, j);
+        if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+        const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
+        const float cDepth = space_.lsDepth(texel.c);
+        const float start = cDepth + map_.texelWorldSize(cDepth);
+        Ray ray;
+        ray.origin = map_.unproject(s, t, start);
+        ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
+        std::optional<RayHit> hit;
+        for (int hop = 0; hop < kMaxProfileHits && (hit = rays.intersect(ray)); ++hop) {
+          ray.tMin = std::nextafter(hit->t, kInfinity);
+          if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
+          const Vec3 wsHit = ray.origin + hit->t * ray.direction;
+          const float depth = map_.lsFromWs(wsHit).z;
+          const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+          // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
+          if (!(depth > map_.lsDepth(i, j) + lift)) continue;
+          const float probeDepth = depth - lift;
+          if (!(probeDepth > 0.0f)) continue;
+          const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+          const float predicted = options_.illuminationTable ? table_(l) : l;
+          if (!(predicted > 0.0f)) continue;
+          const Vec3 probe = wsHit - lift * ray.direction;
+          Ray toLight[kProfileSamples];
+          bool blocked[kProfileSamples];
+          for (int q = 0; q < kProfileSamples; ++q) {
+            const LightSample sample = light.sample(probe, pattern[q]);
+            toLight[q].origin = probe;
+            toLight[q].direction = sample.wsDirection;
+            toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+          }
+          rays.occluded16(toLight, kProfileSamples, blocked);
+          int seen = 0;
+          for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
+          const float expected = predicted * kProfileSamples;
+          if (static_cast<float>(seen) < kProfileFraction * expected && expected - static_cast<float>(seen) >= kProfileMinDeficit) {
+            texel.b = space_.zeta(probeDepth);
+            break;
+          }
+        }
+      }
+    });
+  }
+
+  PlmOptions options_;
+  LightMap map_;
+  plm::Space space_;
+  VisibilityToIllumination table_;
+  std::optional<Light> light_;      //!< the light of the last prepare()
+  Image<PlmTexel> limits_;
+  Image<float> g_;                  //!< limits_' g alone, for the lit fast path
+  Image<uint8_t> footprint2x2_;     //!< kFootprint* of the 2x2 texels whose top-left this is
+  // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
+  // fresh pages.
+  Image<float> farthest_;
+  Image<plm::RibbonTexel> ribbons_;
+  std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
+  std::vector<int> needLower_;
+  std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
+  std::vector<rt::MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  PassTimings timings_;
+};
+
+}  // namespace
+
+ParamSpec ribbonMarginParamSpec() {
+  return ParamSpec{.name = "margin", .type = ParamType::Float, .defaultValue = 2.0, .min = 0.0, .max = 64.0, .choices = {},
+                   .unit = "texels",
+                   .help = "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon"};
+}
+
+ParamSpec illuminationTableParamSpec() {
+  return ParamSpec{.name = "illumination_table", .type = ParamType::Bool, .defaultValue = true, .min = {}, .max = {},
+                   .choices = {}, .unit = "",
+                   .help = "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A "
+                           "table for the light's profile (disk lights; identity for rect, polygon)"};
+}
+
+TechniqueInfo plmTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "plm";
+  info.summary = "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
+  info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
+  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
+                 illuminationTableParamSpec()};
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    PlmOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.bias = depthBiasFromParams(params);
+    options.marginTexels = static_cast<float>(params.getFloat("margin"));
+    options.illuminationTable = params.getBool("illumination_table");
+    return std::make_unique<PlmTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

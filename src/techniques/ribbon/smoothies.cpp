@@ -1,0 +1,121 @@
+// `smoothies`: outer penumbrae only (Chan & Durand 2003, "Rendering fake soft shadows with
+// smoothies", Eurographics Symposium on Rendering), a baseline row of Lawlor 2006's Fig. 10.
+//
+// The method: a hard shadow map from the light's centre sample, plus "smoothies": planar strips
+// attached to the silhouette edges of the occluders, extending outwards, rendered from the light into
+// a smoothie buffer that keeps, per texel, the smoothie nearest the light — its depth and an alpha
+// ramping from 0 at the silhouette edge to 1 at the strip's outer border. A pixel in the hard shadow
+// gets V = 0; a lit pixel behind a smoothie gets the alpha remapped by the blocker and receiver
+// depths, alpha' = alpha / (1 - b / r) (Chan & Durand, Sec. 4), so the penumbra widens with the
+// distance to the occluder; V = 1 elsewhere. The hard shadow stays the umbra: the shadow only grows
+// outwards, never into the umbra, which is why this row sees half of every penumbra; Lawlor 2006
+// measures it against that half (Fig. 11; penumbra/metrics.h, halfPenumbraTruth, PenumbraHalf::Outer).
+//
+// Our implementation: the smoothies are the outer halves of the silhouette ribbons of plm.h. With the
+// strip as wide as the widest physical penumbra, the remapped alpha is the distance from the edge
+// over the penumbra's width at the receiver's depth,
+//     V = sat(w s r / (z - c))    (in plm.h's zeta and depth rate: the disk light's outer penumbra),
+// which is Chan & Durand's remap with the strip width set from the light's size instead of a user
+// knob. Deviation that follows from it: per texel the buffer keeps the strip whose penumbra begins
+// highest on the texel's light ray (priority c + w s r, plm's "highest penumbra limit wins"), not the
+// strip nearest the light. A strip as wide as the widest penumbra in the map reaches far beyond a
+// raised object's own penumbra, and kept by depth it covered the strips of every lower object
+// around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's penumbra);
+// with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden
+// from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at the texel holding the pixel (no filtering:
+// the 2003 hardware filtered no float textures), then V goes through Appendix A's table of Lawlor
+// 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm (sphere, disk,
+// rect, polygon, directional; segments rejected).
+// Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels
+// added to every strip's width), illumination_table (bool).
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "penumbra/error.h"
+#include "penumbra/light_profile.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "techniques/ribbon/plm.h"
+#include "techniques/shadow_map/shadow_map.h"
+
+namespace penumbra {
+namespace {
+
+struct SmoothiesOptions {
+  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every smoothie's width, in [0, 64]
+  bool illuminationTable = true;
+};
+
+class SmoothiesTechnique final : public ShadowTechnique {
+ public:
+  explicit SmoothiesTechnique(const SmoothiesOptions& options) : options_(options) {}
+
+  std::string_view name() const override { return "smoothies"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    Timer timer;
+    plm::emitterRadius(light, "smoothies");
+    createShadowMap(scene, light, options_.mapSize, map_);
+    space_ = plm::makeSpace(map_, light, "smoothies");
+    table_ = VisibilityToIllumination::forLight(light);
+    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
+                          plm::RibbonSides::Outer, options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
+    timings_.add("prepare", timer.elapsedMs());
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (map_.size == 0) fail("smoothies: visibility() called before prepare()");
+    Timer timer;
+    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      if (!r.inMap) return 1.0f;
+      if (hardShadow(map_, r) == 0.0f) return 0.0f;
+      const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
+      const float biased = r.lsDepth - r.bias;
+      if (!s.covered() || !(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > s.c)) return 1.0f;
+      const float z = space_.zeta(r.lsDepth);
+      const float alpha = std::clamp(s.w * space_.ratePerTexel / (z - s.c), 0.0f, 1.0f);
+      return options_.illuminationTable ? table_(alpha) : alpha;
+    });
+    timings_.add("visibility", timer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+ private:
+  SmoothiesOptions options_;
+  LightMap map_;
+  plm::Space space_;
+  VisibilityToIllumination table_;
+  Image<plm::RibbonTexel> smoothies_;
+  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  PassTimings timings_;
+};
+
+}  // namespace
+
+TechniqueInfo smoothiesTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "smoothies";
+  info.summary = "hard shadow map plus silhouette strips that fade the shadow outwards (outer penumbra only)";
+  info.source = "Chan & Durand 2003, Rendering fake soft shadows with smoothies (baseline in Lawlor 2006)";
+  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
+                 illuminationTableParamSpec()};
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    SmoothiesOptions options;
+    options.mapSize = static_cast<int>(params.getInt("map_size"));
+    options.bias = depthBiasFromParams(params);
+    options.marginTexels = static_cast<float>(params.getFloat("margin"));
+    options.illuminationTable = params.getBool("illumination_table");
+    return std::make_unique<SmoothiesTechnique>(options);
+  };
+  return info;
+}
+
+}  // namespace penumbra

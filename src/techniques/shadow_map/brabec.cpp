@@ -1,0 +1,918 @@
+// `brabec`: Brabec & Seidel 2002, "Single Sample Soft Shadows using Depth Maps" — the whole method:
+// outer and inner penumbra searches with the object-id test (Sec. 3.2, 3.3), r_max derived from the
+// physical light or from the paper's r_scale / r_bias / r_shrink, sub-texel distances and texel
+// jitter (Sec. 4.3), the vectorized axis-aligned search (Sec. 4.2) and the adaptive 4x4 block
+// interpolation (Sec. 4.3); and our extension, the coverage bound (on by default). See brabec.h for
+// the equations, the units and the deviations.
+#include "techniques/shadow_map/brabec.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/sampling.h"
+#include "penumbra/timer.h"
+
+namespace penumbra {
+
+namespace brabec {
+namespace {
+
+// Key of a texel that does not qualify: the bits of +infinity, above every finite distance's.
+constexpr int32_t kNoKey = std::bit_cast<int32_t>(kInfinity);
+
+// One texel's candidacy as an integer key: the bit pattern of its squared distance when it meets
+// the criterion (non-negative floats order like their bits), kNoKey otherwise. Written as float
+// selects followed by one bit cast, which GCC vectorizes (a select between a bit-cast value and an
+// integer constant it does not), so the row loop below becomes compares, blends and an integer min.
+template <bool kInner, bool kIdTest, bool kJitter>
+inline int32_t texelKey(const float* depth, const int32_t* id, const float* js, const float* jt, int s, float ps,
+                        float tc, float pt, float zRow, float dzds, int32_t objectId, float r2) {
+  const float sc = static_cast<float>(s) + 0.5f;
+  const float dx = (sc + (kJitter ? js[s] : 0.0f)) - ps;
+  const float dy = (tc + (kJitter ? jt[s] : 0.0f)) - pt;
+  const float d2 = dx * dx + dy * dy;
+  // Inner: the receiver plane's layer at this texel's centre; outer: the constant layer (dzds unused).
+  const float layer = kInner ? zRow + dzds * (sc - ps) : zRow;
+  float candidate = (kInner ? (depth[s] >= layer) : (depth[s] < layer)) ? d2 : kInfinity;
+  if constexpr (kIdTest) candidate = (kInner ? (id[s] == objectId) : (id[s] != objectId)) ? candidate : kInfinity;
+  candidate = d2 < r2 ? candidate : kInfinity;
+  return std::bit_cast<int32_t>(candidate);
+}
+
+// The smallest key of texels [s0, s1] of one row: the vectorized inner loop of the search.
+template <bool kInner, bool kIdTest, bool kJitter>
+int32_t rowMinKey(const float* __restrict depth, const int32_t* __restrict id, const float* __restrict js,
+                  const float* __restrict jt, int s0, int s1, float ps, float tc, float pt, float zRow,
+                  float dzds, int32_t objectId, float r2) {
+  int32_t best = kNoKey;
+  for (int s = s0; s <= s1; ++s) {
+    const int32_t key = texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, ps, tc, pt, zRow, dzds, objectId, r2);
+    best = best < key ? best : key;
+  }
+  return best;
+}
+
+// Whether tile (tx, ty) may hold a qualifying texel. Outer: a blocker needs depth < layer (the tile's
+// nearest depth tells) and, with ids, an id other than P's (a tile all of P's object has none). Inner:
+// a lit texel needs depth >= layer (the tile's farthest depth against the layer's lowest value over
+// the tile, at a corner: the float layer is monotone in s and in t) and, with ids, P's id.
+template <bool kInner, bool kIdTest>
+bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
+  const size_t k = static_cast<size_t>(ty) * m.tilesPerRow + tx;
+  if constexpr (kInner) {
+    if (kIdTest && m.tileObjectId[k] != kMixedTile && m.tileObjectId[k] != q.objectId) return false;
+    const float sA = static_cast<float>(tx << kTileShift) + 0.5f;
+    const float sB = static_cast<float>(std::min(m.size - 1, (tx << kTileShift) + kTileSize - 1)) + 0.5f;
+    const float tA = static_cast<float>(ty << kTileShift) + 0.5f;
+    const float tB = static_cast<float>(std::min(m.size - 1, (ty << kTileShift) + kTileSize - 1)) + 0.5f;
+    const float rowA = q.zLayer + q.dzdt * (tA - q.t), rowB = q.zLayer + q.dzdt * (tB - q.t);
+    const float colA = q.dzds * (sA - q.s), colB = q.dzds * (sB - q.s);
+    const float lo = std::min(std::min(rowA + colA, rowA + colB), std::min(rowB + colA, rowB + colB));
+    return m.tileMaxDepth[k] >= lo;
+  } else {
+    if (kIdTest && m.tileObjectId[k] == q.objectId) return false;
+    return m.tileMinDepth[k] < q.zLayer;
+  }
+}
+
+template <bool kInner, bool kIdTest, bool kJitter>
+SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
+  SearchHit hit;
+  const int n = m.size;
+  const float r2 = q.radius * q.radius;
+  const float reach = q.radius + m.maxJitter;
+  const int tLo = std::max(0, static_cast<int>(std::floor(q.t - reach - 0.5f)));
+  const int tHi = std::min(n - 1, static_cast<int>(std::ceil(q.t + reach - 0.5f)));
+  const int sLo = std::max(0, static_cast<int>(std::floor(q.s - reach - 0.5f)));
+  const int sHi = std::min(n - 1, static_cast<int>(std::ceil(q.s + reach - 0.5f)));
+  if (tLo > tHi || sLo > sHi) return hit;
+
+  // Tiles: which ones may qualify, decided once per search (a grid on the stack when the radius'
+  // box spans few enough tiles), and which tile rows hold any such tile, so empty texel rows cost
+  // one lookup.
+  constexpr int kGrid = 24;
+  const bool tiled = m.tileMinDepth != nullptr;
+  const int tx0 = sLo >> kTileShift, ty0 = tLo >> kTileShift;
+  const int tilesX = (sHi >> kTileShift) - tx0 + 1, tilesY = (tHi >> kTileShift) - ty0 + 1;
+  const bool gridded = tiled && tilesX <= kGrid && tilesY <= kGrid;
+  // Per tile row: the first and the last tile that may qualify (first > last: none).
+  int firstOpen[kGrid], lastOpen[kGrid];
+  if (gridded) {
+    for (int j = 0; j < tilesY; ++j) {
+      firstOpen[j] = kGrid;
+      lastOpen[j] = -1;
+      for (int i = 0; i < tilesX; ++i)
+        if (tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty0 + j)) {
+          firstOpen[j] = std::min(firstOpen[j], i);
+          lastOpen[j] = i;
+        }
+    }
+  }
+
+  // Lower bound of the squared distance of any texel of row t (its centre line, less the jitter).
+  auto rowGap2 = [&](int t) {
+    const float g = std::abs(static_cast<float>(t) + 0.5f - q.t) - m.maxJitter;
+    return g > 0.0f ? g * g : 0.0f;
+  };
+  int32_t bestKey = kNoKey;
+  int t = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
+  int up = t - 1, down = t + 1;
+  for (;;) {
+    const float gap2 = rowGap2(t);
+    // Rows come nearest first: once a row cannot hold a texel within the radius, or nearer than the
+    // best so far (equal may still win the tie on t), no later row can.
+    if (gap2 >= r2 || (bestKey != kNoKey && gap2 > std::bit_cast<float>(bestKey))) break;
+    const int ty = t >> kTileShift;
+    if (!gridded || firstOpen[ty - ty0] <= lastOpen[ty - ty0]) {
+      // The chord of the radius, or of the best distance so far once a texel is found (a texel at that
+      // same distance may still win the tie); small slack so float rounding in sqrt never drops a
+      // texel: the exact tests on d2 decide.
+      const float bound2 = bestKey != kNoKey ? std::min(r2, std::bit_cast<float>(bestKey)) : r2;
+      const float half = std::sqrt(bound2 - gap2) + m.maxJitter + 1e-3f;
+      int s0 = std::max(0, static_cast<int>(std::floor(q.s - half - 0.5f)));
+      int s1 = std::min(n - 1, static_cast<int>(std::ceil(q.s + half - 0.5f)));
+      if (gridded) {  // one scan from the first to the last tile that may qualify
+        s0 = std::max(s0, (tx0 + firstOpen[ty - ty0]) << kTileShift);
+        s1 = std::min(s1, ((tx0 + lastOpen[ty - ty0]) << kTileShift) + kTileSize - 1);
+      }
+      if (s0 <= s1) {
+        const size_t row = static_cast<size_t>(t) * n;
+        const float* depth = m.lsDepth + row;
+        const int32_t* id = m.objectId + row;
+        const float* js = kJitter ? m.jitterS + row : nullptr;
+        const float* jt = kJitter ? m.jitterT + row : nullptr;
+        const float tc = static_cast<float>(t) + 0.5f;
+        const float zRow = kInner ? q.zLayer + q.dzdt * (tc - q.t) : q.zLayer;
+        int32_t key = kNoKey;
+        if (!tiled || gridded) {
+          key = rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2);
+        } else {
+          // Runs of tiles that may qualify, each scanned in one vectorized loop.
+          int runStart = -1;
+          for (int seg = s0; seg <= s1;) {
+            const int tile = seg >> kTileShift;
+            const int segEnd = std::min(s1, ((tile + 1) << kTileShift) - 1);
+            const bool skip = !tileMayQualify<kInner, kIdTest>(m, q, tile, ty);
+            if (!skip && runStart < 0) runStart = seg;
+            if ((skip || segEnd == s1) && runStart >= 0) {
+              const int runEnd = skip ? seg - 1 : segEnd;
+              key = std::min(key, rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, runStart, runEnd, q.s, tc, q.t,
+                                                                      zRow, q.dzds, q.objectId, r2));
+              runStart = -1;
+            }
+            seg = segEnd + 1;
+          }
+        }
+        if (key != kNoKey && (key < bestKey || (key == bestKey && t < hit.t))) {
+          int s = s0;
+          while (texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2) != key)
+            ++s;
+          bestKey = key;
+          hit.found = true;
+          hit.s = s;
+          hit.t = t;
+          hit.distance2 = std::bit_cast<float>(key);
+        }
+      }
+    }
+    const bool canUp = up >= tLo, canDown = down <= tHi;
+    if (!canUp && !canDown) break;
+    if (canUp && (!canDown || std::abs(static_cast<float>(up) + 0.5f - q.t) <= std::abs(static_cast<float>(down) + 0.5f - q.t)))
+      t = up--;
+    else
+      t = down++;
+  }
+  return hit;
+}
+
+template <bool kInner, bool kIdTest>
+SearchHit searchDispatchJitter(const SearchMap& m, const SearchQuery& q) {
+  return m.jitterS ? searchRows<kInner, kIdTest, true>(m, q) : searchRows<kInner, kIdTest, false>(m, q);
+}
+
+}  // namespace
+
+SearchHit searchVectorized(const SearchMap& map, const SearchQuery& query) {
+  if (!(query.radius > 0.0f) || map.size <= 0) return {};
+  if (query.inner)
+    return query.idTest ? searchDispatchJitter<true, true>(map, query) : searchDispatchJitter<true, false>(map, query);
+  return query.idTest ? searchDispatchJitter<false, true>(map, query) : searchDispatchJitter<false, false>(map, query);
+}
+
+// The oracle: every texel of the radius' bounding box in plain row-major order, the same distance
+// expression, the first strictly nearest texel kept (hence ties to the smallest (t, s)).
+SearchHit searchScalar(const SearchMap& map, const SearchQuery& q) {
+  SearchHit hit;
+  if (!(q.radius > 0.0f) || map.size <= 0) return hit;
+  const int n = map.size;
+  const float r2 = q.radius * q.radius;
+  const float reach = q.radius + map.maxJitter + 1.0f;
+  const int tLo = std::max(0, static_cast<int>(std::floor(q.t - reach))), tHi = std::min(n - 1, static_cast<int>(std::ceil(q.t + reach)));
+  const int sLo = std::max(0, static_cast<int>(std::floor(q.s - reach))), sHi = std::min(n - 1, static_cast<int>(std::ceil(q.s + reach)));
+  for (int t = tLo; t <= tHi; ++t) {
+    for (int s = sLo; s <= sHi; ++s) {
+      const size_t i = static_cast<size_t>(t) * n + s;
+      const float js = map.jitterS ? map.jitterS[i] : 0.0f;
+      const float jt = map.jitterT ? map.jitterT[i] : 0.0f;
+      const float sc = static_cast<float>(s) + 0.5f, tc = static_cast<float>(t) + 0.5f;
+      const float dx = (sc + js) - q.s;
+      const float dy = (tc + jt) - q.t;
+      const float d2 = dx * dx + dy * dy;
+      if (!(d2 < r2)) continue;
+      const float depth = map.lsDepth[i];
+      const int32_t id = map.objectId[i];
+      bool ok;
+      if (q.inner)
+        ok = depth >= (q.zLayer + q.dzdt * (tc - q.t)) + q.dzds * (sc - q.s) && (!q.idTest || id == q.objectId);
+      else
+        ok = depth < q.zLayer && (!q.idTest || id != q.objectId);
+      if (ok && (!hit.found || d2 < hit.distance2)) {
+        hit.found = true;
+        hit.distance2 = d2;
+        hit.s = s;
+        hit.t = t;
+      }
+    }
+  }
+  return hit;
+}
+
+float texelJitter(int s, int t, int axis, float amplitude) {
+  const uint32_t h = hashCombine(hashCombine(static_cast<uint64_t>(s), static_cast<uint64_t>(t)), static_cast<uint64_t>(axis) + 0x5bd1e995u);
+  const float u = static_cast<float>(h >> 8) * (1.0f / 16777216.0f);  // [0, 1)
+  return amplitude * (2.0f * u - 1.0f);
+}
+
+namespace {
+
+// Texels a, a + stride, ... <= b of one row in front of the receiver plane (depth zRow at s): the
+// counting loop of the coverage bound, one compare per texel that the compiler vectorizes.
+int countRowBlocked(const float* __restrict depth, int a, int b, int stride, float s, float zRow, float dzds) {
+  int blocked = 0;
+  if (stride == 1) {
+    for (int i = a; i <= b; ++i) blocked += depth[i] < zRow + dzds * (static_cast<float>(i) + 0.5f - s);
+  } else {
+    for (int i = a; i <= b; i += stride) blocked += depth[i] < zRow + dzds * (static_cast<float>(i) + 0.5f - s);
+  }
+  return blocked;
+}
+
+// The smallest multiple of k >= x (k > 0, any sign of x).
+int multipleAtOrAbove(int x, int k) {
+  const int q = x / k;
+  return (q * k >= x ? q : q + 1) * k;
+}
+
+// The count over a footprint given row by row: span(j, i0, i1) sets the texels of row j inside it
+// (false: none). With stride k > 1 only texels whose s and t are multiples of k count (a lattice fixed
+// in the map, so the count moves smoothly with P').
+template <class Span>
+Coverage countRows(const LightMap& map, int tLo, int tHi, int stride, float s, float t, float zLayer, float dzds,
+                   float dzdt, const Span& span) {
+  Coverage c;
+  const int n = map.size;
+  for (int j = multipleAtOrAbove(tLo, stride); j <= tHi; j += stride) {
+    int i0, i1;
+    if (!span(j, i0, i1)) continue;
+    i0 = multipleAtOrAbove(i0, stride);
+    if (i0 > i1) continue;
+    c.total += (i1 - i0) / stride + 1;
+    if (j < 0 || j >= n) continue;
+    const int a = i0 >= 0 ? i0 : multipleAtOrAbove(0, stride), b = std::min(i1, n - 1);
+    if (a > b) continue;
+    const float zRow = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t);
+    c.blocked += countRowBlocked(map.lsDepth.row(j), a, b, stride, s, zRow, dzds);
+  }
+  return c;
+}
+
+}  // namespace
+
+Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, float radius,
+                      int stride) {
+  if (!(radius > 0.0f) || stride < 1) return {};
+  const float r2 = radius * radius;
+  // Row j's chord: the texel centres s_c with |s_c - s| <= sqrt(r^2 - dy^2).
+  auto span = [&](int j, int& i0, int& i1) {
+    const float dy = static_cast<float>(j) + 0.5f - t;
+    const float rest = r2 - dy * dy;
+    if (!(rest > 0.0f)) return false;
+    const float half = std::sqrt(rest);
+    i0 = static_cast<int>(std::ceil(s - half - 0.5f));
+    i1 = static_cast<int>(std::floor(s + half - 0.5f));
+    return i0 <= i1;
+  };
+  const int tLo = static_cast<int>(std::ceil(t - radius - 0.5f)), tHi = static_cast<int>(std::floor(t + radius - 0.5f));
+  return countRows(map, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
+}
+
+Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt,
+                               const std::vector<Vec2>& vertices, float scale, int stride) {
+  const size_t count = vertices.size();
+  if (count < 3 || !(scale > 0.0f) || stride < 1) return {};
+  float area2 = 0.0f, yLo = kInfinity, yHi = -kInfinity;
+  for (size_t k = 0; k < count; ++k) {
+    const Vec2& a = vertices[k];
+    const Vec2& b = vertices[(k + 1) % count];
+    area2 += a.x * b.y - a.y * b.x;
+    yLo = std::min(yLo, a.y * scale);
+    yHi = std::max(yHi, a.y * scale);
+  }
+  const float orientation = area2 > 0.0f ? 1.0f : -1.0f;
+  auto span = [&](int j, int& i0, int& i1) {
+    const float y = static_cast<float>(j) + 0.5f - t;
+    // Inside every edge's half-plane: orientation * cross(e, p - a) >= 0 for edge a -> a + e, i.e.
+    // cx x + rest >= 0, a bound on x at this row.
+    float xLo = -kInfinity, xHi = kInfinity;
+    for (size_t k = 0; k < count; ++k) {
+      const Vec2 a = vertices[k] * scale;
+      const Vec2 e = vertices[(k + 1) % count] * scale - a;
+      const float cx = -orientation * e.y, rest = orientation * (e.x * (y - a.y) + e.y * a.x);
+      if (cx > 0.0f) xLo = std::max(xLo, -rest / cx);
+      else if (cx < 0.0f) xHi = std::min(xHi, -rest / cx);
+      else if (rest < 0.0f) return false;
+    }
+    if (!(xLo <= xHi)) return false;
+    i0 = static_cast<int>(std::ceil(s + xLo - 0.5f));
+    i1 = static_cast<int>(std::floor(s + xHi - 0.5f));
+    return i0 <= i1;
+  };
+  const int tLo = static_cast<int>(std::ceil(t + yLo - 0.5f)), tHi = static_cast<int>(std::floor(t + yHi - 0.5f));
+  return countRows(map, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
+}
+
+Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half) {
+  Coverage c;
+  const float length = 2.0f * glm::length(half);
+  if (!(length > 0.0f)) return c;
+  const int n = map.size;
+  c.total = static_cast<int>(std::ceil(length)) + 1;
+  for (int k = 0; k < c.total; ++k) {
+    const float u = (2.0f * static_cast<float>(k) + 1.0f) / static_cast<float>(c.total) - 1.0f;
+    const int i = static_cast<int>(std::floor(s + u * half.x)), j = static_cast<int>(std::floor(t + u * half.y));
+    if (i < 0 || j < 0 || i >= n || j >= n) continue;
+    const float layer = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t) + dzds * (static_cast<float>(i) + 0.5f - s);
+    c.blocked += map.lsDepth(i, j) < layer;
+  }
+  return c;
+}
+
+void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<float>& maxDepth,
+                std::vector<int32_t>& objectId, int& tilesPerRow) {
+  const int n = map.size;
+  tilesPerRow = (n + kTileSize - 1) / kTileSize;
+  const size_t count = static_cast<size_t>(tilesPerRow) * tilesPerRow;
+  minDepth.assign(count, kInfinity);
+  maxDepth.assign(count, -kInfinity);
+  objectId.assign(count, kNoObject);
+  std::vector<uint8_t> seen(count, 0);
+  for (int t = 0; t < n; ++t)
+    for (int s = 0; s < n; ++s) {
+      const size_t k = static_cast<size_t>(t >> kTileShift) * tilesPerRow + (s >> kTileShift);
+      const float d = map.lsDepth(s, t);
+      const int32_t id = map.objectId(s, t);
+      minDepth[k] = std::min(minDepth[k], d);
+      maxDepth[k] = std::max(maxDepth[k], d);
+      if (!seen[k]) objectId[k] = id;
+      else if (objectId[k] != id) objectId[k] = kMixedTile;
+      seen[k] = 1;
+    }
+}
+
+}  // namespace brabec
+
+// What the hard test found for one camera pixel, and the warped point the searches start from.
+struct BrabecTechnique::Pixel {
+  enum Class : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
+  uint8_t cls = Miss;
+  int32_t key = kNoObject;       //!< interpolation id: the blocker's when blocked, the receiver's otherwise
+  int32_t objectId = kNoObject;  //!< the receiver's own id (P'_ID)
+  float s = 0.0f, t = 0.0f;      //!< P' in map coordinates, texels
+  float lsDepth = 0.0f;          //!< P'z, world units
+  float zLayer = 0.0f;           //!< P'z less the bias: the searches' depth layer
+  float dzds = 0.0f, dzdt = 0.0f;  //!< receiver plane's depth change per texel, world units
+  float texelWorld = 1.0f;       //!< texelWorldSize(P'z)
+  float blockerDepth = 0.0f;     //!< depth of the texel over P when blocked
+};
+
+BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(options) {
+  const int given = int(options.rScale.has_value()) + int(options.rBias.has_value()) + int(options.rShrink.has_value());
+  if (given != 0 && given != 3) {
+    std::string missing;
+    for (const auto& [name, value] : {std::pair{"r_scale", options.rScale}, std::pair{"r_bias", options.rBias},
+                                      std::pair{"r_shrink", options.rShrink}})
+      if (!value) missing += missing.empty() ? name : std::string(", ") + name;
+    fail("brabec: r_scale, r_bias and r_shrink are the paper's knobs and replace the physically derived r_max "
+         "together; give all three or none (missing: {})",
+         missing);
+  }
+  if (!(options.meet >= 0.0f && options.meet <= 1.0f)) fail("brabec: meet = {} is not valid: expected a float in [0, 1]", options.meet);
+  if (options.maxRadius < 1) fail("brabec: max_radius = {} is not valid: expected an int >= 1 (texels)", options.maxRadius);
+  if (!(options.interpolateMaxStep >= 0.0f && options.interpolateMaxStep <= 1.0f))
+    fail("brabec: interpolate_max_step = {} is not valid: expected a float in [0, 1]", options.interpolateMaxStep);
+  if (!(options.interpolateMaxAngle >= 0.0f && options.interpolateMaxAngle <= 180.0f))
+    fail("brabec: interpolate_max_angle = {} is not valid: expected a float in [0, 180] (degrees)",
+         options.interpolateMaxAngle);
+  if (options.coverageMinTexels < 1)
+    fail("brabec: coverage_min_texels = {} is not valid: expected an int >= 1 (texels)", options.coverageMinTexels);
+  if (options.coverageSamples < 16)
+    fail("brabec: coverage_samples = {} is not valid: expected an int >= 16 (texels)", options.coverageSamples);
+  if (!(options.jitter >= 0.0f && options.jitter <= 0.5f))
+    fail("brabec: jitter = {} is not valid: expected a float in [0, 0.5] (texels)", options.jitter);
+}
+
+void BrabecTechnique::prepare(const Scene& scene, const Light& light) {
+  timings_ = {};
+  Timer timer;
+  light_ = light;
+  lightRadius_ = light.extent();
+  createShadowMap(scene, light, options_.mapSize, map_);
+  // A segment's footprint is a segment along its direction in the map (its component across the
+  // light's axis; t runs against light-space y).
+  segmentLight_ = light.shape() == LightShape::Segment;
+  auto mapDirection = [&](const Vec3& wsOffset) {
+    const Vec3 h = map_.lsFrame.toLocal(wsOffset);
+    return Vec2(h.x, -h.y) / lightRadius_;
+  };
+  if (segmentLight_) segmentAxis_ = mapDirection(light.b() - light.center());
+  polygon_.clear();
+  polygonArea_ = 0.0f;
+  if (light.shape() == LightShape::Rect || light.shape() == LightShape::Polygon) {
+    for (const Vec3& vertex : light.vertices()) polygon_.push_back(mapDirection(vertex - light.center()));
+    for (size_t k = 0; k < polygon_.size(); ++k) {
+      const Vec2& a = polygon_[k];
+      const Vec2& b = polygon_[(k + 1) % polygon_.size()];
+      polygonArea_ += 0.5f * (a.x * b.y - a.y * b.x);
+    }
+    polygonArea_ = std::abs(polygonArea_);
+  }
+  minDepth_ = minMapDepth(map_);
+  brabec::buildTiles(map_, tileMinDepth_, tileMaxDepth_, tileObjectId_, tilesPerRow_);
+  if (options_.jitter > 0.0f) {
+    const int n = map_.size;
+    jitterS_ = Image<float>(n, n);
+    jitterT_ = Image<float>(n, n);
+    for (int t = 0; t < n; ++t)
+      for (int s = 0; s < n; ++s) {
+        jitterS_(s, t) = brabec::texelJitter(s, t, 0, options_.jitter);
+        jitterT_(s, t) = brabec::texelJitter(s, t, 1, options_.jitter);
+      }
+  } else {
+    jitterS_ = {};
+    jitterT_ = {};
+  }
+  timings_.add("prepare", timer.elapsedMs());
+}
+
+BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, int y) const {
+  Pixel p;
+  if (!gbuffer.hit(x, y)) return p;
+  p.objectId = p.key = gbuffer.objectId(x, y);
+  const Vec3 wsP = gbuffer.wsPosition(x, y);
+  const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+  // A surface turned away from the light's centre is in its own shadow: no search can light it.
+  const Vec3 wsToLight = light_->isDirectional() ? light_->direction() : light_->center() - wsP;  // sign only
+  if (glm::dot(wsNg, wsToLight) <= 0.0f) {
+    p.cls = Pixel::BackFacing;
+    return p;
+  }
+  const ShadowReceiver r = makeReceiver(map_, wsP, wsNg, options_.bias);
+  const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
+  if (!r.inMap || i < 0 || j < 0 || i >= map_.size || j >= map_.size) {
+    p.cls = Pixel::OutOfMap;
+    return p;
+  }
+  p.s = r.s;
+  p.t = r.t;
+  p.lsDepth = r.lsDepth;
+  p.zLayer = r.lsDepth - r.bias;
+  p.dzds = r.dzds;
+  p.dzdt = r.dzdt;
+  p.texelWorld = r.texelWorld;
+  if (hardShadow(map_, r) == 0.0f) {
+    p.cls = Pixel::Blocked;
+    p.key = map_.objectId(i, j);
+    p.blockerDepth = map_.lsDepth(i, j);
+  } else {
+    p.cls = Pixel::Lit;
+  }
+  return p;
+}
+
+float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) const {
+  if (toTexel) *toTexel = Vec2(0.0f);
+  if (raised) *raised = false;
+  switch (p.cls) {
+    case Pixel::Miss:
+    case Pixel::OutOfMap: return 1.0f;
+    case Pixel::BackFacing: return 0.0f;
+    default: break;
+  }
+  const bool inner = p.cls == Pixel::Blocked;
+  const bool physical = !options_.rScale;
+  const bool orthographic = map_.orthographic;
+  // Physical half penumbra width in texels for a blocker at depth zb (brabec.h): R (z_r - z_b) / z_b
+  // world units, divided by the texel size at the receiver.
+  const float texelsPerWorld = lightRadius_ / p.texelWorld;
+  auto widthTexels = [&](float zb) {
+    const float dz = p.lsDepth - zb;
+    return dz > 0.0f ? texelsPerWorld * dz / (orthographic ? 1.0f : zb) : 0.0f;
+  };
+  const float cap = static_cast<float>(options_.maxRadius);
+  float radius;
+  if (physical)
+    radius = std::min(cap, widthTexels(inner ? p.blockerDepth : minDepth_));
+  else
+    radius = std::min(cap, *options_.rScale * std::abs(p.lsDepth) + *options_.rBias);
+  if (physical && !inner && radius > 0.0f && options_.accelerate) {
+    // The nearest possible blocker near P rather than in the whole map: the nearest depth of the
+    // tiles within the radius that may hold a blocker. A texel beyond w_tex of that depth gives
+    // r >= r_max, V = 1, exactly as no texel does, so the smaller radius changes no result — only
+    // the cost (and no such tile means no search at all).
+    const float reach = radius + options_.jitter;
+    const int tx0 = std::max(0, static_cast<int>(std::floor(p.s - reach - 0.5f))) >> brabec::kTileShift;
+    const int tx1 = std::min(map_.size - 1, static_cast<int>(std::ceil(p.s + reach - 0.5f))) >> brabec::kTileShift;
+    const int ty0 = std::max(0, static_cast<int>(std::floor(p.t - reach - 0.5f))) >> brabec::kTileShift;
+    const int ty1 = std::min(map_.size - 1, static_cast<int>(std::ceil(p.t + reach - 0.5f))) >> brabec::kTileShift;
+    float nearest = kInfinity;
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx) {
+        const size_t k = static_cast<size_t>(ty) * tilesPerRow_ + tx;
+        const bool mayBlock = tileMinDepth_[k] < p.zLayer && !(options_.idTest && tileObjectId_[k] == p.objectId);
+        if (mayBlock) nearest = std::min(nearest, tileMinDepth_[k]);
+      }
+    radius = nearest < kInfinity ? std::min(radius, widthTexels(nearest)) : 0.0f;
+  }
+
+  brabec::SearchMap m;
+  m.size = map_.size;
+  m.lsDepth = map_.lsDepth.data();
+  m.objectId = map_.objectId.data();
+  if (!jitterS_.empty()) {
+    m.jitterS = jitterS_.data();
+    m.jitterT = jitterT_.data();
+    m.maxJitter = options_.jitter;
+  }
+  if (options_.accelerate) {
+    m.tilesPerRow = tilesPerRow_;
+    m.tileMinDepth = tileMinDepth_.data();
+    m.tileMaxDepth = tileMaxDepth_.data();
+    m.tileObjectId = tileObjectId_.data();
+  }
+  brabec::SearchQuery q;
+  q.s = p.s;
+  q.t = p.t;
+  q.zLayer = p.zLayer;
+  q.dzds = p.dzds;
+  q.dzdt = p.dzdt;
+  q.objectId = p.objectId;
+  q.inner = inner;
+  q.idTest = options_.idTest;
+  q.radius = radius;
+  const brabec::SearchHit hit = options_.scalarSearch ? brabec::searchScalar(m, q) : brabec::searchVectorized(m, q);
+  if (!hit.found) {
+    if (!inner) return 1.0f;
+    if (!options_.coverageBound) return 0.0f;
+    const float bounded = boundByCoverage(p, 0.0f, p.blockerDepth);
+    if (raised) *raised = bounded > 0.0f;
+    return bounded;
+  }
+  if (toTexel) {
+    // The texel's position as the distance measured it (centre + jitter).
+    const size_t i = static_cast<size_t>(hit.t) * map_.size + hit.s;
+    const Vec2 d(static_cast<float>(hit.s) + 0.5f + (m.jitterS ? m.jitterS[i] : 0.0f) - p.s,
+                 static_cast<float>(hit.t) + 0.5f + (m.jitterT ? m.jitterT[i] : 0.0f) - p.t);
+    const float length = glm::length(d);
+    if (length > 0.0f) *toTexel = d / length;
+  }
+
+  const float found = map_.lsDepth(hit.s, hit.t);
+  float rMax;
+  if (physical) {
+    rMax = widthTexels(inner ? p.blockerDepth : found);
+  } else {
+    // Sec. 3.3 verbatim: r_max *= r_shrink * (depth difference between P' and the texel found).
+    const float dz = inner ? found - p.lsDepth : p.lsDepth - found;
+    rMax = (*options_.rScale * std::abs(p.lsDepth) + *options_.rBias) * *options_.rShrink * dz;
+  }
+  const float r = std::sqrt(hit.distance2);
+  const float c = rMax > 0.0f ? std::min(r / rMax, 1.0f) : 1.0f;
+  const float meet = options_.meet;
+  const float v = inner ? meet * (1.0f - c) : meet + (1.0f - meet) * c;
+  if (!options_.coverageBound) return v;
+  // The blocker plane of the bound: the blocker's silhouette as the map sees it, on the edge between
+  // blocked and lit texels nearest to P'. Outer: the blocker texel found lies on it. Inner: the
+  // deepest blocker texel next to the lit texel found (the texel over P is the top of the blocker,
+  // whose footprint is wider than the silhouette's).
+  float zb = found;
+  if (inner) {
+    zb = -kInfinity;
+    for (int j = std::max(0, hit.t - 1); j <= std::min(map_.size - 1, hit.t + 1); ++j)
+      for (int i = std::max(0, hit.s - 1); i <= std::min(map_.size - 1, hit.s + 1); ++i) {
+        const float z = map_.lsDepth(i, j);
+        const float tc = static_cast<float>(j) + 0.5f, sc = static_cast<float>(i) + 0.5f;
+        if (z < p.zLayer + p.dzdt * (tc - p.t) + p.dzds * (sc - p.s)) zb = std::max(zb, z);
+      }
+    if (zb == -kInfinity) zb = p.blockerDepth;
+  }
+  const float bounded = boundByCoverage(p, v, zb);
+  if (raised) *raised = bounded > v;
+  return bounded;
+}
+
+float BrabecTechnique::boundByCoverage(const Pixel& p, float v, float zb) const {
+  // Not for a receiver in the shadow of its own object: the part of the object that the map does not
+  // see (below its silhouette from the light's centre) reaches down towards the receiver and covers
+  // more of the light than one blocker plane at zb does.
+  if (v >= 1.0f || (p.cls == Pixel::Blocked && p.key == p.objectId)) return v;
+  // The footprint's size: the physical penumbra width at zb (brabec.h, r_max), within max_radius.
+  const float dz = p.lsDepth - zb;
+  const float width = dz > 0.0f ? lightRadius_ / p.texelWorld * dz / (map_.orthographic ? 1.0f : zb) : 0.0f;
+  const float footprint = std::min(static_cast<float>(options_.maxRadius), width);
+  // A wide footprint is counted on a lattice of every stride-th texel in s and t, about
+  // coverage_samples texels at most (the cost of a count, which grows with the footprint's area).
+  const float area = footprint * footprint * (polygon_.empty() ? 3.14159265f : polygonArea_);
+  const float samples = static_cast<float>(options_.coverageSamples);
+  const int stride = area > samples ? static_cast<int>(std::ceil(std::sqrt(area / samples))) : 1;
+  const brabec::Coverage c =
+      segmentLight_ ? brabec::countBlockedAlong(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, footprint * segmentAxis_)
+      : !polygon_.empty()
+          ? brabec::countBlockedInPolygon(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, polygon_, footprint, stride)
+          : brabec::countBlocked(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, footprint, stride);
+  // A footprint of few texels cannot resolve how much of it the blockers cover (contact shadows,
+  // small maps): the paper's V stands there.
+  if (c.total * stride * stride < options_.coverageMinTexels) return v;
+  return std::max(v, 1.0f - static_cast<float>(c.blocked) / static_cast<float>(c.total));
+}
+
+namespace {
+
+// Sec. 4.3 group refinement along one line of pixels (a column or a row): `at(i)` is pixel i's
+// index. Borders a and b are solved (searched unless already known); the pixels between are
+// interpolated when the borders pass `smooth` (the extra criteria: step, kinks) and the whole group
+// shares class and key, else the middle one is searched and both halves are refined. Groups of 5
+// split into two of 3, as in the paper's Figure 5. `fill(k, from)` interpolates pixel k, `from` being
+// its nearer interpolant (whose id and direction it keeps).
+template <class Solve, class Smooth, class Same, class Fill, class At>
+void refineGroup(int a, int b, const Solve& solve, const Smooth& smooth, const Same& same, const Fill& fill,
+                 const At& at, float* v, const uint8_t* known) {
+  solve(at(a));
+  solve(at(b));
+  if (b - a < 2) return;
+  bool uniform = smooth(at(a), at(b));
+  for (int i = a + 1; i <= b && uniform; ++i) uniform = same(at(a), at(i));
+  if (uniform) {
+    const float va = v[at(a)], vb = v[at(b)];
+    for (int i = a + 1; i < b; ++i) {
+      const size_t k = at(i);
+      if (known[k]) continue;
+      const float f = static_cast<float>(i - a) / static_cast<float>(b - a);
+      v[k] = va + f * (vb - va);
+      fill(k, i - a <= b - i ? at(a) : at(b));
+    }
+    return;
+  }
+  const int mid = (a + b) / 2;
+  refineGroup(a, mid, solve, smooth, same, fill, at, v, known);
+  refineGroup(mid, b, solve, smooth, same, fill, at, v, known);
+}
+
+// Group borders along a line of `length` pixels: every 4th pixel and the last one.
+std::vector<int> groupBorders(int length) {
+  std::vector<int> borders;
+  for (int i = 0; i < length; i += 4) borders.push_back(i);
+  if (borders.back() != length - 1) borders.push_back(length - 1);
+  return borders;
+}
+
+}  // namespace
+
+void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+  if (!light_) fail("brabec: visibility() called before prepare(); call prepare(scene, light) first");
+  Timer timer;
+  const int width = gbuffer.width(), height = gbuffer.height();
+  v.reset(width, height, 1.0f);
+  searches_ = 0.0;
+  hitPixels_ = 0.0;
+  if (width == 0 || height == 0) {
+    timings_.add("visibility", timer.elapsedMs());
+    return;
+  }
+
+  std::atomic<int64_t> hits{0}, searches{0};
+  auto searched = [](const Pixel& p) { return p.cls == Pixel::Lit || p.cls == Pixel::Blocked; };
+  float* out = v.data();
+  if (!options_.interpolate) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+      int64_t hitCount = 0, searchCount = 0;
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < width; ++x) {
+          const Pixel p = classify(gbuffer, x, y);
+          out[static_cast<size_t>(y) * width + x] = evaluate(p);
+          hitCount += p.cls != Pixel::Miss;
+          searchCount += searched(p);
+        }
+      hits += hitCount;
+      searches += searchCount;
+    });
+  } else {
+    // The hard test and the interpolation id of every pixel, kept compact (5 bytes a pixel); the
+    // few pixels that are searched are classified again in full.
+    const size_t count = static_cast<size_t>(width) * height;
+    scratchClass_.resize(count);
+    scratchKey_.resize(count);
+    scratchKnown_.assign(count, 0);
+    std::vector<uint8_t>& cls = scratchClass_;
+    std::vector<uint8_t>& known = scratchKnown_;
+    std::vector<int32_t>& key = scratchKey_;
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+      int64_t hitCount = 0;
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < width; ++x) {
+          const Pixel p = classify(gbuffer, x, y);
+          const size_t k = static_cast<size_t>(y) * width + x;
+          cls[k] = p.cls;
+          key[k] = p.key;
+          hitCount += p.cls != Pixel::Miss;
+        }
+      hits += hitCount;
+    });
+    auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };
+    // known[k]: kKnown once pixel k is solved or interpolated, with kRaised when the coverage bound
+    // raised its V (an interpolated pixel takes its nearer interpolant's).
+    constexpr uint8_t kKnown = 1, kRaised = 2;
+    // Per known pixel: the direction to its texel as two snorm8 components (0, 0: none), 2 bytes a
+    // pixel; written before it is read (a pixel is known once solved or interpolated).
+    scratchDirection_.resize(2 * count);
+    int8_t* const direction = scratchDirection_.data();
+    auto storeDirection = [&](size_t k, const Vec2& d) {
+      direction[2 * k] = static_cast<int8_t>(std::lround(d.x * 127.0f));
+      direction[2 * k + 1] = static_cast<int8_t>(std::lround(d.y * 127.0f));
+    };
+    // V at the end of the penumbra (r >= r_max, or no texel within the radius): the clamp's kink.
+    auto atEnd = [&](size_t k) {
+      return cls[k] == Pixel::Lit ? out[k] == 1.0f : cls[k] == Pixel::Blocked ? out[k] == 0.0f : true;
+    };
+    const float maxStep = options_.interpolateMaxStep;
+    const bool kinks = options_.interpolateKinks;
+    // cos of the largest angle, in the snorm8 units of the dot product (127^2).
+    const float minDot = std::cos(radians(options_.interpolateMaxAngle)) * 127.0f * 127.0f;
+    auto smooth = [&](size_t a, size_t b) {
+      if (std::abs(out[a] - out[b]) > maxStep) return false;
+      if (!kinks) return true;
+      // The coverage bound's kink: V' = max(V, 1 - f) switches from one to the other between them.
+      if ((known[a] ^ known[b]) & kRaised) return false;
+      const bool endA = atEnd(a), endB = atEnd(b);
+      if (endA != endB) return false;
+      if (endA) return true;
+      const int dot = direction[2 * a] * direction[2 * b] + direction[2 * a + 1] * direction[2 * b + 1];
+      return static_cast<float>(dot) >= minDot;
+    };
+    auto fill = [&](size_t k, size_t from) {
+      known[k] = static_cast<uint8_t>(kKnown | (known[from] & kRaised));
+      direction[2 * k] = direction[2 * from];
+      direction[2 * k + 1] = direction[2 * from + 1];
+    };
+    const std::vector<int> columns = groupBorders(width), rowBorders = groupBorders(height);
+    auto makeSolve = [&](int64_t& searchCount) {
+      return [&, searchCountPtr = &searchCount](size_t k) {
+        if (known[k]) return;
+        const Pixel p = classify(gbuffer, static_cast<int>(k % width), static_cast<int>(k / width));
+        Vec2 toTexel;
+        bool raised = false;
+        out[k] = evaluate(p, &toTexel, &raised);
+        storeDirection(k, toTexel);
+        known[k] = static_cast<uint8_t>(kKnown | (raised ? kRaised : 0));
+        *searchCountPtr += searched(p);
+      };
+    };
+    // Columns first (every 4th and the last), then every row between those columns.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, columns.size()), [&](const tbb::blocked_range<size_t>& range) {
+      int64_t searchCount = 0;
+      const auto solve = makeSolve(searchCount);
+      for (size_t c = range.begin(); c < range.end(); ++c) {
+        const int x = columns[c];
+        auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
+        for (size_t g = 0; g + 1 < rowBorders.size(); ++g)
+          refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, known.data());
+        if (rowBorders.size() == 1) solve(at(0));
+      }
+      searches += searchCount;
+    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+      int64_t searchCount = 0;
+      const auto solve = makeSolve(searchCount);
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };
+        for (size_t g = 0; g + 1 < columns.size(); ++g)
+          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fill, at, out, known.data());
+      }
+      searches += searchCount;
+    });
+  }
+  searches_ = static_cast<double>(searches.load());
+  hitPixels_ = static_cast<double>(hits.load());
+  timings_.add("visibility", timer.elapsedMs());
+}
+
+std::vector<std::pair<std::string, double>> BrabecTechnique::stats() const {
+  return {{"searches", searches_},
+          {"search_fraction", hitPixels_ > 0.0 ? searches_ / hitPixels_ : 0.0},
+          {"map_min_depth", minDepth_}};
+}
+
+TechniqueInfo brabecTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "brabec";
+  info.summary = "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer penumbra";
+  info.source = "Brabec & Seidel 2002, Single sample soft shadows using depth maps";
+  info.params.push_back(mapSizeParamSpec(1024));
+  info.params.push_back(biasConstantParamSpec());
+  info.params.push_back(biasSlopeParamSpec());
+  // Every field spelled out (designated initializers), so -Wextra sees no missing initializer.
+  auto add = [&](std::string name, ParamType type, ParamValue defaultValue, std::optional<double> min,
+                 std::optional<double> max, std::string unit, std::string help, bool autoDefault = false) {
+    info.params.push_back(ParamSpec{.name = std::move(name), .type = type, .defaultValue = std::move(defaultValue),
+                                    .min = min, .max = max, .choices = {}, .unit = std::move(unit),
+                                    .help = std::move(help), .autoDefault = autoDefault});
+  };
+  add("meet", ParamType::Float, 0.5, 0.0, 1.0, "",
+      "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)");
+  add("r_scale", ParamType::Float, 0.0, 0.0, 1.0e6, "texels per world unit",
+      "paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
+      "(give r_scale, r_bias and r_shrink together)",
+      true);
+  add("r_bias", ParamType::Float, 0.0, 0.0, 1.0e6, "texels",
+      "paper's knob: search radius at depth 0 (with r_scale and r_shrink)", true);
+  add("r_shrink", ParamType::Float, 0.0, 0.0, 1.0e6, "1 / world unit",
+      "paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
+      "(with r_scale and r_bias)",
+      true);
+  add("max_radius", ParamType::Int, int64_t{96}, 1.0, 1024.0, "texels",
+      "hard cap of the search radius: bounds the cost of a pixel (it grows with the radius squared) "
+      "when the nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds "
+      "the widest physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)");
+  add("interpolate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel");
+  add("interpolate_max_step", ParamType::Float, 1.0, 0.0, 1.0, "",
+      "also search the middle of a group whose border V differ by more than this; 1 = off");
+  add("interpolate_kinks", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "also search the middle of a group across a kink of V: one border at the end of the penumbra "
+      "(r >= r_max) and the other not, or the borders' nearest texels in directions more than "
+      "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria");
+  add("interpolate_max_angle", ParamType::Float, 30.0, 0.0, 180.0, "degrees",
+      "interpolate_kinks: largest angle between the directions from the two borders to the texels "
+      "their searches found");
+  add("accelerate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "tile summary and local search radius: change the cost, never V; false runs the plain Sec. 4.2 "
+      "search (for measuring what they save)");
+  add("jitter", ParamType::Float, 0.0, 0.0, 0.5, "texels",
+      "jitter of the texel positions the distances are measured to (Sec. 4.3), deterministic; 0 = off");
+  add("id_test", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "object-id test of the searches (Sec. 3.2); false shows the self-shadowing of Fig. 3");
+  add("coverage_bound", ParamType::Bool, true, std::nullopt, std::nullopt, "",
+      "our extension, not the paper's: V is at least 1 - f, f the fraction of the texels in the light's "
+      "footprint at the blocker's silhouette depth (its shape scaled to the penumbra width there) that "
+      "block the receiver; lightens the dark blob of an occluder smaller than the light (see "
+      "docs/small-occluders.md); false = the paper's V");
+  add("coverage_min_texels", ParamType::Int, int64_t{32}, 1.0, 1.0e6, "texels",
+      "coverage_bound: smallest footprint (texels; samples along a segment light) the bound is applied "
+      "at; smaller footprints cannot resolve the covered fraction (contact shadows, small maps). 32: "
+      "measured on the corpus, teapots and the built-in scenes, see docs/small-occluders.md");
+  add("coverage_samples", ParamType::Int, int64_t{256}, 16.0, 1.0e6, "texels",
+      "coverage_bound: most texels counted per footprint; a wider footprint is counted on a lattice of "
+      "every k-th texel in s and t. 256 resolves the covered fraction to about one 8-bit step; measured: "
+      "RMSE8 within 0.1 of the full count on every scene and light of docs/small-occluders.md");
+  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
+    BrabecOptions o;
+    o.mapSize = static_cast<int>(params.getInt("map_size"));
+    o.bias = depthBiasFromParams(params);
+    o.meet = static_cast<float>(params.getFloat("meet"));
+    if (!params.isAuto("r_scale")) o.rScale = static_cast<float>(params.getFloat("r_scale"));
+    if (!params.isAuto("r_bias")) o.rBias = static_cast<float>(params.getFloat("r_bias"));
+    if (!params.isAuto("r_shrink")) o.rShrink = static_cast<float>(params.getFloat("r_shrink"));
+    o.maxRadius = static_cast<int>(params.getInt("max_radius"));
+    o.interpolate = params.getBool("interpolate");
+    o.interpolateMaxStep = static_cast<float>(params.getFloat("interpolate_max_step"));
+    o.interpolateKinks = params.getBool("interpolate_kinks");
+    o.interpolateMaxAngle = static_cast<float>(params.getFloat("interpolate_max_angle"));
+    o.accelerate = params.getBool("accelerate");
+    o.jitter = static_cast<float>(params.getFloat("jitter"));
+    o.idTest = params.getBool("id_test");
+    o.coverageBound = params.getBool("coverage_bound");
+    o.coverageMinTexels = static_cast<int>(params.getInt("coverage_min_texels"));
+    o.coverageSamples = static_cast<int>(params.getInt("coverage_samples"));
+    return std::make_unique<BrabecTechnique>(o);
+  };
+  return info;
+}
+
+}  // namespace penumbra

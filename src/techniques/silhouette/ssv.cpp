@@ -1,0 +1,1192 @@
+// `ssv`: soft shadow volumes for convex polygonal lights with a double silhouette (Rouf 2007,
+// "Real time soft shadow generation for arbitrary planar lights", Chapters 3 and 4). Software
+// implementation, per camera pixel, of the two phases of Section 3.2.1. A concave polygon light is
+// broken up into its fewest convex parts (Section 5.2.5), each run as a light of its own and V
+// combined by area (convex_parts.h); everything below is about one convex light.
+//
+// Phase 1 (prepare): every facet of every occluder is classified against every light vertex as
+// fully lit / partially lit / in shadow (Section 3.2.2); the penumbra silhouette (boundary of the
+// fully lit facets) and the umbra silhouette (boundary of the facets in shadow) are split into
+// rings (3.2.3.2) from the edge adjacency built once per mesh (src/techniques/silhouette/mesh_topology.cpp). Every
+// silhouette edge gets the fixed part of its edge shadow: its direction, the edge projected from the
+// light's centre and quantized to the nearest of the four axis directions of the light (3.2.3.1),
+// and its box in the light-space binning grid.
+//
+// Phase 2 (visibility, per pixel p): the light is mapped to the unit "light square" (its bounding
+// rectangle in light space; x along the polygon's first edge, so a rect light is the square
+// itself). Each ring gives one visibility curve (3.2.4.3, Figs. 3-20, 3-21):
+//  - an edge of the ring, projected from p, is replaced by its approximant: the line of the light
+//    square perpendicular to the edge's quantized direction that leaves the edge shadow's visible
+//    fraction t of the square visible. t is interpolated linearly between the front plane (t = 1)
+//    and the back plane (t = 0), the planes through the edge that touch the light on either side,
+//    found by walking the light's vertices (O(L), 3.2.3.3, 3.4.1; the linear shading assumption of
+//    3.3);
+//  - consecutive approximants are joined where they meet, which realizes the corner rules: at a
+//    convex corner the hidden parts are AND-ed (visibilities OR-ed, 3.2.4.1, Fig. 3-7: two edges
+//    each leaving 50 % leave 75 %), at a concave corner OR-ed, and at a straight corner (two equal
+//    quantized directions, 3.2.3.6) the two are joined by a step at the projected shared vertex:
+//    the cut line both edge shadows agree on;
+//  - only the edges whose edge shadows contain p (their projection meets the light square) are
+//    drawn as approximants, in chains of consecutive edges; the curve is closed through the
+//    projections of the other edges, which lie outside the square and only say which side of the
+//    chains is hidden. A point of the square is hidden by the ring when the curve winds around it;
+//  - in a corner region (the projected edge ends inside the square) the approximant moves from the
+//    ramp's position towards the position of the edge's part inside the square as that part
+//    shrinks, so an edge shadow starts where its neighbour's chain left the square and V stays
+//    continuous (the role of the corner colouring of 3.2.3.3-5).
+// The rings that bound one facet set (one silhouette of one object; an object with a hole has two)
+// are one curve: their windings add. Silhouettes compete (3.2.4.2, 3.2.4.4): a point is hidden
+// when any of them hides it (visibilities AND-ed).
+// The visible fraction is measured by slicing (3.2.4.4, Fig. 3-22): the square is cut at every
+// distinct coordinate of the curves (two within `merge_tolerance`, 0.01 in the thesis, count as
+// one, Section 4.2.6) and one point per cell is tested, weighted by its area; or by fixed 8x8 /
+// 16x16 sampling (`integration`, Fig. 4-8). The points are tested row by row (each piece of a curve
+// only on the rows it spans, its crossings by bisection), which gives what testing every piece at
+// every point gives. The hard shadow (3.2.5): a ring none of whose edge
+// shadows contains p (p behind all its back planes or in front of some front plane) hides the
+// whole light when p lies in its shadow, tested in 2D by the angle sweep (winding) of p's
+// direction from the light's centre around the ring's projection, which works for concave and
+// self-intersecting rings alike (Fig. 3-23).
+//
+// Choices where the text leaves them open (kept so V stays continuous and exact where the
+// thesis' assumptions hold: a rect light and occluder edges parallel to its sides):
+//  - The corner areas of Sections 3.2.3.3-6 are not coloured and interpolated separately: joining
+//    the approximants of consecutive edges gives the same values on their outlines (black inside
+//    the neighbour at a convex corner, white at a concave one) and is exact in the case above.
+//  - The umbra test is made only where no edge shadow of the ring contains p, where it is exact;
+//    the polygon of intersected back lines is not used, because at a concave corner the umbra is
+//    bounded by the corner's own shadow rather than by the meeting point of the two back lines,
+//    and for a ring that is not planar the back lines' polygon can wind around points outside
+//    the umbra. Elsewhere the curves decide (they give V = 0 where they enclose the square).
+//  - Edges at reflex (concave) mesh edges stay in their ring's curve: leaving them out (end of
+//    3.2.3.2) would open it.
+//  - An object without fully lit facets (a large light close to it) has no penumbra silhouette in
+//    the sense of 3.2.2, and its umbra silhouette alone would shrink its shadow to the facets in
+//    shadow: the boundary of the facets facing the light's centre ("potentially fully lit", 3.2.2)
+//    stands for it. An object without facets in shadow has one silhouette, as has one whose two
+//    silhouettes coincide (a plate lit by the whole light).
+//  - Rings are clipped as closed polygons to zNear <= z <= z_p (1 - 1e-4) (only occluder parts
+//    nearer to the light than p can occlude it), closed along the cut. Where a silhouette's facet
+//    set reaches beyond p (p on or beside its object), the closing segments project far outside
+//    the light and could pass around it either way; which side of its curves is hidden is then
+//    fixed by one ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h; what
+//    the hard shadow of a shadow-volume pass gives): the silhouette hides the centre when the
+//    first thing the ray meets is its object. Elsewhere no ray is traced: the curves and the
+//    angle sweep agree with the projection to the last bit, a ray would not.
+//  - Receivers behind the light's plane are handled in the light space of its other face (planar
+//    lights emit from both). An edge seen (nearly) end-on from the centre has no direction: its
+//    curve piece is dropped and its neighbours meet at its projection.
+//  - Binning: a light-space grid over directions from the light's centre (ssv.h, which says why)
+//    lists per cell the rings with an edge whose region of influence reaches a receiver of the
+//    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
+//    it; a pixel combines the rings listed in its cell.
+//  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
+//    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
+//    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
+//    rings and windings above need nothing more. One thing a shell changes: a shell triangle whose
+//    plane the light straddles has both sides partially lit, both sides are in the umbra
+//    silhouette's facet set, and their projections cancel (as a thin solid plate's two faces do in
+//    Rouf's method, where the plate's rims carry its shadow): the walls of an open box or a cup,
+//    which a large light straddles, would shadow nothing where they alone block the light. A
+//    third silhouette, competing with the other two, bounds one side of each such triangle (the
+//    side facing the light's centre); its winding counts the walls crossed.
+//  - A two-sided planar sheet (an open planar mesh, e.g. the ground; mesh_topology.h) does not
+//    shadow its own pixels.
+//
+// Approximations (Section 3.3), measured in tests/techniques/silhouette/ssv_test.cpp: linear shading across
+// an edge shadow and quantized directions (exact for rect lights and axis-parallel edges; for
+// tilted edges and other polygons the hidden parts are axis-parallel stand-ins whose area follows
+// the ramp, and a thin light shows the artifacts of Fig. 4-9); only the two silhouettes are used, so the
+// object looks like a prism between them and the hidden part is the union of the two rings'
+// projections, not their hull. Option edge_visibility=area replaces the linear ramp by the exact
+// fraction of the light past the edge's line (clipping the light polygon, O(L)).
+//
+// Parameters: integration ("slicing" | "8x8" | "16x16"), merge_tolerance (fraction of the light's
+// side, [0, 0.25], default 0.01), grid (cells per side of the light-space binning grid, default 64),
+// edge_visibility ("linear" | "area").
+#include "techniques/silhouette/ssv.h"
+
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+#include "penumbra/timer.h"
+#include "rt/shadow_ray.h"
+#include "techniques/silhouette/convex_parts.h"
+
+namespace penumbra {
+namespace silhouette {
+
+LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back) {
+  if (light.shape() != LightShape::Rect && light.shape() != LightShape::Polygon)
+    fail("{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, hexagon, ...)",
+         technique, toString(light.shape()), technique);
+  if (!light.convex())
+    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique, technique);
+  const std::vector<Vec3>& ws = light.vertices();
+  if (ws.size() > static_cast<size_t>(kMaxLightVertices))
+    fail("{}: the polygon light has {} vertices; at most {} are supported", technique, ws.size(), kMaxLightVertices);
+  LightPlane plane;
+  plane.wsOrigin = light.center();
+  const Vec3 z = back ? -light.lightFrame(sceneBounds).z : light.lightFrame(sceneBounds).z;
+  Vec3 x = ws[1] - ws[0];
+  x = glm::normalize(x - z * glm::dot(x, z));
+  plane.lsFrame.z = z;
+  plane.lsFrame.x = x;
+  plane.lsFrame.y = glm::cross(z, x);
+  for (const Vec3& v : ws) {
+    const Vec3 l = plane.lsFromWs(v);
+    plane.vertices.push_back(Vec2(l.x, l.y));
+  }
+  float twiceArea = 0.0f;
+  for (size_t i = 0; i < plane.vertices.size(); ++i) {
+    const Vec2 &a = plane.vertices[i], &b = plane.vertices[(i + 1) % plane.vertices.size()];
+    twiceArea += a.x * b.y - a.y * b.x;
+  }
+  if (twiceArea < 0.0f) std::reverse(plane.vertices.begin(), plane.vertices.end());
+  plane.area = 0.5f * std::abs(twiceArea);
+  plane.lower = plane.upper = plane.vertices[0];
+  for (const Vec2& v : plane.vertices) {
+    plane.extent = std::max(plane.extent, glm::length(v));
+    plane.lower = glm::min(plane.lower, v);
+    plane.upper = glm::max(plane.upper, v);
+  }
+  return plane;
+}
+
+std::vector<Occluder> makeOccluders(const Scene& scene) {
+  std::vector<Occluder> occluders;
+  for (const Object& object : scene.objects) {
+    Occluder o;
+    o.objectId = object.id;
+    o.name = object.name;
+    o.topology = occluderTopology(object.mesh);
+    if (o.topology.triangles.empty()) continue;
+    o.sheet = o.topology.twoSidedSheet;
+    occluders.push_back(std::move(o));
+  }
+  return occluders;
+}
+
+LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
+  LightSpaceGeometry g;
+  g.positions.reserve(o.topology.positions.size());
+  g.normals.reserve(o.topology.faceNormals.size());
+  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.lsFromWs(p));
+  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFrame.toLocal(n));
+  return g;
+}
+
+namespace {
+// Clips a convex polygon to the half-plane dot(n, x) <= d (Sutherland-Hodgman).
+int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d) {
+  int m = 0;
+  for (int i = 0; i < count; ++i) {
+    const Vec2 &a = in[i], &b = in[(i + 1) % count];
+    const float da = glm::dot(n, a) - d, db = glm::dot(n, b) - d;
+    if (da <= 0.0f) out[m++] = a;
+    if ((da < 0.0f) != (db < 0.0f) && da != 0.0f && db != 0.0f) out[m++] = a + (b - a) * (da / (da - db));
+  }
+  return m;
+}
+}  // namespace
+
+float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
+  const float cross = a0.x * b0.y - a0.y * b0.x;
+  if (cross == 0.0f) return 0.0f;
+  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
+  std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
+  int n = static_cast<int>(poly.size());
+  std::copy(poly.begin(), poly.end(), bufA.begin());
+  // Inside of the counter-clockwise triangle (0, a, b): left of 0->a, a->b, b->0.
+  const Vec2 corners[3] = {Vec2(0.0f), a, b};
+  Vec2* in = bufA.data();
+  Vec2* out = bufB.data();
+  for (int e = 0; e < 3 && n > 0; ++e) {
+    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
+    const Vec2 nOut(t.y - s.y, s.x - t.x);  // right normal: outside
+    n = clipHalfPlane(in, n, out, nOut, glm::dot(nOut, s));
+    std::swap(in, out);
+  }
+  float twice = 0.0f;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 &p = in[i], &q = in[(i + 1) % n];
+    twice += p.x * q.y - p.y * q.x;
+  }
+  return (cross > 0.0f ? 0.5f : -0.5f) * twice;
+}
+
+namespace {
+// The cell of u in a grid of res x res cells over lower + [0, res / scale]: -1 outside.
+int cellOf(const Vec2& lower, const Vec2& scale, int res, const Vec2& u) {
+  const Vec2 g = (u - lower) * scale;
+  if (!(g.x >= 0.0f && g.y >= 0.0f && g.x <= res && g.y <= res) || res == 0) return -1;
+  const int x = std::min(res - 1, static_cast<int>(g.x)), y = std::min(res - 1, static_cast<int>(g.y));
+  return y * res + x;
+}
+
+Vec2 gridScale(const Vec2& lower, const Vec2& upper, int res) {
+  return Vec2(static_cast<float>(res)) / glm::max(upper - lower, Vec2(1e-20f));
+}
+}  // namespace
+
+void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                  const std::vector<Vec2>& itemUpper) {
+  res_ = resolution;
+  lower_ = lower;
+  scale_ = gridScale(lower, upper, res_);
+  start_.assign(size_t(res_) * res_ + 1, 0);
+  auto range = [&](size_t i, int& x0, int& y0, int& x1, int& y1) {
+    const Vec2 lo = (itemLower[i] - lower_) * scale_, hi = (itemUpper[i] - lower_) * scale_;
+    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return false;
+    x0 = static_cast<int>(std::max(lo.x, 0.0f));  // clamped before the conversion: lo can be far below 0
+    y0 = static_cast<int>(std::max(lo.y, 0.0f));
+    x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
+    y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
+    return true;
+  };
+  int x0, y0, x1, y1;
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    if (range(i, x0, y0, x1, y1))
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) ++start_[size_t(y) * res_ + x + 1];
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  items_.resize(start_.back());
+  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    if (range(i, x0, y0, x1, y1))
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) items_[fill[size_t(y) * res_ + x]++] = static_cast<uint32_t>(i);
+}
+
+void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
+                           const std::vector<uint32_t>& keys) {
+  res_ = resolution;
+  lower_ = lower;
+  scale_ = gridScale(lower, upper, res_);
+  const size_t cells = size_t(res_) * res_;
+  start_.assign(cells + 1, 0);
+  items_.clear();
+  float nearestFar = kInfinity;
+  for (const float f : cellFar) nearestFar = std::min(nearestFar, f);
+  if (!(nearestFar < kInfinity)) return;  // no receivers
+  const Vec2 cellSize = Vec2(1.0f) / scale_;
+  // A cell's rectangle, padded by a little of its size so float rounding of cellOf cannot put a
+  // receiver just outside the rectangle of its own cell.
+  const Vec2 pad = 1e-3f * cellSize;
+  auto visit = [&](size_t i, auto&& add) {
+    const float growMost = itemNear[i] - nearestFar;
+    if (!(growMost >= 0.0f)) return;
+    const Vec2 lo = (itemLower[i] - growMost - lower_) * scale_, hi = (itemUpper[i] + growMost - lower_) * scale_;
+    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return;
+    const int x0 = static_cast<int>(std::max(lo.x, 0.0f)), y0 = static_cast<int>(std::max(lo.y, 0.0f));
+    const int x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
+    const int y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const size_t c = size_t(y) * res_ + x;
+        const float grow = itemNear[i] - cellFar[c];
+        if (!(grow >= 0.0f)) continue;
+        const Vec2 cellLo = lower_ + Vec2(float(x), float(y)) * cellSize - pad, cellHi = cellLo + cellSize + 2.0f * pad;
+        const Vec2 gap = glm::max(Vec2(0.0f), glm::max(itemLower[i] - cellHi, cellLo - itemUpper[i]));
+        if (gap.x <= grow && gap.y <= grow) add(c);
+      }
+  };
+  constexpr uint32_t kNone = 0xffffffffu;
+  std::vector<uint32_t> last(cells, kNone);
+  auto keyOf = [&](size_t i) { return keys.empty() ? static_cast<uint32_t>(i) : keys[i]; };
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      ++start_[c + 1];
+    });
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  items_.resize(start_.back());
+  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
+  std::fill(last.begin(), last.end(), kNone);
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      items_[fill[c]++] = keyOf(i);
+    });
+}
+
+int UGrid::cellIndex(const Vec2& u) const { return cellOf(lower_, scale_, res_, u); }
+
+std::pair<const uint32_t*, const uint32_t*> UGrid::cell(const Vec2& u) const {
+  const int c = cellIndex(u);
+  if (c < 0) return {nullptr, nullptr};
+  return {items_.data() + start_[c], items_.data() + start_[c + 1]};
+}
+
+bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane) {
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x)
+      if (gbuffer.hit(x, y) && !(plane.lsFromWs(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
+  return false;
+}
+
+bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper) {
+  lower = Vec2(kInfinity);
+  upper = Vec2(-kInfinity);
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x) {
+      if (!gbuffer.hit(x, y)) continue;
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
+      if (!(p.z > zMin)) continue;
+      const Vec2 u(p.x / p.z, p.y / p.z);
+      lower = glm::min(lower, u);
+      upper = glm::max(upper, u);
+    }
+  return lower.x <= upper.x;
+}
+
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
+                                   int resolution) {
+  const Vec2 scale = gridScale(lower, upper, resolution);
+  std::vector<float> deepest(size_t(resolution) * resolution, 0.0f);
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x) {
+      if (!gbuffer.hit(x, y)) continue;
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
+      if (!(p.z > zMin)) continue;
+      const int c = cellOf(lower, scale, resolution, Vec2(p.x / p.z, p.y / p.z));
+      if (c >= 0) deepest[size_t(c)] = std::max(deepest[size_t(c)], p.z);
+    }
+  std::vector<float> far(deepest.size());
+  for (size_t c = 0; c < far.size(); ++c) far[c] = deepest[c] > 0.0f ? plane.extent / deepest[c] : kInfinity;
+  return far;
+}
+
+int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
+  const Vec3 wsP = gbuffer.wsPosition(x, y);
+  const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+  const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+  const std::optional<RayHit> hit =
+      rays.intersect(rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon));
+  return hit ? hit->objectId : kNoObject;
+}
+
+}  // namespace silhouette
+
+namespace {
+
+using namespace silhouette;
+
+enum class Integration { Slicing, Fixed8, Fixed16 };
+
+struct SsvOptions {
+  Integration integration = Integration::Slicing;
+  float mergeTolerance = 0.01f;     //!< slicing: cuts closer than this (fraction of the light's side) merge
+  int grid = 64;                    //!< cells per side of the light-space binning grid
+  bool areaEdgeVisibility = false;  //!< per edge, the exact light area past its line instead of the linear ramp
+};
+
+constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping plane (no silhouette edge)
+
+// One silhouette edge and the fixed part of its edge shadow (light space).
+struct Edge {
+  Vec3 a, b;             //!< endpoints, light space (b is the next edge's a)
+  Vec2 uA, uB;           //!< directions from the light's centre
+  uint8_t axis = 0;      //!< quantized direction (3.2.3.1): the light-square axis (0: x, 1: y) nearest to its normal
+  bool degenerate = false;   //!< seen end-on from the centre: no direction of its own
+  bool inFront = true;       //!< some part lies in front of the light's plane
+  uint32_t ring = 0;
+};
+
+struct Ring {
+  uint32_t first = 0, count = 0;  //!< edges [first, first + count)
+  bool umbra = false;
+  bool sheet = false;
+  bool crossesLightPlane = false;  //!< some vertex is not in front of the light
+  int32_t objectId = 0;
+  uint32_t group = 0;  //!< index into Side::groups
+  Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring (its hard shadow from the centre lies inside)
+  float zMin = kInfinity, zMax = 0.0f;
+};
+
+// The rings that bound one facet set (one silhouette of one object, e.g. the outline and the hole
+// of a ring-shaped object): their windings add.
+struct Group {
+  int32_t objectId = 0;
+  bool sheet = false;
+  bool crossesLightPlane = false;
+  float zMin = kInfinity, zMax = 0.0f;
+};
+
+// A piece of a visibility curve in light-square coordinates, directed a -> b.
+struct Piece {
+  Vec2 a, b;
+  uint32_t group;  //!< the ring's group
+};
+
+// One edge's approximant in a visibility curve: the line s[axis] = cut of the light square, and the
+// projected edge it stands for.
+struct Approximant {
+  uint8_t axis;
+  float cut;
+  Vec2 start, end;   //!< the projected edge
+  bool contributes;  //!< its edge shadow contains p: the projected edge meets the square
+};
+
+// Per-thread buffers of the per-pixel pass.
+struct Scratch {
+  std::vector<Vec3> loop, tmp;
+  std::vector<int32_t> loopEdge, tmpEdge;
+  std::vector<Approximant> approximants;
+  std::vector<Vec2> curve;
+  std::vector<Piece> pieces;
+  std::vector<uint32_t> rings;
+  std::vector<float> xs, ys;
+  // Integration: cell centres, pieces per row, per-row winding events and marks, the result.
+  std::vector<float> cx, cy;
+  std::vector<uint32_t> rowStart, rowFill, rowPieces;
+  std::vector<std::pair<uint32_t, int>> events;
+  std::vector<int> diff;
+  std::vector<uint8_t> hidden;
+};
+
+// Everything about one face of the light: its light space, silhouettes and edge shadows.
+struct Side {
+  LightPlane plane;
+  Vec2 squareScale{1.0f};  //!< light plane (x, y) -> light square [0, 1]^2: (q - plane.lower) * squareScale
+  std::vector<Edge> edges;
+  std::vector<Ring> rings;
+  std::vector<Group> groups;
+  UGrid edgeGrid;  //!< per cell: the rings with an edge whose region of influence reaches it
+  UGrid ringGrid;  //!< per cell: the rings whose u-space box (hard shadow) overlaps it
+  bool binned = false;
+};
+
+class SsvTechnique final : public ShadowTechnique {
+ public:
+  explicit SsvTechnique(const SsvOptions& options) : options_(options) {}
+  std::string_view name() const override { return "ssv"; }
+
+  void prepare(const Scene& scene, const Light& light) override {
+    timings_ = {};
+    prepared_ = false;
+    Timer timer;
+    const Bounds3 bounds = scene.bounds();
+    sides_[0] = Side{};
+    sides_[1] = Side{};
+    sides_[0].plane = makeLightPlane(light, bounds, "ssv");
+    sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
+    occluders_ = makeOccluders(scene);
+    rays_ = std::make_unique<RayScene>(scene);
+    light_ = light;
+    epsilon_ = shadowRayEpsilon(bounds);
+    zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
+    facets_ = 0;
+    for (const Occluder& o : occluders_) facets_ += o.topology.surfaceTriangles;
+    // The other face of the light is built when a receiver lies behind the light's plane.
+    buildSide(sides_[0]);
+    backBuilt_ = false;
+    timings_.add("prepare", timer.elapsedMs());
+    prepared_ = true;
+  }
+
+  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+    if (!prepared_) fail("ssv: visibility() called before prepare(); call prepare(scene, light) first");
+    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
+                                         [](const auto& p) { return p.first != "prepare" && p.first != "back face silhouettes"; }),
+                          timings_.passes.end());
+    Timer timer;
+    const int width = gbuffer.width(), height = gbuffer.height();
+    v.reset(width, height, 1.0f);
+    if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
+      buildSide(sides_[1]);
+      backBuilt_ = true;
+      timings_.add("back face silhouettes", timer.elapsedMs());
+      timer = Timer();
+    }
+    for (Side& side : sides_) bin(side, gbuffer);
+    timings_.add("binning", timer.elapsedMs());
+    Timer pixelTimer;
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+      Scratch scratch;
+      for (int y = range.begin(); y < range.end(); ++y)
+        for (int x = 0; x < width; ++x) {
+          if (!gbuffer.hit(x, y)) continue;
+          const Vec3 wsP = gbuffer.wsPosition(x, y);
+          // Receivers behind the light's plane see its other face.
+          const Vec3 front = sides_[0].plane.lsFromWs(wsP);
+          const Side& side = sides_[front.z > 0.0f ? 0 : 1];
+          const Vec3 p = front.z > 0.0f ? front : side.plane.lsFromWs(wsP);
+          // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
+          std::optional<int32_t> centreBlocker;
+          auto blocker = [&]() {
+            if (!centreBlocker) centreBlocker = silhouette::centreBlockerAt(*rays_, *light_, gbuffer, x, y, epsilon_);
+            return *centreBlocker;
+          };
+          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blocker);
+        }
+    });
+    timings_.add("visibility", pixelTimer.elapsedMs());
+  }
+
+  PassTimings timings() const override { return timings_; }
+
+  std::vector<std::pair<std::string, double>> stats() const override {
+    size_t umbraRings = 0, umbraEdges = 0;
+    for (const Ring& r : sides_[0].rings) {
+      umbraRings += r.umbra;
+      umbraEdges += r.umbra ? r.count : 0;
+    }
+    return {{"facets", double(facets_)},
+            {"silhouette_edges", double(sides_[0].edges.size())},
+            {"penumbra_silhouette_edges", double(sides_[0].edges.size() - umbraEdges)},
+            {"umbra_silhouette_edges", double(umbraEdges)},
+            {"rings", double(sides_[0].rings.size())},
+            {"umbra_rings", double(umbraRings)}};
+  }
+
+ private:
+  void bin(Side& side, const GBuffer& gbuffer) const {
+    side.binned = false;
+    Vec2 lower, upper;
+    if (side.rings.empty() || !receiverRange(gbuffer, side.plane, zNear_, lower, upper)) return;
+    const std::vector<float> cellFar = receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, options_.grid);
+    std::vector<Vec2> lo, hi;
+    std::vector<float> near;
+    std::vector<uint32_t> ring;
+    for (const Edge& e : side.edges) {
+      if (!e.inFront) continue;
+      lo.push_back(glm::min(e.uA, e.uB));
+      hi.push_back(glm::max(e.uA, e.uB));
+      near.push_back(side.plane.extent / std::max(std::min(e.a.z, e.b.z), zNear_));
+      ring.push_back(e.ring);
+    }
+    // Each cell lists the rings (once, in order) with an edge whose region of influence reaches it.
+    side.edgeGrid.buildInfluence(lower, upper, options_.grid, lo, hi, near, cellFar, ring);
+    lo.clear();
+    hi.clear();
+    for (const Ring& r : side.rings) {
+      lo.push_back(r.uLower);
+      hi.push_back(r.uUpper);
+    }
+    side.ringGrid.build(lower, upper, options_.grid, lo, hi);
+    side.binned = true;
+  }
+
+  void buildSide(Side& side) const {
+    side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
+    for (const Occluder& o : occluders_) buildRings(side, o, toLightSpace(o, side.plane));
+  }
+
+  void buildRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls) const {
+    const MeshTopology& m = o.topology;
+    const size_t n = m.triangles.size();
+    // Section 3.2.2: fully lit (every light vertex in front of the facet's plane), in shadow (none
+    // in front), partially lit otherwise. The penumbra silhouette bounds the fully lit facets, the
+    // umbra silhouette the facets in shadow (= the boundary of those not in shadow).
+    std::vector<uint8_t> lit(n), notShadow(n), facing(n);
+    size_t litCount = 0, notShadowCount = 0;
+    for (size_t t = 0; t < n; ++t) {
+      const Vec3 p0 = ls.positions[m.triangles[t].x];
+      int front = 0;
+      for (const Vec2& l : side.plane.vertices) front += glm::dot(ls.normals[t], Vec3(l, 0.0f) - p0) > 0.0f;
+      lit[t] = front == static_cast<int>(side.plane.vertices.size());
+      notShadow[t] = front > 0;
+      facing[t] = glm::dot(ls.normals[t], -p0) > 0.0f;
+      litCount += lit[t];
+      notShadowCount += notShadow[t];
+    }
+    // A side of an object with no fully lit facet (a large light close to it) has no penumbra
+    // silhouette in the sense of Section 3.2.2, and the umbra silhouette alone would shrink its
+    // shadow to the facets in shadow. The facets facing the light's centre, "potentially fully lit"
+    // in the words of 3.2.2 (and the fully lit ones whenever the light is small), bound it instead.
+    if (litCount == 0) lit = facing;
+    const bool noUmbra = notShadowCount == n;
+    if (lit == notShadow || noUmbra) {
+      // One silhouette is both (e.g. a sheet, or a thin plate seen by the whole light), or there is
+      // no facet in shadow (an object against the light): one set of rings.
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), true);
+    } else {
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, lit)), false);
+      addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, notShadow)), true);
+    }
+    // The straddled shell triangles' silhouette (header): one side of each, the one facing the
+    // light's centre.
+    std::vector<uint8_t> straddled(n, 0);
+    bool anyStraddled = false;
+    for (size_t i = 0; i < m.copyOf.size(); ++i) {
+      const uint32_t front = m.copyOf[i], back = static_cast<uint32_t>(m.surfaceTriangles + i);
+      if (!notShadow[front] || !notShadow[back]) continue;
+      straddled[facing[back] && !facing[front] ? back : front] = 1;
+      anyStraddled = true;
+    }
+    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true);
+  }
+
+  void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,
+                bool umbra) const {
+    auto uOf = [&](const Vec3& p) {
+      const float z = std::max(p.z, zNear_);
+      return Vec2(p.x / z, p.y / z);
+    };
+    const auto group = static_cast<uint32_t>(side.groups.size());
+    Group g;
+    g.objectId = o.objectId;
+    g.sheet = o.sheet;
+    for (const auto& ringEdges : rings) {
+      Ring ring;
+      ring.group = group;
+      ring.first = static_cast<uint32_t>(side.edges.size());
+      ring.count = static_cast<uint32_t>(ringEdges.size());
+      ring.umbra = umbra;
+      ring.sheet = o.sheet;
+      ring.objectId = o.objectId;
+      const auto ringId = static_cast<uint32_t>(side.rings.size());
+      for (const SilhouetteEdge& s : ringEdges) {
+        Edge e;
+        e.a = ls.positions[s.a];
+        e.b = ls.positions[s.b];
+        e.ring = ringId;
+        ring.crossesLightPlane = ring.crossesLightPlane || e.a.z < zNear_;
+        Vec3 ca = e.a, cb = e.b;
+        e.inFront = clipToSlab(ca, cb, zNear_, kInfinity);
+        e.uA = uOf(e.a);
+        e.uB = uOf(e.b);
+        // Section 3.2.3.1: the direction of the edge shadow is the edge's projection from the
+        // light's centre, quantized to the nearest multiple of 90 degrees (light-square axes): its
+        // approximants cut the axis its normal is nearest to. (Which side it hides follows from
+        // the curve it is part of.)
+        const Vec2 d = e.uB - e.uA;
+        e.axis = std::abs(d.y) >= std::abs(d.x) ? 0 : 1;
+        ring.uLower = glm::min(ring.uLower, glm::min(e.uA, e.uB));
+        ring.uUpper = glm::max(ring.uUpper, glm::max(e.uA, e.uB));
+        ring.zMin = std::min({ring.zMin, e.a.z, e.b.z});
+        ring.zMax = std::max({ring.zMax, e.a.z, e.b.z});
+        side.edges.push_back(e);
+      }
+      // An edge seen (nearly) end-on from the centre, e.g. a vertical edge of a box under the
+      // light, has no direction of its own: its curve piece is dropped and its neighbours meet
+      // at its projection.
+      const float uDiagonal = glm::length(ring.uUpper - ring.uLower);
+      for (uint32_t i = 0; i < ring.count; ++i) {
+        Edge& e = side.edges[ring.first + i];
+        e.degenerate = !(glm::length(e.uB - e.uA) > 1e-3f * uDiagonal);
+      }
+      g.crossesLightPlane = g.crossesLightPlane || ring.crossesLightPlane;
+      g.zMin = std::min(g.zMin, ring.zMin);
+      g.zMax = std::max(g.zMax, ring.zMax);
+      side.rings.push_back(ring);
+    }
+    if (!rings.empty()) side.groups.push_back(g);
+  }
+
+  // Signed crossing of edge a-b with the ray from q towards +x (winding number, Sunday 2001).
+  static int crossing(const Vec2& a, const Vec2& b, const Vec2& q) {
+    const float side = (b.x - a.x) * (q.y - a.y) - (q.x - a.x) * (b.y - a.y);
+    if (a.y <= q.y) return (b.y > q.y && side > 0.0f) ? 1 : 0;
+    return (b.y <= q.y && side < 0.0f) ? -1 : 0;
+  }
+
+  // The position of an edge shadow's approximant (Sections 3.2.3.1, 3.2.3.3): the projected edge
+  // q0-q1 leaves the fraction t of the light visible, linear between the front plane (t = 1, the
+  // line touches the light on its hidden side) and the back plane (t = 0); the approximant is the
+  // line of the light square across `axis` that leaves the same fraction: s[axis] = t measured
+  // from the side the edge's normal (taken towards +axis) points away from (which side is hidden
+  // does not change the line: t and 1 - t measured from opposite sides).
+  float approximantCut(const Side& side, const Vec2& q0, const Vec2& q1, uint8_t axis) const {
+    const Vec2 d = q1 - q0;
+    Vec2 m(-d.y, d.x);
+    const float len = glm::length(m);
+    if (!(len > 0.0f)) {
+      // A point: the approximant passes through it.
+      return (q0[axis] - side.plane.lower[axis]) * side.squareScale[axis];
+    }
+    m /= len;
+    if (m[axis] < 0.0f) m = -m;
+    float hLo, hHi;
+    side.plane.support(m, hLo, hHi);
+    const float offset = glm::dot(q0, m);
+    if (options_.areaEdgeVisibility && offset > hLo && offset < hHi) return visibleBeyondLine(side.plane, m, offset);
+    return (offset - hLo) / (hHi - hLo);
+  }
+
+  // Liang-Barsky: the part [t0, t1] of segment a-b inside the light square [0, 1]^2; false if none.
+  static bool clipToSquare(const Vec2& a, const Vec2& b, float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = 1.0f;
+    const Vec2 d = b - a;
+    for (int k = 0; k < 2; ++k) {
+      for (const float bound : {0.0f, 1.0f}) {
+        const float num = bound == 0.0f ? a[k] : 1.0f - a[k];  // distance inside this side
+        const float den = bound == 0.0f ? -d[k] : d[k];         // rate of leaving through it
+        if (den == 0.0f) {
+          if (num < 0.0f) return false;
+        } else {
+          const float t = num / den;
+          if (den > 0.0f) t1 = std::min(t1, t);
+          else t0 = std::max(t0, t);
+        }
+      }
+    }
+    return t0 <= t1;
+  }
+
+  // A loop around the light square adds `winding` to every winding inside it; only its right side
+  // can cross a ray towards +x.
+  static void loopAround(Scratch& s, int winding, uint32_t group) {
+    for (int i = 0; i < std::abs(winding); ++i)
+      s.pieces.push_back({Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group});
+  }
+
+  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
+  // winding of the ring's projection around the light's centre.
+  //
+  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
+  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
+  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
+  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
+  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
+  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
+  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
+  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
+  // entered and left on its first and last approximants at the position of the projected edges'
+  // outer ends, clamped to the square, and the curve is closed through the projections of the
+  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
+  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
+  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
+  // direction from the light's centre lies inside the ring or not (an angle sweep).
+  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
+    const Ring& r = side.rings[ringId];
+    const float zMax = p.z * (1.0f - 1e-4f);
+    s.loop.clear();
+    s.loopEdge.clear();
+    for (uint32_t i = 0; i < r.count; ++i) {
+      s.loop.push_back(side.edges[r.first + i].a);
+      s.loopEdge.push_back(static_cast<int32_t>(r.first + i));
+    }
+    // Sutherland-Hodgman against both depth bounds; each vertex keeps the edge that leaves it.
+    bool cut = false;
+    for (const float bound : {zNear_, zMax}) {
+      const bool low = bound == zNear_;
+      bool allIn = true;
+      for (const Vec3& q : s.loop) allIn = allIn && (low ? q.z >= bound : q.z <= bound);
+      if (allIn) continue;
+      cut = true;
+      s.tmp.clear();
+      s.tmpEdge.clear();
+      const size_t n = s.loop.size();
+      for (size_t i = 0; i < n; ++i) {
+        const Vec3 &a = s.loop[i], &b = s.loop[(i + 1) % n];
+        const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
+        if (inA) {
+          s.tmp.push_back(a);
+          s.tmpEdge.push_back(s.loopEdge[i]);
+        }
+        if (inA != inB) {
+          const Vec3 c = a + (b - a) * ((bound - a.z) / (b.z - a.z));
+          s.tmp.push_back(Vec3(c.x, c.y, bound));
+          s.tmpEdge.push_back(inA ? kClosure : s.loopEdge[i]);
+        }
+      }
+      s.loop.swap(s.tmp);
+      s.loopEdge.swap(s.tmpEdge);
+    }
+    const size_t n = s.loop.size();
+    if (n < 3) return 0;
+    auto toSquare = [&](const Vec3& q) { return (projectFrom(p, q) - side.plane.lower) * side.squareScale; };
+    s.approximants.clear();
+    bool anyContribution = false;
+    const Vec2 first = toSquare(s.loop[0]);
+    Vec2 a = first;
+    for (size_t i = 0; i < n; ++i) {
+      const Vec2 b = i + 1 < n ? toSquare(s.loop[i + 1]) : first;
+      const int32_t id = s.loopEdge[i];
+      if (id == kClosure) {
+        // Along the clipping plane: its points are at p's depth and project far outside the
+        // light; it never contributes, it only separates chains.
+        s.approximants.push_back({0, 0.0f, a, b, false});
+      } else if (!side.edges[id].degenerate) {
+        const Edge& e = side.edges[id];
+        float t0, t1;
+        const bool contributes = clipToSquare(a, b, t0, t1);
+        anyContribution = anyContribution || contributes;
+        float cut = 0.0f;  // only a contributing edge is drawn as its approximant
+        if (contributes) {
+          // The cut from the light-plane points (the square is an axis-wise affine image of the
+          // light plane, so the ramp measured in either is the same).
+          const Vec2 qa = side.plane.lower + a / side.squareScale, qb = side.plane.lower + b / side.squareScale;
+          cut = approximantCut(side, qa, qb, e.axis);
+          // Corner regions (3.2.3.3-5): where the projected edge ends inside the square it covers
+          // only the fraction w of the square along its approximant, and the cut moves from the
+          // ramp's value (mid region, w = 1) to the position of the edge's part inside the square
+          // (w -> 0). So an edge whose end enters the square starts on the square's edge, where
+          // its neighbour's chain left it, and V stays continuous as edge shadows begin and end.
+          const Vec2 p0 = a + (b - a) * t0, p1 = a + (b - a) * t1;
+          const float w = std::min(std::abs(p1[1 - e.axis] - p0[1 - e.axis]), 1.0f);
+          cut = w * std::clamp(cut, 0.0f, 1.0f) + (1.0f - w) * 0.5f * (p0[e.axis] + p1[e.axis]);
+        }
+        s.approximants.push_back({e.axis, cut, a, b, contributes});
+      }
+      a = b;
+    }
+    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
+    // the cut, and that closing segment, projected from p, runs far outside the light and could
+    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
+    // the light's centre from p (one ray, what a shadow-volume pass gives).
+    // The winding of the ring's projection around the light's centre.
+    int centreWinding = 0;
+    if (cut || anyContribution) {
+      const Vec2 centre = -side.plane.lower * side.squareScale;
+      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
+    }
+    if (!anyContribution) {
+      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
+      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
+      // direction from the centre around the ring.
+      if (!cut) {
+        const Vec2 u(p.x / p.z, p.y / p.z);
+        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
+        for (uint32_t i = 0; i < r.count; ++i) {
+          const Edge& e = side.edges[r.first + i];
+          centreWinding += crossing(e.uA, e.uB, u);
+        }
+      }
+      loopAround(s, centreWinding, r.group);
+      return centreWinding;
+    }
+    const size_t k = s.approximants.size();
+    // The join of approximant e with the next one, f.
+    auto join = [&](const Approximant& e, const Approximant& f) {
+      Vec2 w;
+      if (e.axis != f.axis) {
+        w[e.axis] = e.cut;
+        w[f.axis] = f.cut;
+        s.curve.push_back(w);
+      } else {
+        const int other = 1 - e.axis;
+        w[other] = f.start[other];
+        w[e.axis] = e.cut;
+        s.curve.push_back(w);
+        w[e.axis] = f.cut;
+        s.curve.push_back(w);
+      }
+    };
+    size_t gap = k;
+    for (size_t i = 0; i < k; ++i)
+      if (!s.approximants[i].contributes) {
+        gap = i;
+        break;
+      }
+    s.curve.clear();
+    if (gap == k) {
+      // Every edge shadow contains p: one closed curve of approximants.
+      for (size_t i = 0; i < k; ++i) join(s.approximants[i], s.approximants[(i + 1) % k]);
+    } else {
+      // Once around the ring from a gap: the projected edges outside the square as they are, each
+      // chain of contributing edges as its approximants, entered and left on the approximant at
+      // the position (along it) of the projected edge's outer end, clamped to the square.
+      for (size_t step = 1; step <= k; ++step) {
+        const size_t i = (gap + step) % k;
+        const Approximant& e = s.approximants[i];
+        if (!e.contributes) {
+          s.curve.push_back(e.start);
+          s.curve.push_back(e.end);
+          continue;
+        }
+        const int other = 1 - e.axis;
+        if (!s.approximants[(i + k - 1) % k].contributes) {
+          s.curve.push_back(e.start);
+          Vec2 entry;
+          entry[e.axis] = e.cut;
+          entry[other] = std::clamp(e.start[other], 0.0f, 1.0f);
+          s.curve.push_back(entry);
+        }
+        const Approximant& next = s.approximants[(i + 1) % k];
+        if (next.contributes) {
+          join(e, next);
+        } else {
+          Vec2 exit;
+          exit[e.axis] = e.cut;
+          exit[other] = std::clamp(e.end[other], 0.0f, 1.0f);
+          s.curve.push_back(exit);
+          s.curve.push_back(e.end);
+        }
+      }
+    }
+    // The pieces that can cross a ray from a point of the square towards +x.
+    const size_t c = s.curve.size();
+    for (size_t i = 0; i < c; ++i) {
+      const Vec2 &u = s.curve[i], &v = s.curve[(i + 1) % c];
+      if (u.y == v.y || std::max(u.x, v.x) <= 0.0f || std::max(u.y, v.y) <= 0.0f || std::min(u.y, v.y) >= 1.0f) continue;
+      s.pieces.push_back({u, v, r.group});
+    }
+    return centreWinding;
+  }
+
+  // s.hidden[iy * nx + ix]: whether the point (cx[ix], cy[iy]) of the light square is hidden, i.e.
+  // some group's pieces (runs of equal group in s.pieces) wind around it, exactly as summing
+  // crossing() over every piece would say. Row by row: a piece crosses the ray from (x, cy)
+  // towards +x only on the rows within its y-range, and there for a prefix of the columns
+  // (crossing()'s side test, in float, is monotone in x), found by bisection. O(pieces x rows
+  // spanned x log columns + rows x columns) instead of O(pieces x rows x columns).
+  static void hiddenCells(Scratch& s) {
+    const size_t nx = s.cx.size(), ny = s.cy.size();
+    s.hidden.assign(nx * ny, 0);
+    // Pieces per row, in piece order (counting sort): rows with min(a.y, b.y) <= cy < max(a.y, b.y).
+    s.rowStart.assign(ny + 1, 0);
+    auto rowsOf = [&](const Piece& piece, size_t& r0, size_t& r1) {
+      const float lo = std::min(piece.a.y, piece.b.y), hi = std::max(piece.a.y, piece.b.y);
+      r0 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), lo) - s.cy.begin());
+      r1 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), hi) - s.cy.begin());
+    };
+    size_t r0, r1;
+    for (const Piece& piece : s.pieces) {
+      rowsOf(piece, r0, r1);
+      for (size_t r = r0; r < r1; ++r) ++s.rowStart[r + 1];
+    }
+    for (size_t r = 1; r <= ny; ++r) s.rowStart[r] += s.rowStart[r - 1];
+    s.rowPieces.resize(s.rowStart[ny]);
+    s.rowFill.assign(s.rowStart.begin(), s.rowStart.end() - 1);
+    for (uint32_t i = 0; i < s.pieces.size(); ++i) {
+      rowsOf(s.pieces[i], r0, r1);
+      for (size_t r = r0; r < r1; ++r) s.rowPieces[s.rowFill[r]++] = i;
+    }
+    s.diff.resize(nx + 1);
+    for (size_t iy = 0; iy < ny; ++iy) {
+      const float y = s.cy[iy];
+      std::fill(s.diff.begin(), s.diff.end(), 0);
+      auto flush = [&]() {
+        // The group's winding is constant between consecutive prefix ends: mark where it is not 0.
+        std::sort(s.events.begin(), s.events.end());
+        int winding = 0;
+        for (const auto& e : s.events) winding += e.second;
+        size_t column = 0;
+        for (size_t i = 0; i < s.events.size();) {
+          const uint32_t end = s.events[i].first;
+          if (winding != 0 && end > column) {
+            ++s.diff[column];
+            --s.diff[end];
+          }
+          for (; i < s.events.size() && s.events[i].first == end; ++i) winding -= s.events[i].second;
+          column = end;
+        }
+        s.events.clear();
+      };
+      uint32_t group = 0;
+      bool any = false;
+      for (size_t k = s.rowStart[iy]; k < s.rowStart[iy + 1]; ++k) {
+        const Piece& piece = s.pieces[s.rowPieces[k]];
+        if (any && piece.group != group) flush();
+        group = piece.group;
+        any = true;
+        const int w = crossing(piece.a, piece.b, Vec2(s.cx[0], y)) != 0 ? 1 : 0;
+        // Bisection for the first column whose point the piece does not cross.
+        size_t lo = 0, hi = nx;
+        if (w) {
+          lo = 1;
+          while (lo < hi) {
+            const size_t mid = (lo + hi) / 2;
+            if (crossing(piece.a, piece.b, Vec2(s.cx[mid], y)) != 0) lo = mid + 1;
+            else hi = mid;
+          }
+          s.events.push_back({static_cast<uint32_t>(lo), piece.a.y <= y ? 1 : -1});
+        }
+      }
+      if (any) flush();
+      int open = 0;
+      for (size_t ix = 0; ix < nx; ++ix) {
+        open += s.diff[ix];
+        s.hidden[iy * nx + ix] = open > 0;
+      }
+    }
+  }
+
+  template <typename Blocker>
+  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, Scratch& s, Blocker& blocker) const {
+    if (!side.binned || !(p.z > zNear_)) return 1.0f;
+    const Vec2 u(p.x / p.z, p.y / p.z);
+    // The rings to combine: those with an edge shadow that may contain p (the edge grid), and
+    // those whose hard shadow may (the ring grid; their edge shadows may all miss p while the ring
+    // hides the whole light).
+    s.rings.clear();
+    {
+      // Both cells list ring ids in increasing order: merged, each ring once, in order (the rings
+      // of a group are consecutive).
+      const auto [begin, end] = side.edgeGrid.cell(u);
+      const auto [rBegin, rEnd] = side.ringGrid.cell(u);
+      const uint32_t* e = begin;
+      for (const uint32_t* it = rBegin; it != rEnd; ++it) {
+        const Ring& r = side.rings[*it];
+        if (!(u.x >= r.uLower.x && u.y >= r.uLower.y && u.x <= r.uUpper.x && u.y <= r.uUpper.y)) continue;
+        for (; e != end && *e < *it; ++e) s.rings.push_back(*e);
+        if (e != end && *e == *it) ++e;
+        s.rings.push_back(*it);
+      }
+      for (; e != end; ++e) s.rings.push_back(*e);
+    }
+    if (s.rings.empty()) return 1.0f;
+    s.pieces.clear();
+    const float zMax = p.z * (1.0f - 1e-4f);
+    for (size_t i = 0; i < s.rings.size();) {
+      // The rings of one group bound one facet set: their windings add.
+      const uint32_t group = side.rings[s.rings[i]].group;
+      const Group& g = side.groups[group];
+      const size_t firstPiece = s.pieces.size();
+      int centreWinding = 0;
+      for (; i < s.rings.size() && side.rings[s.rings[i]].group == group; ++i) {
+        const Ring& r = side.rings[s.rings[i]];
+        if ((r.sheet && r.objectId == objectId) || !(r.zMin < p.z)) continue;
+        centreWinding += appendCurve(side, s.rings[i], p, s);
+      }
+      if (g.sheet && g.objectId == objectId) continue;
+      // A facet set reaching beyond p (p on or beside its object) or behind the light's plane is
+      // cut there, and closed along the cut: the closing segments project far outside the light
+      // and could pass around it either way. Which side of the curves is hidden is then fixed by
+      // whether the object hides the light's centre from p: one ray, what the hard shadow of a
+      // shadow-volume pass gives.
+      if ((g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z) {
+        const bool hidesCentre = blocker() == g.objectId;
+        if ((centreWinding != 0) != hidesCentre) {
+          loopAround(s, hidesCentre ? 1 : -centreWinding, group);
+          centreWinding = hidesCentre ? (centreWinding == 0 ? 1 : centreWinding) : 0;
+        }
+      }
+      // A silhouette none of whose edge shadows contains p and that winds around the square hides
+      // all of the light (the umbra): nothing else can change V.
+      bool onlyLoops = true;
+      for (size_t k = firstPiece; k < s.pieces.size() && onlyLoops; ++k) onlyLoops = s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f;
+      if (onlyLoops && centreWinding != 0 && s.pieces.size() > firstPiece) return 0.0f;
+    }
+    if (s.pieces.empty()) return 1.0f;
+    // Competitive combination (3.2.4.2, 3.2.4.4): a point of the light square is hidden when any
+    // ring's curve winds around it (the visibilities AND-ed).
+    double visible = 0.0;
+    if (options_.integration == Integration::Slicing) {
+      // Slicing (3.2.4.4, Fig. 3-22): the light square cut at every distinct coordinate of the
+      // curves, one test per cell, weighted by its area.
+      s.xs.assign({0.0f, 1.0f});
+      s.ys.assign({0.0f, 1.0f});
+      for (const Piece& piece : s.pieces)
+        for (const Vec2& q : {piece.a, piece.b}) {
+          if (q.x > 0.0f && q.x < 1.0f) s.xs.push_back(q.x);
+          if (q.y > 0.0f && q.y < 1.0f) s.ys.push_back(q.y);
+        }
+      const float tolerance = options_.mergeTolerance;
+      auto merge = [tolerance](std::vector<float>& cuts) {
+        std::sort(cuts.begin(), cuts.end());
+        size_t n = 1;
+        for (size_t i = 1; i < cuts.size(); ++i)
+          if (cuts[i] - cuts[n - 1] > tolerance) cuts[n++] = cuts[i];
+        cuts.resize(n);
+        if (cuts.back() < 1.0f) {
+          if (n > 1 && 1.0f - cuts.back() <= tolerance) cuts.back() = 1.0f;
+          else cuts.push_back(1.0f);
+        }
+      };
+      merge(s.xs);
+      merge(s.ys);
+      s.cx.resize(s.xs.size() - 1);
+      s.cy.resize(s.ys.size() - 1);
+      for (size_t ix = 0; ix < s.cx.size(); ++ix) s.cx[ix] = 0.5f * (s.xs[ix] + s.xs[ix + 1]);
+      for (size_t iy = 0; iy < s.cy.size(); ++iy) s.cy[iy] = 0.5f * (s.ys[iy] + s.ys[iy + 1]);
+      hiddenCells(s);
+      for (size_t iy = 0; iy < s.cy.size(); ++iy)
+        for (size_t ix = 0; ix < s.cx.size(); ++ix) {
+          const float w = (s.xs[ix + 1] - s.xs[ix]) * (s.ys[iy + 1] - s.ys[iy]);
+          if (w > 0.0f && !s.hidden[iy * s.cx.size() + ix]) visible += w;
+        }
+    } else {
+      const int n = options_.integration == Integration::Fixed8 ? 8 : 16;
+      s.cx.resize(size_t(n));
+      for (int i = 0; i < n; ++i) s.cx[size_t(i)] = (static_cast<float>(i) + 0.5f) / static_cast<float>(n);
+      s.cy = s.cx;
+      hiddenCells(s);
+      int count = 0;
+      for (const uint8_t h : s.hidden) count += !h;
+      visible = double(count) / (n * n);
+    }
+    return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
+  }
+
+  // The fraction of the light's area on the visible side of the line dot(x, m) = offset (the exact
+  // visibility past one infinite edge), by clipping the polygon: O(L).
+  static float visibleBeyondLine(const LightPlane& plane, const Vec2& m, float offset) {
+    std::array<Vec2, kMaxLightVertices + 2> clipped;
+    const int n = clipHalfPlane(plane.vertices.data(), static_cast<int>(plane.vertices.size()), clipped.data(), m, offset);
+    float twice = 0.0f;
+    for (int i = 0; i < n; ++i) {
+      const Vec2 &a = clipped[i], &b = clipped[(i + 1) % n];
+      twice += a.x * b.y - a.y * b.x;
+    }
+    return std::clamp(0.5f * twice / plane.area, 0.0f, 1.0f);
+  }
+
+  SsvOptions options_;
+  std::vector<Occluder> occluders_;
+  bool backBuilt_ = false;
+  std::unique_ptr<RayScene> rays_;  //!< the light's centre seen from receivers beside an occluder
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
+  Side sides_[2];  //!< [0]: the face towards the scene's centre; [1]: the other face
+  float zNear_ = 0.0f;
+  size_t facets_ = 0;
+  bool prepared_ = false;
+  PassTimings timings_;
+};
+
+}  // namespace
+
+TechniqueInfo ssvTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "ssv";
+  info.summary = "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its fewest convex parts)";
+  info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
+  ParamSpec integration;
+  integration.name = "integration";
+  integration.type = ParamType::String;
+  integration.defaultValue = std::string("slicing");
+  integration.choices = {"slicing", "8x8", "16x16"};
+  integration.help = "visible fraction from the visibility curves: slicing (variable quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)";
+  ParamSpec merge;
+  merge.name = "merge_tolerance";
+  merge.type = ParamType::Float;
+  merge.defaultValue = 0.01;
+  merge.min = 0.0;
+  merge.max = 0.25;
+  merge.unit = "fraction of the light's side";
+  merge.help = "slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)";
+  ParamSpec grid;
+  grid.name = "grid";
+  grid.type = ParamType::Int;
+  grid.defaultValue = int64_t{64};
+  grid.min = 1;
+  grid.max = 1024;
+  grid.unit = "cells per side";
+  grid.help = "resolution of the light-space (direction from the light's centre) grid that bins the edge shadows";
+  ParamSpec edge;
+  edge.name = "edge_visibility";
+  edge.type = ParamType::String;
+  edge.defaultValue = std::string("linear");
+  edge.choices = {"linear", "area"};
+  edge.help = "visible fraction past one edge shadow: linear between its front and back planes (the thesis, Section 3.3) or the exact area of the light past the edge's line";
+  info.params = {integration, merge, grid, edge};
+  info.create = [](const Params& p) -> std::unique_ptr<ShadowTechnique> {
+    SsvOptions o;
+    const std::string& mode = p.getString("integration");
+    o.integration = mode == "8x8" ? Integration::Fixed8 : mode == "16x16" ? Integration::Fixed16 : Integration::Slicing;
+    o.mergeTolerance = static_cast<float>(p.getFloat("merge_tolerance"));
+    o.grid = static_cast<int>(p.getInt("grid"));
+    o.areaEdgeVisibility = p.getString("edge_visibility") == "area";
+    // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
+    return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
+  };
+  return info;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,161 @@
+// Shared stages of the silhouette-based techniques `ssv` (Rouf 2007) and `wedges` (Assarsson &
+// Akenine-Moeller 2003): the light's plane as a 2D polygon, the occluders' topologies, the central
+// projection of occluder points from a receiver onto the light's plane, convex clipping, and the
+// binning grid.
+//
+// Light space here: origin at the light's centre sample, z along Light::lightFrame's axis (towards
+// the scene), x along the polygon's first edge (so a rect light's sides are the x and y axes, which
+// the four quantized directions of Rouf Section 3.2.3.1 need), y = z x x. The light lies in z = 0.
+//
+// Binning (a light-space grid, chosen over a screen-space one because an edge's region of
+// influence is a fixed shape in light space, independent of the camera): a receiver p is binned by
+// its direction from the light's centre, u = (x/z, y/z). A point of an occluder edge at depth z_e can
+// change the light's visibility from p only if p sees it in front of the light, and then
+// |u_p - u_e| <= R (1/z_e - 1/z_p) < R / z_e, R the light's extent (the projection of the point from
+// p onto the light's plane lies within R of the centre). So an edge's influence on the receivers of
+// a cell lies in its u-space bounding box grown by R (1/min z_e - 1/z_c), z_c the deepest receiver
+// of the cell (none if z_c <= min z_e): conservative, exact in the limit of a small light.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "penumbra/gbuffer.h"
+#include "penumbra/light.h"
+#include "techniques/silhouette/mesh_topology.h"
+#include "penumbra/scene.h"
+
+namespace penumbra {
+class RayScene;
+}
+
+namespace penumbra::silhouette {
+
+inline constexpr int kMaxLightVertices = 32;
+
+struct LightPlane {
+  Vec3 wsOrigin{0.0f};
+  Frame lsFrame;                  //!< axes of light space in world space
+  std::vector<Vec2> vertices;    //!< the polygon in light space (z = 0), counter-clockwise in (x, y)
+  float area = 0.0f;
+  float extent = 0.0f;           //!< R: the largest distance of a vertex from the centre
+  Vec2 lower{0.0f}, upper{0.0f}; //!< bounding rectangle in (x, y)
+
+  Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
+  // min / max of dot(v, dir) over the light's vertices.
+  void support(const Vec2& dir, float& lo, float& hi) const {
+    lo = hi = glm::dot(vertices[0], dir);
+    for (size_t i = 1; i < vertices.size(); ++i) {
+      const float h = glm::dot(vertices[i], dir);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+  }
+};
+
+// Rect and polygon lights (triangles, rects, thin rects, any convex polygon of at most
+// kMaxLightVertices vertices); other shapes throw Error naming the shape and the supported ones, and
+// so does a concave polygon (the techniques get its convex parts: convex_parts.h).
+// Planar lights emit from both faces: `back` gives the light space of the other face (z reversed),
+// for receivers behind the light's plane.
+LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back = false);
+
+struct Occluder {
+  int32_t objectId = 0;
+  std::string name;
+  MeshTopology topology;          //!< world space
+  bool sheet = false;             //!< a two-sided planar sheet (cannot shadow itself)
+};
+
+// An occluder's vertex positions and face normals in the light space of one face of the light.
+struct LightSpaceGeometry {
+  std::vector<Vec3> positions, normals;
+};
+
+// The scene's objects as occluders in world space: closed oriented surfaces (mesh_topology.h: a solid
+// as given or repaired, any other mesh as a doubled shell; Rouf Section 1.3 asks for solids).
+std::vector<Occluder> makeOccluders(const Scene& scene);
+// The occluder's positions and normals in the light space of `plane`.
+LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane);
+
+// Clips segment a-b to zMin <= z <= zMax; false if nothing is left.
+inline bool clipToSlab(Vec3& a, Vec3& b, float zMin, float zMax) {
+  if ((a.z < zMin && b.z < zMin) || (a.z > zMax && b.z > zMax)) return false;
+  for (const float bound : {zMin, zMax}) {
+    const bool lowSide = bound == zMin;
+    const bool outA = lowSide ? a.z < bound : a.z > bound, outB = lowSide ? b.z < bound : b.z > bound;
+    if (outA == outB) continue;
+    const float s = (bound - a.z) / (b.z - a.z);
+    const Vec3 c = a + (b - a) * s;
+    (outA ? a : b) = Vec3(c.x, c.y, bound);
+  }
+  return true;
+}
+
+// The point where the line from receiver p through occluder point q meets the light's plane
+// (z = 0); q must be nearer to the plane than p (q.z < p.z).
+inline Vec2 projectFrom(const Vec3& p, const Vec3& q) {
+  const float s = p.z / (p.z - q.z);
+  return Vec2(p.x + (q.x - p.x) * s, p.y + (q.y - p.y) * s);
+}
+
+// Clips segment a-b to z <= zMax; false if nothing is left.
+inline bool clipToDepth(Vec3& a, Vec3& b, float zMax) {
+  const bool ina = a.z <= zMax, inb = b.z <= zMax;
+  if (!ina && !inb) return false;
+  if (ina && inb) return true;
+  const float s = (zMax - a.z) / (b.z - a.z);
+  const Vec3 c = a + (b - a) * s;
+  (ina ? b : a) = Vec3(c.x, c.y, zMax);
+  return true;
+}
+
+// Area of the convex polygon `poly` (counter-clockwise) clipped to the triangle (0, a, b),
+// signed by the triangle's orientation: exact for any convex light.
+float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a, const Vec2& b);
+
+// A uniform grid over a rectangle of u-space whose cells list the items whose boxes overlap them,
+// in item order.
+class UGrid {
+ public:
+  void build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+             const std::vector<Vec2>& itemUpper);
+  // Regions of influence (ssv.h's bound, per cell): an item at least `itemNear` = R / z_item deep
+  // (z_item its smallest depth) can change the light's visibility only from receivers deeper than
+  // it, and there within R (1/z_item - 1/z_p) of its box; a cell lists it when some receiver of
+  // the cell can be such a receiver: cellFar[c] = R / (the deepest receiver in cell c), +infinity
+  // for a cell without receivers. Items with equal consecutive `keys` are listed once per cell, as
+  // their key (empty keys: the item's index).
+  void buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                      const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
+                      const std::vector<uint32_t>& keys);
+  // The items of the cell holding u ([begin, end) into items()); empty outside the grid.
+  std::pair<const uint32_t*, const uint32_t*> cell(const Vec2& u) const;
+  // The cell holding u, or -1 outside the grid.
+  int cellIndex(const Vec2& u) const;
+  int resolution() const { return res_; }
+
+ private:
+  Vec2 lower_{0.0f}, scale_{0.0f};
+  int res_ = 0;
+  std::vector<uint32_t> start_, items_;
+};
+
+// Whether some G-buffer hit point lies behind the light's plane (z <= 0 in the light space of
+// `plane`): only then is the light's other face needed.
+bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane);
+// The u-space rectangle of the G-buffer's hit points in front of the light (z > zMin).
+bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper);
+// cellFar of UGrid::buildInfluence for a grid of `resolution` cells over [lower, upper]: R / the
+// deepest receiver (z > zMin) in each cell, +infinity where there is none.
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
+                                   int resolution);
+
+// The object that hides the light's centre from G-buffer pixel (x, y) (kNoObject: none): one ray,
+// offset and clipped as raytraced-hard's. ssv and wedges trace it only where their silhouettes
+// cannot tell which side of their curves is hidden.
+int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon);
+
+}  // namespace penumbra::silhouette
