@@ -62,9 +62,9 @@ void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
 
   // When spp fills the sampler's m x n grid, every cell holds one sample and the cells are visited in
   // 4 x 4 tiles, so each 16-ray packet aims at one small patch of the light: a narrow frustum that
-  // Embree traverses far faster than 16 rays spread over the whole light (measured ~1.5x on
-  // `crowded`). Otherwise the samples are taken in index order. Either way the set of samples, and
-  // so V up to the order of the sums, is the one sample(i, pattern) gives for i < spp.
+  // Embree traverses faster than 16 rays spread over the whole light. Otherwise the samples are taken
+  // in index order. Either way the set of samples, and so V up to the order of the sums, is the one
+  // sample(i, pattern) gives for i < spp.
   const uint32_t columns = sampler.columns(), rows = sampler.rows();
   const bool fullGrid = columns * rows == spp;
 
@@ -98,8 +98,8 @@ void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
           lightSampler.sample(us, count, lightSamples);
           for (int i = 0; i < count; ++i) {
             // Copied member by member: a whole-struct copy made the compiler assemble the ray in a
-            // stack temporary with narrow stores and reload it with 16-byte loads, a store-forwarding
-            // stall that cost ~30% of this loop (measured with perf).
+            // stack temporary with narrow stores and reload it with 16-byte loads: a store-forwarding
+            // stall in the hottest loop.
             const Ray ray = rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon);
             packet[i].origin = ray.origin;
             packet[i].direction = ray.direction;

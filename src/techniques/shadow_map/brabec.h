@@ -26,10 +26,8 @@
 //    inner search compares against P's receiver plane (depth z + grad z . (texel - P') - bias, the
 //    plane of techniques/shadow_map/shadow_map.h) instead: with the constant layer, the lit part of a receiver
 //    tilted towards the light (the ground under a light off to the side) lies in front of the layer
-//    and never counts as lit, so the inner penumbra only grows away from the light. Measured on a
-//    plane tilted 40 degrees under a sphere light with a box above it (256x256 image, 1024 map):
-//    RMSE8 9.5 / penumbra RMSE8 20.7 with the plane, 11.6 / 25.3 with the constant layer; on
-//    `crowded`, whose ground nearly faces the light, the two give the same V.
+//    and never counts as lit, so the inner penumbra only grows away from the light. On a ground
+//    that nearly faces the light the two give the same V.
 //
 // r_max, physically (the paper's future work, Sec. 6). A light of radius R (Light::extent(), the
 // emitter modelled as a disk of that radius facing the map), a blocker edge at depth z_b and a
@@ -81,12 +79,11 @@
 // umbra, a blocker's corner), where the nearest texel jumps to another edge: refine when the
 // directions from the two borders' P' to their texels differ by more than `interpolate_max_angle`
 // (default 30 degrees). An interpolated pixel carries its nearer interpolant's direction into the
-// row pass, as it carries its id. Measured on `crowded` against the exhaustive search (pixel RMSE8
-// over the error mask, 512x512 image, maps 256 / 1024): the paper's criteria alone 2.2 / 2.5, with
-// (1) only 1.5 / 1.6, with (1) and (2) 0.61 / 0.59; searched pixels 8.8% -> 12.2% / 11.6%. At 1024x1024
-// (penumbrae twice as many pixels wide) 1.26 -> 0.38 / 0.37, searched 7.5% -> 9.4%. Different blocker
-// ids at the borders (the paper's other cue) add nothing once (2) is in: a change of blocker turns the
-// direction. Option `interpolate_max_step` (default 1: off) also refines a group whose border V
+// row pass, as it carries its id. Both kinks matter: against the exhaustive search the paper's
+// criteria alone leave about four times the error of (1) and (2) together, for a few percent more
+// searched pixels (tests/techniques/shadow_map/brabec_test.cpp checks the interpolated pass against
+// the exhaustive one). Different blocker ids at the borders (the paper's other cue) add nothing once
+// (2) is in: a change of blocker turns the direction. Option `interpolate_max_step` (default 1: off) also refines a group whose border V
 // differ by more than the step.
 //
 // Jitter (Sec. 4.3): texel positions offset by up to `jitter` texels in s and t, a deterministic hash

@@ -46,7 +46,7 @@
 //    the surface it sees (value and depth), read where that skin lies in front of p; a second channel
 //    whose 2x2 lookup spreads over more than 1/4 is a skin seen edge-on near its occluder end and
 //    gives no bound. With both, a box over a plane is exact but for its edge pixels and a sphere
-//    close (RMSE8 on a scan line through the penumbra, tests: 11.2 -> 5.7 and 20.6 -> 3.1).
+//    close (the scan-line tests of tests/techniques/shadow_map/heidrich_test.cpp print both).
 //  - Self-shadowing: where p's own plane hides one end of a sub-segment (its geometric normal faces
 //    one sample point and not the other: between the two terminators of a curved or a box surface),
 //    the skins near p are its own object's and say nothing about it; V there is the part of the
