@@ -28,6 +28,11 @@ struct ErrorStats {
 // 1 where the pixel hits geometry whose shading normal faces the light's centre sample.
 Image<uint8_t> errorMask(const GBuffer& gbuffer, const Light& light);
 
+// The open interval of V that counts a pixel as "in the penumbra" (docs/architecture.md, "Vocabulary").
+inline constexpr float kPenumbraLow = 0.01f;
+inline constexpr float kPenumbraHigh = 0.99f;
+inline bool inPenumbra(float v) { return v > kPenumbraLow && v < kPenumbraHigh; }
+
 // Thresholds of ErrorStats::umbraLeaks and ErrorStats::speckle, in V.
 inline constexpr float kUmbraReference = 0.05f;  //!< reference V below this: umbra
 inline constexpr float kUmbraLeakLit = 0.5f;     //!< technique V above this there: a leak

@@ -12,6 +12,7 @@
 #include "penumbra/camera.h"
 #include "penumbra/light.h"
 #include "penumbra/math.h"
+#include "penumbra/motion.h"
 #include "penumbra/params.h"
 
 namespace penumbra {
@@ -68,6 +69,9 @@ struct Scene {
   float ambient = 0.05f;  //!< ambient term of the shading, relative to the light's peak irradiance
   // Technique parameters given in the scene file ("techniques": {"pcss": {...}}), by technique name.
   std::map<std::string, ParamSet> techniqueParams;
+  // A light or the camera moving over a sequence of frames (the scene file's "motion"); absent: a
+  // still scene.
+  std::optional<Motion> motion;
   // The files the scene was read from (the scene file and its mesh files): outputs never replace them.
   std::vector<std::string> inputFiles;
 

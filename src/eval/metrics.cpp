@@ -13,12 +13,6 @@ namespace penumbra {
 
 namespace {
 
-// Bounds of the open interval that counts a value as "in the penumbra" (docs/architecture.md, "Vocabulary").
-constexpr float kPenumbraLow = 0.01f;
-constexpr float kPenumbraHigh = 0.99f;
-
-bool inPenumbra(float v) { return v > kPenumbraLow && v < kPenumbraHigh; }
-
 // |V(x, y) - median of V over the 3x3 block around it|; (x, y) not on the border.
 float distanceToMedian3x3(const Image<float>& v, int x, int y) {
   std::array<float, 9> block;

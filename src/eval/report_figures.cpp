@@ -7,15 +7,11 @@
 #include <cmath>
 
 #include "penumbra/error.h"
+#include "penumbra/metrics.h"
 
 namespace penumbra {
 
 namespace {
-
-// Bounds of "in the penumbra" from the penumbra RMSE8 (docs/architecture.md, "Vocabulary"): the same
-// open interval as metrics.cpp.
-constexpr float kPenumbraLow = 0.01f;
-constexpr float kPenumbraHigh = 0.99f;
 
 // Exact inverse of the sRGB encoding image_io applies, so that a byte of the colour map survives
 // writePng's linear -> sRGB -> byte round trip.
@@ -92,7 +88,7 @@ int mostPenumbraRow(const Image<float>& reference, const Image<uint8_t>& mask) {
     int count = 0;
     const float* v = reference.row(y);
     const uint8_t* m = mask.row(y);
-    for (int x = 0; x < reference.width(); ++x) count += m[x] && v[x] > kPenumbraLow && v[x] < kPenumbraHigh;
+    for (int x = 0; x < reference.width(); ++x) count += m[x] && inPenumbra(v[x]);
     if (count > bestCount) {
       best = y;
       bestCount = count;

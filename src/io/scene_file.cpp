@@ -284,6 +284,30 @@ Camera readCamera(const Field& field) {
   return camera;
 }
 
+// "motion": {"moves": "light" | "camera", "light": index, "path": [[x, y, z], ...], "frames": N}
+// (include/penumbra/motion.h); validated against the scene's lights and camera.
+Motion readMotion(const Field& field, const Scene& scene) {
+  const ObjectField o(field, {"moves", "light", "path", "frames"});
+  Motion motion;
+  const std::string moves = o.required("moves").string();
+  if (moves == "light") {
+    motion.target = MotionTarget::Light;
+  } else if (moves == "camera") {
+    motion.target = MotionTarget::Camera;
+    if (auto light = o.optional("light")) light->error("a light index is for \"moves\": \"light\"; the camera moves here");
+  } else {
+    o.required("moves").error("expected \"light\" or \"camera\", got \"{}\"", moves);
+  }
+  if (auto light = o.optional("light"))
+    motion.lightIndex = light->integer(0, std::max(0, static_cast<int>(scene.lights.size()) - 1));
+  const Field path = o.required("path");
+  path.array(2, "key points [x, y, z]");
+  for (size_t i = 0; i < path.value().size(); ++i) motion.path.push_back(path.element(i).vec3());
+  if (auto frames = o.optional("frames")) motion.frames = frames->integer(2, kMaxMotionFrames);
+  motion.validate(scene, fmt::format("{}: {}", field.source(), field.path()));
+  return motion;
+}
+
 Light readLight(const Field& field) {
   if (!field.value().is_object()) field.error("expected a light object, got {}", field.describe());
   if (!field.value().contains("type")) field.error("missing required key 'type' (one of sphere, disk, rect, segment, polygon, directional)");
@@ -702,7 +726,8 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
   const json root = parseJson(jsonText, source);
   const Field rootField(root, "", source);
   if (!root.is_object()) fail("{}: expected a JSON object at the top level, got {}", source, rootField.describe());
-  const ObjectField o(rootField, {"name", "description", "image", "camera", "ambient", "lights", "objects", "techniques"});
+  const ObjectField o(rootField,
+                      {"name", "description", "image", "camera", "ambient", "lights", "objects", "techniques", "motion"});
 
   Scene scene;
   scene.source = source;
@@ -745,6 +770,8 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
               object.id, it->second);
     scene.objects.push_back(std::move(object));
   }
+
+  if (auto motion = o.optional("motion")) scene.motion = readMotion(*motion, scene);
 
   if (auto techniques = o.optional("techniques")) {
     if (!techniques->value().is_object()) techniques->error("expected an object {{\"<technique>\": {{\"<parameter>\": value}}}}, got {}", techniques->describe());
@@ -801,6 +828,15 @@ std::string sceneToJson(const Scene& scene) {
       t[technique] = std::move(params);
     }
     out += ",\n  \"techniques\": " + t.dump();
+  }
+  if (scene.motion) {
+    const Motion& motion = *scene.motion;
+    json m = {{"moves", motion.target == MotionTarget::Light ? "light" : "camera"}};
+    if (motion.target == MotionTarget::Light) m["light"] = motion.lightIndex;
+    m["path"] = json::array();
+    for (const Vec3& p : motion.path) m["path"].push_back(vec3Json(p));
+    m["frames"] = motion.frames;
+    out += ",\n  \"motion\": " + m.dump();
   }
   out += "\n}\n";
   return out;

@@ -629,5 +629,51 @@ TEST(SceneErrors, BadMeshFileIsNamed) {
   }
 }
 
+TEST(SceneFile, MotionIsReadCheckedAndWrittenBack) {
+  json j = baseScene();
+  j["motion"] = json::parse(R"({"moves": "light", "light": 0, "path": [[0, 4, 0], [0.2, 4, 0]], "frames": 6})");
+  const Scene s = parseScene(j.dump(), "scenes/x.json");
+  ASSERT_TRUE(s.motion.has_value());
+  EXPECT_EQ(s.motion->target, MotionTarget::Light);
+  EXPECT_EQ(s.motion->frames, 6);
+  ASSERT_EQ(s.motion->path.size(), 2u);
+  EXPECT_FLOAT_EQ(s.motion->path[1].x, 0.2f);
+  // sceneToJson keeps it, so a report's scene.json reproduces the sequence.
+  const Scene again = parseScene(sceneToJson(s), "again.json");
+  ASSERT_TRUE(again.motion.has_value());
+  EXPECT_EQ(again.motion->path, s.motion->path);
+  EXPECT_EQ(again.motion->frames, 6);
+  // Without a motion the scene's JSON has none (the reference cache's key of a still scene is unchanged).
+  EXPECT_EQ(sceneToJson(parseScene(baseScene().dump(), "b.json")).find("motion"), std::string::npos);
+
+  json camera = baseScene();
+  camera["motion"] = json::parse(R"({"moves": "camera", "path": [[0, 2, 5], [1, 2, 5]]})");
+  const Scene c = parseScene(camera.dump(), "scenes/x.json");
+  EXPECT_EQ(c.motion->target, MotionTarget::Camera);
+  EXPECT_EQ(c.motion->frames, 12);  // the default
+}
+
+TEST(SceneErrors, BadMotionIsNamed) {
+  auto withMotion = [](const char* motion) {
+    json j = baseScene();
+    j["motion"] = json::parse(motion);
+    return errorOfJson(j);
+  };
+  EXPECT_CONTAINS(withMotion(R"({"moves": "sun", "path": [[0, 4, 0], [1, 4, 0]]})"),
+                  "scenes/x.json: motion.moves: expected \"light\" or \"camera\", got \"sun\"");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "light", "path": [[0, 4, 0]]})"),
+                  "scenes/x.json: motion.path: expected an array of at least 2 key points");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "light", "light": 3, "path": [[0, 4, 0], [1, 4, 0]]})"),
+                  "scenes/x.json: motion.light: expected an integer in [0, 0], got 3");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "light", "path": [[0, 4, 0], [1, 4, 0]], "frames": 1})"),
+                  "scenes/x.json: motion.frames: expected an integer in [2, 1000]");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "light", "path": [[0, 4, 0], [0, 4, 0]]})"),
+                  "scenes/x.json: motion: path has zero length");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "camera", "path": [[0, 2, 5], [0, 2, -5]], "frames": 3})"),
+                  "scenes/x.json: motion: the camera at frame 1");
+  EXPECT_CONTAINS(withMotion(R"({"moves": "light", "speed": 1, "path": [[0, 4, 0], [1, 4, 0]]})"),
+                  "scenes/x.json: motion: unknown key 'speed'");
+}
+
 }  // namespace
 }  // namespace penumbra
