@@ -160,10 +160,10 @@ class StagedReport {
   bool committed_ = false;
 };
 
-int runCompare(const CompareOptions& options) {
-  ThreadLimit threads(options.frame.threads);
+// The techniques to compare (the baseline appended when not named), after the checks that need
+// no scene: the baseline exists, and every prefixed --param names one of them.
+std::vector<std::string> comparedTechniques(const CompareOptions& options, const std::string& baseline) {
   std::vector<std::string> names = techniqueList(options.techniques);
-  const std::string baseline = options.baseline.empty() ? defaultBaseline() : options.baseline;
   findTechnique(baseline);
   if (std::find(names.begin(), names.end(), baseline) == names.end()) names.push_back(baseline);
   const bool referenceRow = std::find(names.begin(), names.end(), kReference) != names.end();
@@ -173,6 +173,221 @@ int runCompare(const CompareOptions& options) {
            "truth's samples are set by --spp (and --seed)",
            kv);
   checkPrefixedParams(options.frame.params, names);
+  return names;
+}
+
+// Every parameter set of the run, resolved before the (long) truth runs so a typo fails fast.
+struct RunPlan {
+  ParamSet truthGiven;
+  Params truthParams;
+  std::vector<ParamSet> given;                   //!< per technique
+  std::vector<std::vector<ParamSet>> sweepGiven;  //!< per technique, per --map-sizes entry (map_size techniques)
+  std::vector<PlannedRun> planned;               //!< what the memory and time check counts
+};
+
+RunPlan planRuns(const CompareOptions& options, const Setup& setup, const std::vector<std::string>& names,
+                 const std::vector<int>& mapSizes) {
+  RunPlan plan;
+  // The truth takes the scene file's reference parameters and --spp/--seed, never the --param of a
+  // reference row.
+  const TechniqueInfo& referenceInfo = findTechnique(kReference);
+  FrameOptions truthFrame = options.frame;
+  truthFrame.params.clear();
+  plan.truthGiven = gatherParams(setup, referenceInfo, truthFrame, true);
+  plan.truthParams = resolveParams(referenceInfo.name, referenceInfo.params, plan.truthGiven);
+  // Each technique run, resolved once here, is also what the memory and time check counts.
+  plan.sweepGiven.resize(names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
+    plan.given.push_back(gatherParams(setup, info, options.frame, true));
+    plan.planned.push_back({&info, resolveParams(info.name, info.params, plan.given.back()), 1});
+    if (!info.hasParam(kMapSize)) continue;
+    for (int size : mapSizes) {
+      ParamSet atSize = plan.given.back();
+      atSize.set(kMapSize, int64_t{size}, "command line (--map-sizes)");
+      plan.planned.push_back({&info, resolveParams(info.name, info.params, atSize), 1});
+      plan.sweepGiven[i].push_back(std::move(atSize));
+    }
+  }
+  return plan;
+}
+
+// Where the truth comes from: the cache entry when this exact setup was rendered before, else a
+// render, stored when the cache can be written.
+struct TruthSource {
+  std::optional<ReferenceCache> cache;
+  std::optional<CachedTruth> cached;
+  std::string why = "--no-cache";  //!< why there is no cached truth
+  bool store = false;
+};
+
+// The cache is looked up, and checked for writing, before any rendering: an unwritable cache is
+// said now (the run goes on without storing the truth), and a cached truth costs no rays.
+void lookUpTruth(const CompareOptions& options, const Setup& setup, const Params& truthParams, TruthSource& source) {
+  if (!options.noCache)
+    source.cache.emplace(options.cacheDir.empty() ? (fs::path(options.outDir) / "cache").string() : options.cacheDir,
+                         setup, truthParams);
+  source.cached = source.cache ? source.cache->load(source.why) : std::nullopt;
+  if (source.cached && (source.cached->v.width() != setup.width || source.cached->v.height() != setup.height)) {
+    source.why = "its image size differs";
+    source.cached.reset();
+  }
+  if (source.cache && !source.cached) {
+    const std::optional<std::string> unwritable = source.cache->whyUnwritable();
+    if (unwritable) fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", *unwritable);
+    source.store = !unwritable;
+  }
+}
+
+// What every row's images and errors are made against: the frame, its error mask and the staged
+// report folder.
+struct CompareFrame {
+  const CompareOptions& options;
+  const Setup& setup;
+  const Light& light;
+  const GBuffer& gbuffer;
+  const Image<uint8_t>& mask;
+  const std::string& reportDir;
+  std::string stem;  //!< file names' prefix
+
+  std::string path(const std::string& name) const { return outputPath(setup, reportDir, name); }
+
+  // A row's shaded image, V (EXR and PNG) and, against the truth, its signed error map.
+  void writeImages(const std::string& base, const Image<float>& v, ReportRow& row, const Image<float>* truthV) const {
+    writePng(path(base + ".png"), shade(setup.scene, light, gbuffer, v));
+    writeExr(path(base + "_v.exr"), v);
+    writePngGray(path(base + "_v.png"), v);
+    row.images = {{"shaded", base + ".png"}, {"visibility", base + "_v.png"}, {"visibility_exr", base + "_v.exr"}};
+    if (truthV) {
+      writePng(path(base + "_err.png"), signedErrorMap(v, *truthV, mask, options.errorRange));
+      row.images.emplace_back("error", base + "_err.png");
+    }
+  }
+};
+
+// The truth's row and V: from the cache when this exact setup was rendered before (lookUpTruth).
+Image<float> truthRow(const CompareFrame& frame, const RunPlan& plan, TruthSource& source, ReportRow& truth) {
+  const TechniqueInfo& referenceInfo = findTechnique(kReference);
+  truth.technique = kReference;
+  truth.label = rowLabel(referenceInfo, plan.truthParams);
+  truth.params = describeParams(plan.truthParams);
+  Image<float> vTruth;
+  if (source.cached) {
+    fmt::print("truth: reused {} ({}; rendered earlier in {:.1f} ms)\n", source.cache->path(), joinParams(truth.params),
+               source.cached->timings.total());
+    vTruth = std::move(source.cached->v);
+    truth.timings = source.cached->timings;
+    truth.stats = source.cached->stats;
+    truth.cached = true;
+  } else {
+    fmt::print("truth: rendering reference {} ({})\n", joinParams(truth.params),
+               source.cache ? fmt::format("cache {}: {}", source.cache->path(), source.why) : source.why);
+    TechniqueRun run = runTechnique(frame.setup, frame.gbuffer, referenceInfo, plan.truthGiven);
+    vTruth = std::move(run.v);
+    truth.timings = run.timings;
+    truth.stats = run.stats;
+    if (source.cache && source.store) {
+      try {
+        source.cache->store(vTruth, truth.timings, truth.stats);
+      } catch (const Error& e) {
+        // The truth is rendered: losing the report for want of a cache would waste it.
+        fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", e.what());
+      }
+    }
+  }
+  truth.error = compareVisibility(vTruth, vTruth, frame.mask);
+  frame.writeImages(frame.stem + "truth", vTruth, truth, nullptr);
+  return vTruth;
+}
+
+ScanProfile scanProfile(const CompareOptions& options, const Image<float>& vTruth, const Image<uint8_t>& mask) {
+  ScanProfile profile;
+  profile.row = options.profileRow ? *options.profileRow : mostPenumbraRow(vTruth, mask);
+  profile.choice = options.profileRow ? "--profile-row" : "the row with the most penumbra pixels in the reference";
+  profile.reference = rowOf(vTruth, profile.row);
+  profile.mask.assign(mask.row(profile.row), mask.row(profile.row) + mask.width());
+  return profile;
+}
+
+// One technique's row, its V in `v`; empty when the technique did not run (notRun says why).
+std::optional<ReportRow> techniqueRow(const CompareFrame& frame, const TechniqueInfo& info, const Params& params,
+                                      const ParamSet& given, const ReportRow& truth, const Image<float>& vTruth,
+                                      const Params& truthParams, NotRunTechniques& notRun, Image<float>& v) {
+  ReportRow row;
+  row.technique = info.name;
+  row.label = rowLabel(info, params);
+  row.params = describeParams(params);
+  if (info.name == kReference && sameParams(params, truthParams)) {
+    // The same parameters as the truth: the same deterministic image; rendering it again would only cost time.
+    v = vTruth;
+    row.timings = truth.timings;
+    row.stats = truth.stats;
+    row.cached = truth.cached;
+    row.images = truth.images;
+    row.images.emplace_back("error", frame.stem + info.name + "_err.png");
+    writePng(frame.path(frame.stem + info.name + "_err.png"),
+             signedErrorMap(v, vTruth, frame.mask, frame.options.errorRange));
+    return row;
+  }
+  fmt::print("{}{}{}\n", row.shownName(), row.params.empty() ? "" : ": ", joinParams(row.params));
+  std::optional<TechniqueRun> attempt;
+  try {
+    attempt = runTechnique(frame.setup, frame.gbuffer, info, given);
+  } catch (const std::exception& e) {
+    // A technique that cannot take this scene (its light's shape, or anything its prepare or
+    // visibility refuses) costs its row, never the comparison: the others run and the report is
+    // written with its reason. Only one the user named makes the exit status non-zero.
+    notRun.add(info.name, e.what());
+    return std::nullopt;
+  }
+  TechniqueRun& run = *attempt;
+  v = std::move(run.v);
+  row.timings = run.timings;
+  row.stats = run.stats;
+  frame.writeImages(frame.stem + info.name, v, row, &vTruth);
+  return row;
+}
+
+// The row's points of the --map-sizes sweep: a run per size for a technique with a map_size (the
+// row's own run where its map_size is that size), the row's own numbers at every size otherwise.
+void sweepMapSizes(const CompareFrame& frame, const TechniqueInfo& info, const Params& params,
+                   const std::vector<ParamSet>& sweepGiven, const std::vector<int>& mapSizes,
+                   const Image<float>& vTruth, NotRunTechniques& notRun, ReportRow& row) {
+  row.mapSizeVaries = info.hasParam(kMapSize);
+  for (size_t s = 0; s < mapSizes.size(); ++s) {
+    MapSizePoint point{mapSizes[s], *row.error, row.timings};
+    if (row.mapSizeVaries && (params.isAuto(kMapSize) || params.getInt(kMapSize) != mapSizes[s])) {
+      fmt::print("{}: map_size={}\n", row.shownName(), mapSizes[s]);
+      try {
+        const TechniqueRun run = runTechnique(frame.setup, frame.gbuffer, info, sweepGiven[s]);
+        point.error = compareVisibility(run.v, vTruth, frame.mask);
+        point.timings = run.timings;
+      } catch (const std::exception& e) {
+        // The row leaves the map-size sweep (its plot and table) and this size is listed as not run.
+        notRun.add(fmt::format("{} (map_size={})", info.name, mapSizes[s]), e.what());
+        row.mapSizeVaries = false;
+        row.mapSizeSweep.clear();
+        break;
+      }
+    }
+    row.mapSizeSweep.push_back(point);
+  }
+}
+
+// The page, its JSON and Markdown, and a copy of the scene into the staged folder.
+void writeReportFiles(const CompareFrame& frame, Report& report) {
+  report.files = {{"every number of this page", "compare.json"}, {"Markdown tables", "compare.md"},
+                  {"the scene, meshes inline", "scene.json"}};
+  writeTextFile(frame.path("scene.json"), sceneToJson(frame.setup.scene));
+  writeTextFile(frame.path("compare.json"), reportToJson(report));
+  writeTextFile(frame.path("compare.md"), reportToMarkdown(report));
+  writeTextFile(frame.path("index.html"), reportToHtml(report));
+}
+
+int runCompare(const CompareOptions& options) {
+  ThreadLimit threads(options.frame.threads);
+  const std::string baseline = options.baseline.empty() ? defaultBaseline() : options.baseline;
+  const std::vector<std::string> names = comparedTechniques(options, baseline);
 
   const Setup setup = loadSetup(options.frame);
   const Light& light = setupLight(setup);
@@ -183,60 +398,19 @@ int runCompare(const CompareOptions& options) {
   std::sort(mapSizes.begin(), mapSizes.end());
   mapSizes.erase(std::unique(mapSizes.begin(), mapSizes.end()), mapSizes.end());
 
-  // Resolve every parameter set before the (long) truth runs, so a typo fails fast. The truth takes
-  // the scene file's reference parameters and --spp/--seed, never the --param of a reference row.
-  const TechniqueInfo& referenceInfo = findTechnique(kReference);
-  FrameOptions truthFrame = options.frame;
-  truthFrame.params.clear();
-  const ParamSet truthGiven = gatherParams(setup, referenceInfo, truthFrame, true);
-  const Params truthParams = resolveParams(referenceInfo.name, referenceInfo.params, truthGiven);
-  // Each technique run, resolved once here, is also what the memory and time check below counts.
-  std::vector<ParamSet> given;
-  std::vector<std::vector<ParamSet>> sweepGiven(names.size());
-  std::vector<PlannedRun> planned;
-  for (size_t i = 0; i < names.size(); ++i) {
-    const TechniqueInfo& info = findTechnique(names[i]);
-    given.push_back(gatherParams(setup, info, options.frame, true));
-    planned.push_back({&info, resolveParams(info.name, info.params, given.back()), 1});
-    if (!info.hasParam(kMapSize)) continue;
-    for (int size : mapSizes) {
-      ParamSet atSize = given.back();
-      atSize.set(kMapSize, int64_t{size}, "command line (--map-sizes)");
-      planned.push_back({&info, resolveParams(info.name, info.params, atSize), 1});
-      sweepGiven[i].push_back(std::move(atSize));
-    }
-  }
-  const int keptImages = static_cast<int>(planned.size()) + 1;  // every run's V and the truth's
+  RunPlan plan = planRuns(options, setup, names, mapSizes);
+  const int keptImages = static_cast<int>(plan.planned.size()) + 1;  // every run's V and the truth's
 
   makeOutputDir(options.outDir);
   const OutputLock lock(options.outDir);
   StagedReport staged(options.outDir, setup);
-
-  // The cache is looked up, and checked for writing, before any rendering: an unwritable cache is
-  // said now (the run goes on without storing the truth), and a cached truth costs no rays below.
-  std::optional<ReferenceCache> cache;
-  if (!options.noCache)
-    cache.emplace(options.cacheDir.empty() ? (fs::path(options.outDir) / "cache").string() : options.cacheDir, setup,
-                  truthParams);
-  std::string why = "--no-cache";
-  std::optional<CachedTruth> cached = cache ? cache->load(why) : std::nullopt;
-  if (cached && (cached->v.width() != setup.width || cached->v.height() != setup.height)) {
-    why = "its image size differs";
-    cached.reset();
-  }
-  bool storeTruth = false;
-  if (cache && !cached) {
-    const std::optional<std::string> unwritable = cache->whyUnwritable();
-    if (unwritable) fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", *unwritable);
-    storeTruth = !unwritable;
-  }
+  TruthSource source;
+  lookUpTruth(options, setup, plan.truthParams, source);
 
   // Memory and time, before the G-buffer: every planned run (the truth's unless cached) with the V
   // images the report keeps.
-  if (!cached) planned.push_back({&referenceInfo, truthParams, 1});
-  checkResources(setup, planned, keptImages, options.frame.force);
-  const std::string& reportDir = staged.dir();
-  const std::string stem = setup.stem + "_";
+  if (!source.cached) plan.planned.push_back({&findTechnique(kReference), plan.truthParams, 1});
+  checkResources(setup, plan.planned, keptImages, options.frame.force);
 
   fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
              setup.lightIndex, describeLight(light));
@@ -244,6 +418,7 @@ int runCompare(const CompareOptions& options) {
   const GBuffer gbuffer = renderGBuffer(setup.scene, setup.width, setup.height);
   const double gbufferMs = gbufferTimer.elapsedMs();
   const Image<uint8_t> mask = errorMask(gbuffer, light);
+  const CompareFrame frame{options, setup, light, gbuffer, mask, staged.dir(), setup.stem + "_"};
 
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)},
@@ -254,54 +429,9 @@ int runCompare(const CompareOptions& options) {
   report.errorMapRange = options.errorRange;
   report.command = reproduceCommand(options, setup, names, baseline);
 
-  auto writeImages = [&](const std::string& base, const Image<float>& v, ReportRow& row, const Image<float>* truthV) {
-    writePng(outputPath(setup, reportDir, base + ".png"), shade(setup.scene, light, gbuffer, v));
-    writeExr(outputPath(setup, reportDir, base + "_v.exr"), v);
-    writePngGray(outputPath(setup, reportDir, base + "_v.png"), v);
-    row.images = {{"shaded", base + ".png"}, {"visibility", base + "_v.png"}, {"visibility_exr", base + "_v.exr"}};
-    if (truthV) {
-      writePng(outputPath(setup, reportDir, base + "_err.png"), signedErrorMap(v, *truthV, mask, options.errorRange));
-      row.images.emplace_back("error", base + "_err.png");
-    }
-  };
-
-  // The truth: from the cache when this exact setup was rendered before (looked up above).
   ReportRow truth;
-  truth.technique = kReference;
-  truth.label = rowLabel(referenceInfo, truthParams);
-  truth.params = describeParams(truthParams);
-  Image<float> vTruth;
-  if (cached) {
-    fmt::print("truth: reused {} ({}; rendered earlier in {:.1f} ms)\n", cache->path(), joinParams(truth.params),
-               cached->timings.total());
-    vTruth = std::move(cached->v);
-    truth.timings = cached->timings;
-    truth.stats = cached->stats;
-    truth.cached = true;
-  } else {
-    fmt::print("truth: rendering reference {} ({})\n", joinParams(truth.params),
-               cache ? fmt::format("cache {}: {}", cache->path(), why) : why);
-    TechniqueRun run = runTechnique(setup, gbuffer, referenceInfo, truthGiven);
-    vTruth = std::move(run.v);
-    truth.timings = run.timings;
-    truth.stats = run.stats;
-    if (cache && storeTruth) {
-      try {
-        cache->store(vTruth, truth.timings, truth.stats);
-      } catch (const Error& e) {
-        // The truth is rendered: losing the report for want of a cache would waste it.
-        fmt::print(stderr, "penumbra: warning: {}; going on without caching the truth\n", e.what());
-      }
-    }
-  }
-  truth.error = compareVisibility(vTruth, vTruth, mask);
-  writeImages(stem + "truth", vTruth, truth, nullptr);
-
-  ScanProfile profile;
-  profile.row = options.profileRow ? *options.profileRow : mostPenumbraRow(vTruth, mask);
-  profile.choice = options.profileRow ? "--profile-row" : "the row with the most penumbra pixels in the reference";
-  profile.reference = rowOf(vTruth, profile.row);
-  profile.mask.assign(mask.row(profile.row), mask.row(profile.row) + mask.width());
+  const Image<float> vTruth = truthRow(frame, plan, source, truth);
+  const ScanProfile profile = scanProfile(options, vTruth, mask);
   truth.profile = profile.reference;
   report.profile = profile;
 
@@ -309,78 +439,19 @@ int runCompare(const CompareOptions& options) {
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
-    const Params params = resolveParams(info.name, info.params, given[i]);
-    ReportRow row;
-    row.technique = info.name;
-    row.label = rowLabel(info, params);
-    row.params = describeParams(params);
+    const Params params = resolveParams(info.name, info.params, plan.given[i]);
     Image<float> v;
-    if (info.name == kReference && sameParams(params, truthParams)) {
-      // The same parameters as the truth: the same deterministic image; rendering it again would only cost time.
-      v = vTruth;
-      row.timings = truth.timings;
-      row.stats = truth.stats;
-      row.cached = truth.cached;
-      row.images = truth.images;
-      row.images.emplace_back("error", stem + info.name + "_err.png");
-      writePng(outputPath(setup, reportDir, stem + info.name + "_err.png"),
-               signedErrorMap(v, vTruth, mask, options.errorRange));
-    } else {
-      fmt::print("{}{}{}\n", row.shownName(), row.params.empty() ? "" : ": ", joinParams(row.params));
-      std::optional<TechniqueRun> attempt;
-      try {
-        attempt = runTechnique(setup, gbuffer, info, given[i]);
-      } catch (const std::exception& e) {
-        // A technique that cannot take this scene (its light's shape, or anything its prepare or
-        // visibility refuses) costs its row, never the comparison: the others run and the report is
-        // written with its reason. Only one the user named makes the exit status non-zero.
-        notRun.add(info.name, e.what());
-        continue;
-      }
-      TechniqueRun& run = *attempt;
-      v = std::move(run.v);
-      row.timings = run.timings;
-      row.stats = run.stats;
-      writeImages(stem + info.name, v, row, &vTruth);
-    }
-    row.error = compareVisibility(v, vTruth, mask);
-    row.profile = rowOf(v, profile.row);
-
-    if (!mapSizes.empty()) {
-      row.mapSizeVaries = info.hasParam(kMapSize);
-      for (size_t s = 0; s < mapSizes.size(); ++s) {
-        MapSizePoint point{mapSizes[s], *row.error, row.timings};
-        if (row.mapSizeVaries && (params.isAuto(kMapSize) || params.getInt(kMapSize) != mapSizes[s])) {
-          fmt::print("{}: map_size={}\n", row.shownName(), mapSizes[s]);
-          try {
-            const TechniqueRun run = runTechnique(setup, gbuffer, info, sweepGiven[i][s]);
-            point.error = compareVisibility(run.v, vTruth, mask);
-            point.timings = run.timings;
-          } catch (const std::exception& e) {
-            // The row leaves the map-size sweep (its plot and table) and this size is listed as not run.
-            notRun.add(fmt::format("{} (map_size={})", info.name, mapSizes[s]), e.what());
-            row.mapSizeVaries = false;
-            row.mapSizeSweep.clear();
-            break;
-          }
-        }
-        row.mapSizeSweep.push_back(point);
-      }
-    }
-    report.rows.push_back(std::move(row));
+    std::optional<ReportRow> row = techniqueRow(frame, info, params, plan.given[i], truth, vTruth, plan.truthParams, notRun, v);
+    if (!row) continue;
+    row->error = compareVisibility(v, vTruth, mask);
+    row->profile = rowOf(v, profile.row);
+    if (!mapSizes.empty()) sweepMapSizes(frame, info, params, plan.sweepGiven[i], mapSizes, vTruth, notRun, *row);
+    report.rows.push_back(std::move(*row));
   }
   fillBaselineRatios(report);
   report.truth = std::move(truth);
 
-  const std::string jsonPath = outputPath(setup, reportDir, "compare.json");
-  const std::string mdPath = outputPath(setup, reportDir, "compare.md");
-  const std::string htmlPath = outputPath(setup, reportDir, "index.html");
-  report.files = {{"every number of this page", "compare.json"}, {"Markdown tables", "compare.md"},
-                  {"the scene, meshes inline", "scene.json"}};
-  writeTextFile(outputPath(setup, reportDir, "scene.json"), sceneToJson(setup.scene));
-  writeTextFile(jsonPath, reportToJson(report));
-  writeTextFile(mdPath, reportToMarkdown(report));
-  writeTextFile(htmlPath, reportToHtml(report));
+  writeReportFiles(frame, report);
   staged.commit();
   fmt::print("G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
              "it)\n",
