@@ -98,9 +98,12 @@ struct TechniqueRun {
   std::vector<std::pair<std::string, double>> stats;
 };
 // Builds the technique from `given` and runs prepare + visibility `repeat` times (timings: median of
-// each pass over the repeats; V and stats: the last run).
+// each pass over the repeats; V and stats: the last run). With `instance`, the technique object is
+// kept there and the next call with it reuses it instead of building another (a sequence's frames,
+// where a frame's prepare may reuse what the previous one built, as a renderer's would); `given`
+// must then be the same at every call.
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
-                          int repeat = 1);
+                          int repeat = 1, std::unique_ptr<ShadowTechnique>* instance = nullptr);
 
 // Techniques that could not take the scene, for compare and bench: each keeps its row in the report
 // with the reason (printed too), never ending the run; exitCode() is 1, after saying which, when the

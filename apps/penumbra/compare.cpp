@@ -33,6 +33,8 @@
 #include "penumbra/error.h"
 #include "penumbra/image_io.h"
 #include "penumbra/metrics.h"
+#include "penumbra/motion.h"
+#include "penumbra/temporal_metrics.h"
 #include "penumbra/raster.h"
 #include "penumbra/report.h"
 #include "penumbra/report_figures.h"
@@ -58,6 +60,11 @@ struct CompareOptions {
   double errorRange = 0.5;
   std::string cacheDir;  //!< empty: DIR/cache
   bool noCache = false;
+  // A sequence (include/penumbra/motion.h): --motion-path replaces the scene file's motion, --frames
+  // either's frame count.
+  std::string motionPath;           //!< "x,y,z;x,y,z;...": key points
+  std::string motionMoves = "light";  //!< what --motion-path moves: "light" (the compared --light) or "camera"
+  std::optional<int> frames;
 };
 
 // A row's shown name: techniques with a sample count say it, so a cheap reference row is not
@@ -100,6 +107,9 @@ std::string reproduceCommand(const CompareOptions& options, const Setup& setup, 
   for (const std::string& p : options.frame.params) args.insert(args.end(), {"--param", p});
   if (!options.mapSizes.empty()) args.insert(args.end(), {"--map-sizes", fmt::format("{}", fmt::join(options.mapSizes, ","))});
   if (options.profileRow) args.insert(args.end(), {"--profile-row", std::to_string(*options.profileRow)});
+  if (!options.motionPath.empty())
+    args.insert(args.end(), {"--motion-moves", options.motionMoves, "--motion-path", options.motionPath});
+  if (options.frames) args.insert(args.end(), {"--frames", std::to_string(*options.frames)});
   args.insert(args.end(), {"--error-range", fmt::format("{:g}", options.errorRange), "--out", options.outDir});
   std::string command;
   for (const std::string& a : args) command += (command.empty() ? "" : " ") + shellQuote(a);
@@ -312,7 +322,8 @@ ScanProfile scanProfile(const CompareOptions& options, const Image<float>& vTrut
 // One technique's row, its V in `v`; empty when the technique did not run (notRun says why).
 std::optional<ReportRow> techniqueRow(const CompareFrame& frame, const TechniqueInfo& info, const Params& params,
                                       const ParamSet& given, const ReportRow& truth, const Image<float>& vTruth,
-                                      const Params& truthParams, NotRunTechniques& notRun, Image<float>& v) {
+                                      const Params& truthParams, NotRunTechniques& notRun, Image<float>& v,
+                                      std::unique_ptr<ShadowTechnique>* instance = nullptr) {
   ReportRow row;
   row.technique = info.name;
   row.label = rowLabel(info, params);
@@ -332,7 +343,7 @@ std::optional<ReportRow> techniqueRow(const CompareFrame& frame, const Technique
   fmt::print("{}{}{}\n", row.shownName(), row.params.empty() ? "" : ": ", joinParams(row.params));
   std::optional<TechniqueRun> attempt;
   try {
-    attempt = runTechnique(frame.setup, frame.gbuffer, info, given);
+    attempt = runTechnique(frame.setup, frame.gbuffer, info, given, 1, instance);
   } catch (const std::exception& e) {
     // A technique that cannot take this scene (its light's shape, or anything its prepare or
     // visibility refuses) costs its row, never the comparison: the others run and the report is
@@ -375,13 +386,199 @@ void sweepMapSizes(const CompareFrame& frame, const TechniqueInfo& info, const P
 }
 
 // The page, its JSON and Markdown, and a copy of the scene into the staged folder.
-void writeReportFiles(const CompareFrame& frame, Report& report) {
+void writeReportFiles(const Setup& setup, const std::string& reportDir, Report& report) {
   report.files = {{"every number of this page", "compare.json"}, {"Markdown tables", "compare.md"},
                   {"the scene, meshes inline", "scene.json"}};
-  writeTextFile(frame.path("scene.json"), sceneToJson(frame.setup.scene));
-  writeTextFile(frame.path("compare.json"), reportToJson(report));
-  writeTextFile(frame.path("compare.md"), reportToMarkdown(report));
-  writeTextFile(frame.path("index.html"), reportToHtml(report));
+  const auto path = [&](const std::string& name) { return outputPath(setup, reportDir, name); };
+  writeTextFile(path("scene.json"), sceneToJson(setup.scene));
+  writeTextFile(path("compare.json"), reportToJson(report));
+  writeTextFile(path("compare.md"), reportToMarkdown(report));
+  writeTextFile(path("index.html"), reportToHtml(report));
+}
+
+// The run's motion: --motion-path (moving the compared light or the camera) over the scene file's
+// motion; --frames over either's frame count. None: a still scene.
+std::optional<Motion> runMotion(const CompareOptions& options, const Setup& setup) {
+  std::optional<Motion> motion = setup.scene.motion;
+  if (!options.motionPath.empty()) {
+    motion.emplace();
+    if (options.motionMoves == "camera") motion->target = MotionTarget::Camera;
+    else if (options.motionMoves == "light") motion->target = MotionTarget::Light;
+    else fail("--motion-moves '{}': expected light or camera", options.motionMoves);
+    motion->lightIndex = setup.lightIndex;
+    size_t start = 0;
+    for (int key = 0; start <= options.motionPath.size(); ++key) {
+      const size_t end = std::min(options.motionPath.find(';', start), options.motionPath.size());
+      const std::string text = options.motionPath.substr(start, end - start);
+      Vec3 p;
+      char extra = 0;
+      if (std::sscanf(text.c_str(), "%f,%f,%f %c", &p.x, &p.y, &p.z, &extra) != 3)
+        fail("--motion-path: key {} '{}' is not three numbers x,y,z (keys are separated by ';')", key, text);
+      motion->path.push_back(p);
+      start = end + 1;
+    }
+  } else if (options.motionMoves != "light") {
+    fail("--motion-moves is for --motion-path, which is not given");
+  }
+  if (!motion) {
+    if (options.frames) fail("--frames {}: the scene has no motion; give one with --motion-path", *options.frames);
+    return std::nullopt;
+  }
+  if (options.frames) motion->frames = *options.frames;
+  motion->validate(setup.scene, options.motionPath.empty() ? setup.scene.source + ": motion" : "--motion-path");
+  if (motion->target == MotionTarget::Light && motion->lightIndex != setup.lightIndex)
+    fail("{}: the motion moves light {}, but light {} is compared: pass --light {}", setup.scene.source,
+         motion->lightIndex, setup.lightIndex, motion->lightIndex);
+  return motion;
+}
+
+std::string describeMotion(const Motion& motion) {
+  std::string path;
+  for (const Vec3& p : motion.path) path += fmt::format("{}({:g}, {:g}, {:g})", path.empty() ? "" : " -> ", p.x, p.y, p.z);
+  return motion.target == MotionTarget::Light ? fmt::format("light {} along {}", motion.lightIndex, path)
+                                              : fmt::format("the camera along {}", path);
+}
+
+// A row's error over frames: the mean of each frame's (the maximum for the max error).
+ErrorStats meanOverFrames(const std::vector<ErrorStats>& frames) {
+  ErrorStats mean;
+  const double n = static_cast<double>(frames.size());
+  double leaks = 0.0, speckle = 0.0, mask = 0.0, penumbra = 0.0;
+  for (const ErrorStats& e : frames) {
+    mean.rmse8 += e.rmse8 / n;
+    mean.penumbraRmse8 += e.penumbraRmse8 / n;
+    mean.maxAbsError = std::max(mean.maxAbsError, e.maxAbsError);
+    leaks += static_cast<double>(e.umbraLeaks) / n;
+    speckle += static_cast<double>(e.speckle) / n;
+    mask += static_cast<double>(e.maskPixels) / n;
+    penumbra += static_cast<double>(e.penumbraPixels) / n;
+  }
+  mean.umbraLeaks = static_cast<size_t>(std::lround(leaks));
+  mean.speckle = static_cast<size_t>(std::lround(speckle));
+  mean.maskPixels = static_cast<size_t>(std::lround(mask));
+  mean.penumbraPixels = static_cast<size_t>(std::lround(penumbra));
+  return mean;
+}
+
+// Each pass's median over frames, in the first frame's pass order.
+PassTimings medianOverFrames(const std::vector<PassTimings>& frames) {
+  PassTimings out;
+  for (const auto& [pass, ms] : frames.front().passes) {
+    std::vector<double> values;
+    for (const PassTimings& t : frames) values.push_back(t.get(pass));
+    out.add(pass, median(values));
+  }
+  return out;
+}
+
+// compare over the frames of a motion: per frame the truth (cached per frame, as any still compare),
+// a second truth of the next seed for the noise floor, and every technique; a row per technique with
+// its error averaged over frames, its median pass times and its temporal error against the truth's
+// sequence (include/penumbra/temporal_metrics.h). A technique that cannot take a frame leaves the
+// sequence with its reason, as in a still compare.
+int runCompareSequence(const CompareOptions& options, const Setup& setup, const Motion& motion,
+                       const std::vector<std::string>& names, const std::string& baseline) {
+  if (!options.mapSizes.empty()) fail("--map-sizes is for a still scene; this one has a motion (--frames, --motion-path)");
+  RunPlan plan = planRuns(options, setup, names, {});
+  // The noise floor's truth: the same reference with the next seed.
+  RunPlan floorPlan = plan;
+  const TechniqueInfo& referenceInfo = findTechnique(kReference);
+  const int64_t seed = plan.truthParams.getInt("seed");
+  floorPlan.truthGiven.set("seed", int64_t{seed + 1}, "the noise floor's second truth (seed + 1)");
+  floorPlan.truthParams = resolveParams(referenceInfo.name, referenceInfo.params, floorPlan.truthGiven);
+
+  makeOutputDir(options.outDir);
+  const OutputLock lock(options.outDir);
+  StagedReport staged(options.outDir, setup);
+  // Memory and time: every run once a frame, and the two truths (cached frames are not known yet).
+  std::vector<PlannedRun> planned = plan.planned;
+  for (PlannedRun& run : planned) run.repeat = motion.frames;
+  planned.push_back({&referenceInfo, plan.truthParams, 2 * motion.frames});
+  const int keptImages = (static_cast<int>(names.size()) + 2) * motion.frames;
+  checkResources(setup, planned, keptImages, options.frame.force);
+
+  fmt::print("scene {} ({}), {}x{}, light {}: {}\n{} frames: {}\n", setup.scene.name, setup.scene.source, setup.width,
+             setup.height, setup.lightIndex, describeLight(setupLight(setup)), motion.frames, describeMotion(motion));
+  Report report = beginReport("compare", setup, baseline);
+  report.settings = {{"frames", fmt::format("{}", motion.frames)},
+                     {"timings", "median over the frames of one technique instance (the first frame builds what "
+                                 "later ones reuse)"},
+                     {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
+  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
+  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  report.errorMapRange = options.errorRange;
+  report.command = reproduceCommand(options, setup, names, baseline);
+  NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
+
+  std::vector<Image<float>> truths, floors;
+  std::vector<Image<uint8_t>> masks;
+  std::vector<std::optional<ReportRow>> rows(names.size());  // frame 0's row; empty once a technique fails
+  std::vector<std::vector<Image<float>>> vs(names.size());
+  std::vector<std::vector<PassTimings>> timings(names.size());
+  std::vector<SequenceRow> sequences(names.size());
+  std::vector<bool> running(names.size(), true);
+  // One instance per technique for the whole sequence, as a renderer keeps its shadow technique from
+  // frame to frame: what a prepare builds once for unchanged geometry is built at the first frame.
+  std::vector<std::unique_ptr<ShadowTechnique>> instances(names.size());
+  ReportRow truth0;
+  for (int k = 0; k < motion.frames; ++k) {
+    Setup frameSetup = setup;
+    frameSetup.scene = sceneAtFrame(setup.scene, motion, k);
+    frameSetup.stem = fmt::format("{}_f{:03d}", setup.stem, k);
+    fmt::print("\nframe {} of {}: {}\n", k + 1, motion.frames, describeLight(setupLight(frameSetup)));
+    const GBuffer gbuffer = renderGBuffer(frameSetup.scene, setup.width, setup.height);
+    const Image<uint8_t> mask = errorMask(gbuffer, setupLight(frameSetup));
+    const CompareFrame frame{options, frameSetup, setupLight(frameSetup), gbuffer, mask, staged.dir(),
+                             frameSetup.stem + "_"};
+    TruthSource source, floorSource;
+    lookUpTruth(options, frameSetup, plan.truthParams, source);
+    lookUpTruth(options, frameSetup, floorPlan.truthParams, floorSource);
+    ReportRow truth, floorRow;
+    const Image<float> vTruth = truthRow(frame, plan, source, truth);
+    CompareFrame floorFrame = frame;
+    floorFrame.stem = frameSetup.stem + "_floor_";
+    floors.push_back(truthRow(floorFrame, floorPlan, floorSource, floorRow));
+    if (k == 0) truth0 = truth;
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (!running[i]) continue;
+      const TechniqueInfo& info = findTechnique(names[i]);
+      const Params params = resolveParams(info.name, info.params, plan.given[i]);
+      Image<float> v;
+      std::optional<ReportRow> row =
+          techniqueRow(frame, info, params, plan.given[i], truth, vTruth, plan.truthParams, notRun, v, &instances[i]);
+      if (!row) {
+        running[i] = false;
+        continue;
+      }
+      sequences[i].frames.push_back(compareVisibility(v, vTruth, mask));
+      sequences[i].images.push_back(row->images);
+      timings[i].push_back(row->timings);
+      vs[i].push_back(std::move(v));
+      if (k == 0) rows[i] = std::move(row);
+    }
+    truths.push_back(vTruth);
+    masks.push_back(mask);
+  }
+
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (!running[i]) continue;
+    ReportRow row = std::move(*rows[i]);
+    row.error = meanOverFrames(sequences[i].frames);
+    row.timings = medianOverFrames(timings[i]);
+    sequences[i].temporal = temporalError(vs[i], truths, masks);
+    row.sequence = std::move(sequences[i]);
+    report.rows.push_back(std::move(row));
+  }
+  report.sequence = SequenceInfo{motion.frames, describeMotion(motion), temporalError(floors, truths, masks),
+                                 fmt::format("seeds {} and {}", seed, seed + 1)};
+  fillBaselineRatios(report);
+  report.truth = std::move(truth0);
+
+  writeReportFiles(setup, staged.dir(), report);
+  staged.commit();
+  fmt::print("\n{}\nwrote {} ({}, {} and images beside it)\n", reportToText(report),
+             (fs::path(staged.finalDir()) / "index.html").string(), "compare.json", "compare.md");
+  return notRun.exitCode("report");
 }
 
 int runCompare(const CompareOptions& options) {
@@ -394,6 +591,8 @@ int runCompare(const CompareOptions& options) {
   if (options.profileRow && (*options.profileRow < 0 || *options.profileRow >= setup.height))
     fail("--profile-row {} is out of range: the image has {} rows (valid: 0 to {})", *options.profileRow, setup.height,
          setup.height - 1);
+  if (const std::optional<Motion> motion = runMotion(options, setup))
+    return runCompareSequence(options, setup, *motion, names, baseline);
   std::vector<int> mapSizes = options.mapSizes;
   std::sort(mapSizes.begin(), mapSizes.end());
   mapSizes.erase(std::unique(mapSizes.begin(), mapSizes.end()), mapSizes.end());
@@ -451,7 +650,7 @@ int runCompare(const CompareOptions& options) {
   fillBaselineRatios(report);
   report.truth = std::move(truth);
 
-  writeReportFiles(frame, report);
+  writeReportFiles(setup, staged.dir(), report);
   staged.commit();
   fmt::print("G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
              "it)\n",
@@ -493,6 +692,15 @@ Command addCompareCommand(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--cache-dir", options->cacheDir, "reference cache directory (default: DIR/cache)");
   app->add_flag("--no-cache", options->noCache, "render the truth even when it is cached, and do not store it");
+  app->add_option("--motion-path", options->motionPath,
+                  "a sequence: key points 'x,y,z;x,y,z;...' (at least 2) that the light (its centre; a directional "
+                  "light: its direction) or the camera moves along, at constant speed; replaces the scene file's "
+                  "motion");
+  app->add_option("--motion-moves", options->motionMoves, "what --motion-path moves: light (the compared --light) or camera")
+      ->check(CLI::IsMember({"light", "camera"}))
+      ->capture_default_str();
+  app->add_option("--frames", options->frames, "frames of the sequence (default: the scene file's motion's, else 12)")
+      ->check(CLI::Range(2, kMaxMotionFrames));
   return {app, [options] { return runCompare(*options); }};
 }
 

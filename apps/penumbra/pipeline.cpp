@@ -200,11 +200,13 @@ double median(std::vector<double> values) {
 }
 
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
-                          int repeat) {
+                          int repeat, std::unique_ptr<ShadowTechnique>* instance) {
   TechniqueRun run;
   run.name = info.name;
   run.params = resolveParams(info.name, info.params, given);
-  std::unique_ptr<ShadowTechnique> technique = info.create(run.params);
+  std::unique_ptr<ShadowTechnique> fresh;
+  if (!instance || !*instance) fresh = info.create(run.params);
+  ShadowTechnique* technique = fresh ? fresh.get() : instance->get();
   ProgressBar bar(info.name);
   technique->setProgressCallback(bar.callback());
   std::vector<std::string> order;
@@ -223,6 +225,7 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
          run.v.height(), gbuffer.width(), gbuffer.height());
   for (const std::string& pass : order) run.timings.add(pass, median(passMs[pass]));
   run.stats = technique->stats();
+  if (instance && fresh) *instance = std::move(fresh);
   return run;
 }
 

@@ -15,6 +15,7 @@
 #include "penumbra/metrics.h"
 #include "penumbra/params.h"
 #include "penumbra/technique.h"
+#include "penumbra/temporal_metrics.h"
 
 namespace penumbra {
 
@@ -25,6 +26,13 @@ struct MapSizePoint {
   int mapSize = 0;  //!< texels per side
   ErrorStats error;
   PassTimings timings;
+};
+
+// A row's numbers over the frames of a sequence (`penumbra compare` on a scene with a motion).
+struct SequenceRow {
+  std::vector<ErrorStats> frames;  //!< per frame, against that frame's truth
+  TemporalStats temporal;          //!< against the truth's sequence
+  std::vector<KeyValues> images;   //!< per frame: kind -> file name, as ReportRow::images
 };
 
 struct ReportRow {
@@ -42,8 +50,19 @@ struct ReportRow {
   std::vector<MapSizePoint> mapSizeSweep;
   bool mapSizeVaries = false;
   bool cached = false;               //!< V was read from the reference cache, not rendered in this run
+  // Set for a sequence: `error` is then the mean over frames (maxima for max err), `timings` the
+  // median of each pass over frames, `images` the first frame's.
+  std::optional<SequenceRow> sequence;
 
   const std::string& shownName() const { return label.empty() ? technique : label; }
+};
+
+// What moved in a sequence, and the truth's own temporal noise.
+struct SequenceInfo {
+  int frames = 0;
+  std::string motion;        //!< e.g. "light 0 along (0.5, 8, -1) -> (0.7, 8, -1)"
+  TemporalStats noiseFloor;  //!< the truth against a truth of another seed, frame by frame
+  std::string noiseFloorSeeds;  //!< e.g. "seeds 1 and 2"
 };
 
 // V along one image row: where the penumbrae of the techniques can be seen side by side.
@@ -74,6 +93,7 @@ struct Report {
   std::string command;             //!< a command line that reproduces the report
   KeyValues files;                 //!< other files beside the report: kind -> file name
   KeyValues skipped;               //!< technique -> why it did not run (e.g. a light shape it does not support)
+  std::optional<SequenceInfo> sequence;  //!< set when the rows are over the frames of a motion
 };
 
 // One line naming the light's shape and its defining values, e.g. "sphere center (0, 4, 0) radius 0.5".

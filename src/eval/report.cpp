@@ -149,6 +149,39 @@ nlohmann::json profileJson(const std::vector<float>& values) {
   return a;
 }
 
+nlohmann::json temporalJson(const TemporalStats& t) {
+  return {{"flicker", t.flicker}, {"pop_rate", t.popRate}, {"reversed_pops", t.reversedPops}, {"pixels", t.pixels},
+          {"pops", t.pops}, {"frame_pairs", t.framePairs}};
+}
+
+// The sequence table: per technique, the mean still-frame error and the temporal error; the truth's
+// noise floor last.
+std::vector<std::vector<std::string>> sequenceCells(const Report& report) {
+  std::vector<std::vector<std::string>> cells = {
+      {"technique", "mean RMSE8", "mean penumbra RMSE8", "flicker", "pop %", "reversed pops %"}};
+  const auto temporal = [](const TemporalStats& t) {
+    return std::vector<std::string>{fmt::format("{:.2f}", t.flicker), fmt::format("{:.2f}", 100.0 * t.popRate),
+                                    fmt::format("{:.1f}", 100.0 * t.reversedPops)};
+  };
+  for (const ReportRow& row : report.rows) {
+    if (!row.sequence || !row.error) continue;
+    std::vector<std::string> line = {row.shownName(), fmt::format("{:.2f}", row.error->rmse8),
+                                     fmt::format("{:.2f}", row.error->penumbraRmse8)};
+    for (std::string& cell : temporal(row.sequence->temporal)) line.push_back(std::move(cell));
+    cells.push_back(std::move(line));
+  }
+  std::vector<std::string> floor = {fmt::format("noise floor (reference, {})", report.sequence->noiseFloorSeeds), "", ""};
+  for (std::string& cell : temporal(report.sequence->noiseFloor)) floor.push_back(std::move(cell));
+  cells.push_back(std::move(floor));
+  return cells;
+}
+
+constexpr const char* kTemporalLegend =
+    "flicker = mean |dV - dV_ref| x 255 over the pixels in the penumbra (V or V_ref in (0.01, 0.99)) of two "
+    "consecutive frames, dV the change from one frame to the next; pop %: share of those with |dV - dV_ref| > 0.1; "
+    "reversed pops %: share of pops undone at the next frame (shimmer). The noise floor is the truth against a "
+    "truth of another seed.";
+
 nlohmann::json rowJson(const ReportRow& row) {
   using nlohmann::json;
   json r;
@@ -187,6 +220,18 @@ nlohmann::json rowJson(const ReportRow& row) {
     r["map_size_sweep"] = sweep;
     r["map_size_varies"] = row.mapSizeVaries;
   }
+  if (row.sequence) {
+    json frames = json::array();
+    for (size_t k = 0; k < row.sequence->frames.size(); ++k) {
+      json frame = errorJson(row.sequence->frames[k]);
+      json images = json::object();
+      if (k < row.sequence->images.size())
+        for (const auto& [kind, file] : row.sequence->images[k]) images[kind] = file;
+      frame["images"] = images;
+      frames.push_back(frame);
+    }
+    r["sequence"] = {{"frames", frames}, {"temporal", temporalJson(row.sequence->temporal)}};
+  }
   return r;
 }
 
@@ -204,6 +249,47 @@ std::vector<std::string> reportNotes(const Report& report) {
                                     row.shownName(), value, value == 1.0 ? "" : "s"));
   return notes;
 }
+
+namespace {
+
+// A table as Markdown; the first column and the last `textColumns` are left-aligned text, the others
+// right-aligned numbers.
+std::string markdownTable(const std::vector<std::vector<std::string>>& cells, size_t textColumns) {
+  std::string md;
+  for (size_t r = 0; r < cells.size(); ++r) {
+    md += "|";
+    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : markdownText(c)) + " |";
+    md += "\n";
+    if (r == 0) {
+      md += "|";
+      for (size_t c = 0; c < cells[0].size(); ++c)
+        md += c == 0 || c + textColumns >= cells[0].size() ? "---|" : "---:|";
+      md += "\n";
+    }
+  }
+  return md;
+}
+
+// The same table aligned for the terminal; the last column is not padded.
+std::string textTable(const std::vector<std::vector<std::string>>& cells, size_t textColumns) {
+  std::vector<size_t> widths(cells[0].size(), 0);
+  for (const auto& line : cells)
+    for (size_t c = 0; c < line.size(); ++c) widths[c] = std::max(widths[c], line[c].size());
+  std::string text;
+  for (const auto& line : cells) {
+    std::string out;
+    for (size_t c = 0; c < line.size(); ++c) {
+      const bool left = c == 0 || c + textColumns >= line.size();
+      if (c + 1 == line.size()) out += line[c];
+      else out += left ? fmt::format("{:<{}}  ", line[c], widths[c]) : fmt::format("{:>{}}  ", line[c], widths[c]);
+    }
+    while (!out.empty() && out.back() == ' ') out.pop_back();
+    text += out + "\n";
+  }
+  return text;
+}
+
+}  // namespace
 
 std::string reportToJson(const Report& report) {
   using nlohmann::json;
@@ -240,6 +326,11 @@ std::string reportToJson(const Report& report) {
     for (const auto& [name, why] : report.skipped) skipped.push_back({{"name", name}, {"reason", why}});
     j["skipped"] = skipped;
   }
+  if (report.sequence)
+    j["sequence"] = {{"frames", report.sequence->frames},
+                     {"motion", report.sequence->motion},
+                     {"noise_floor", temporalJson(report.sequence->noiseFloor)},
+                     {"noise_floor_seeds", report.sequence->noiseFloorSeeds}};
   json rows = json::array();
   for (const ReportRow& row : report.rows) rows.push_back(rowJson(row));
   j["techniques"] = rows;
@@ -266,16 +357,11 @@ std::string reportToMarkdown(const Report& report) {
           "speckle: pixels whose V is more than 0.25 from the median of its 3x3 block where V_ref's is within 0.05 "
           "of its own. The reference row's error is 0 by definition: its own noise is its standard error in the "
           "stats column.\n\n";
-  const auto cells = tableCells(report);
-  for (size_t r = 0; r < cells.size(); ++r) {
-    md += "|";
-    for (const std::string& c : cells[r]) md += " " + (c.empty() ? std::string(" ") : markdownText(c)) + " |";
-    md += "\n";
-    if (r == 0) {
-      md += "|";
-      for (size_t c = 0; c < cells[0].size(); ++c) md += c == 0 || c + 2 >= cells[0].size() ? "---|" : "---:|";
-      md += "\n";
-    }
+  md += markdownTable(tableCells(report), 2);
+  if (report.sequence) {
+    md += fmt::format("\n## Over the sequence\n\n{} frames, {}. {}\n\n", report.sequence->frames,
+                      markdownText(report.sequence->motion), kTemporalLegend);
+    md += markdownTable(sequenceCells(report), 0);
   }
   if (!report.mapSizes.empty() && anyError(report)) {
     md += "\n## RMSE8 against shadow-map size\n\nOne column per map size (texels per side); a technique without a map "
@@ -314,21 +400,10 @@ std::string reportToMarkdown(const Report& report) {
 }
 
 std::string reportToText(const Report& report) {
-  const auto cells = tableCells(report);
-  std::vector<size_t> widths(cells[0].size(), 0);
-  for (const auto& line : cells)
-    for (size_t c = 0; c < line.size(); ++c) widths[c] = std::max(widths[c], line[c].size());
-  std::string text;
-  for (const auto& line : cells) {
-    std::string out;
-    for (size_t c = 0; c < line.size(); ++c) {
-      // Numbers right-aligned, names and free text left-aligned; the last column is not padded.
-      const bool left = c == 0 || c + 2 >= line.size();
-      if (c + 1 == line.size()) out += line[c];
-      else out += left ? fmt::format("{:<{}}  ", line[c], widths[c]) : fmt::format("{:>{}}  ", line[c], widths[c]);
-    }
-    while (!out.empty() && out.back() == ' ') out.pop_back();
-    text += out + "\n";
+  std::string text = textTable(tableCells(report), 2);
+  if (report.sequence) {
+    text += fmt::format("\nover {} frames ({}):\n", report.sequence->frames, report.sequence->motion);
+    text += textTable(sequenceCells(report), 0);
   }
   for (const std::string& note : reportNotes(report)) text += "note: " + note + "\n";
   return text;

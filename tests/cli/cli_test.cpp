@@ -304,6 +304,70 @@ TEST_F(CliTest, CompareWritesReportWithReferenceAndNone) {
   EXPECT_NE(read("out/report/scene.json").find("\"tiny\""), std::string::npos);
 }
 
+// A sequence (--motion-path, or the scene file's "motion"): per frame the truth and each technique, a
+// row's error averaged over the frames, its temporal error against the truth's sequence, the truth's
+// noise floor; a technique that follows the truth exactly (a reference row with the truth's own
+// parameters) has no flicker at all.
+TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const Result r = run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path '0,4,0;0.3,4,0' "
+                       "--frames 3 " + kTiny);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("over 3 frames (light 0 along (0, 4, 0) -> (0.3, 4, 0))"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  ASSERT_TRUE(j.contains("sequence")) << j.dump(2);
+  EXPECT_EQ(j["sequence"]["frames"], 3);
+  EXPECT_EQ(j["sequence"]["noise_floor_seeds"], "seeds 1 and 2");
+  EXPECT_GT(j["sequence"]["noise_floor"]["flicker"].get<double>(), 0.0);  // 4 spp: plenty of noise
+  EXPECT_EQ(j["sequence"]["noise_floor"]["frame_pairs"], 2);
+  for (const auto& row : j["techniques"]) {
+    ASSERT_TRUE(row.contains("sequence")) << row.dump(2);
+    const auto& frames = row["sequence"]["frames"];
+    ASSERT_EQ(frames.size(), 3u);
+    double mean = 0.0;
+    for (const auto& f : frames) {
+      mean += f["rmse8"].get<double>() / 3.0;
+      for (const auto& [kind, file] : f["images"].items()) EXPECT_TRUE(exists("out/report/" + file.get<std::string>())) << file;
+    }
+    EXPECT_NEAR(row["rmse8"].get<double>(), mean, 1e-9) << row["name"];
+    if (row["name"] == "reference") {
+      EXPECT_EQ(row["sequence"]["temporal"]["flicker"].get<double>(), 0.0);
+    } else {
+      EXPECT_GT(row["sequence"]["temporal"]["flicker"].get<double>(), 0.0) << row["name"];
+    }
+  }
+  // Each frame's truth is cached on its own: a second run reuses all three and gives the same numbers.
+  const Result again = run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path "
+                           "'0,4,0;0.3,4,0' --frames 3 " + kTiny);
+  ASSERT_EQ(again.code, 0) << again.output;
+  size_t reused = 0;
+  for (size_t at = again.output.find("truth: reused"); at != std::string::npos; at = again.output.find("truth: reused", at + 1))
+    ++reused;
+  EXPECT_EQ(reused, 6u) << again.output;  // 3 frames x (the truth and the noise floor's)
+  const nlohmann::json second = nlohmann::json::parse(read("out/report/compare.json"));
+  ASSERT_EQ(second["techniques"].size(), j["techniques"].size());
+  for (size_t i = 0; i < j["techniques"].size(); ++i) {  // the same V, so the same errors (not the same times)
+    EXPECT_EQ(second["techniques"][i]["rmse8"], j["techniques"][i]["rmse8"]);
+    EXPECT_EQ(second["techniques"][i]["sequence"], j["techniques"][i]["sequence"]);
+  }
+  EXPECT_EQ(second["sequence"], j["sequence"]);
+
+  // The scene file's motion, and bad motions named.
+  write("m.json", sceneJson(kLight, kObjects, R"(, "motion": {"moves": "camera", "path": [[0, 3, 5], [0.5, 3, 5]], "frames": 2})"));
+  const Result camera = run("compare --scene m.json --techniques raytraced-hard " + kTiny);
+  ASSERT_EQ(camera.code, 0) << camera.output;
+  EXPECT_NE(camera.output.find("over 2 frames (the camera along (0, 3, 5) -> (0.5, 3, 5))"), std::string::npos)
+      << camera.output;
+  expectError("compare --scene s.json --techniques hard --motion-path '0,4,0;1,4' " + kTiny,
+              {"--motion-path: key 1 '1,4' is not three numbers x,y,z"});
+  expectError("compare --scene s.json --techniques hard --motion-path '0,4,0;0,4,0' " + kTiny,
+              {"--motion-path: path has zero length"});
+  expectError("compare --scene s.json --techniques hard --frames 4 " + kTiny,
+              {"--frames 4: the scene has no motion; give one with --motion-path"});
+  expectError("compare --scene s.json --techniques hard --motion-path '0,4,0;1,4,0' --map-sizes 16 " + kTiny,
+              {"--map-sizes is for a still scene"});
+}
+
 std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) { return testing::htmlTableValues(html); }
 
 TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
