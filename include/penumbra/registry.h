@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/options.h"
 #include "penumbra/params.h"
 #include "penumbra/technique.h"
 
@@ -32,6 +33,16 @@ struct TechniqueInfo {
   std::function<ResourceEstimate(const Params&, int width, int height)> estimate;  //!< set by the registry for every technique
 
   bool hasParam(const std::string& param) const;
+
+  // Sets params and create from one options struct (options.h): params is its schema, create
+  // parses the resolved Params into it and hands it to `make`, which builds the technique.
+  template <class Options, class Make>
+  void setOptions(Make make) {
+    params = paramSchema<Options>();
+    create = [make](const Params& resolved) -> std::unique_ptr<ShadowTechnique> {
+      return make(optionsFromParams<Options>(resolved));
+    };
+  }
 };
 
 // All registered techniques, in the order of docs/architecture.md's table.

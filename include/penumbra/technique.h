@@ -13,6 +13,7 @@
 #include "penumbra/image.h"
 #include "penumbra/light.h"
 #include "penumbra/scene.h"
+#include "penumbra/timer.h"
 
 namespace penumbra {
 
@@ -36,15 +37,22 @@ struct PassTimings {
 // worker thread, so it must be thread-safe; a technique calls it at most a few hundred times a pass.
 using ProgressCallback = std::function<void(double)>;
 
+// A technique derives from ShadowTechnique and implements prepareImpl() and visibilityImpl(); the
+// base class's prepare() and visibility() call them and time them, so no technique carries its
+// own timing code. A technique with finer passes inside one of them marks their ends with endPass().
 class ShadowTechnique {
  public:
   virtual ~ShadowTechnique() = default;
   virtual std::string_view name() const = 0;
   // Throws Error naming the supported shapes if the technique does not support this light.
-  virtual void prepare(const Scene& scene, const Light& light) = 0;
+  void prepare(const Scene& scene, const Light& light);
   // v is resized to the G-buffer's size by the technique.
-  virtual void visibility(const GBuffer& gbuffer, Image<float>& v) = 0;
-  virtual PassTimings timings() const = 0;
+  void visibility(const GBuffer& gbuffer, Image<float>& v);
+  // The passes of the last prepare() followed by those of the last visibility(): each call's finer
+  // passes (endPass) and then its own, "prepare" or "visibility", which is the rest of the call.
+  // Virtual only for a technique run as several instances of another (convex_parts.h), which adds
+  // up theirs.
+  virtual PassTimings timings() const { return timings_; }
   // Extra numbers a technique measures about its last run, for reports: ("rays", 6.7e7),
   // ("mean_std_error", 0.004), ... Empty by default.
   virtual std::vector<std::pair<std::string, double>> stats() const { return {}; }
@@ -55,9 +63,18 @@ class ShadowTechnique {
   void reportProgress(double fraction) const {
     if (progress_) progress_(fraction);
   }
+  // Ends a finer pass of the running prepare() or visibility(): `name` takes the time since the
+  // call began or since the previous endPass() of the call.
+  void endPass(std::string name);
 
  private:
+  virtual void prepareImpl(const Scene& scene, const Light& light) = 0;
+  virtual void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) = 0;
+
   ProgressCallback progress_;
+  PassTimings timings_;
+  size_t preparePasses_ = 0;  //!< timings_'s passes that belong to the last prepare()
+  Timer passTimer_;           //!< since the running call began or its last endPass()
 };
 
 }  // namespace penumbra

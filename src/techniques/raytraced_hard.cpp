@@ -13,7 +13,6 @@
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {
@@ -23,19 +22,16 @@ class RaytracedHardTechnique final : public ShadowTechnique {
  public:
   std::string_view name() const override { return "raytraced-hard"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     // Every light shape has a centre sample, so every shape is supported.
-    timings_ = {};
-    Timer timer;
     rays_ = std::make_unique<RayScene>(scene);
     light_ = light;
     epsilon_ = shadowRayEpsilon(scene.bounds());
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (!rays_ || !light_) fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
-    Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     const Light& light = *light_;
@@ -68,19 +64,11 @@ class RaytracedHardTechnique final : public ShadowTechnique {
         if (count > 0) flush();
       }
     });
-    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first == "visibility"; }),
-                          timings_.passes.end());
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   std::unique_ptr<RayScene> rays_;
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
-  PassTimings timings_;
 };
 
 }  // namespace

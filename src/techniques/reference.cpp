@@ -28,7 +28,6 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
-#include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {
@@ -37,19 +36,15 @@ ReferenceTechnique::ReferenceTechnique(const ReferenceOptions& options) : option
   if (options_.samplesPerPixel < 1) fail("reference: spp must be >= 1 (got {})", options_.samplesPerPixel);
 }
 
-void ReferenceTechnique::prepare(const Scene& scene, const Light& light) {
+void ReferenceTechnique::prepareImpl(const Scene& scene, const Light& light) {
   // Every light shape offers Light::sample, so every shape is supported.
-  timings_ = {};
-  Timer timer;
   rays_ = std::make_unique<RayScene>(scene);
   light_ = light;
   epsilon_ = shadowRayEpsilon(scene.bounds());
-  timings_.add("prepare", timer.elapsedMs());
 }
 
-void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!rays_ || !light_) fail("reference: visibility() called before prepare(); call prepare(scene, light) first");
-  Timer timer;
   const int width = gbuffer.width(), height = gbuffer.height();
   v.reset(width, height, 1.0f);
   stdError_ = Image<float>(width, height, 0.0f);
@@ -151,11 +146,6 @@ void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
     hitPixels += localHits;
   });
 
-  const double ms = timer.elapsedMs();
-  timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                       [](const auto& p) { return p.first == "visibility"; }),
-                        timings_.passes.end());
-  timings_.add("visibility", ms);
   rayCount_ = static_cast<double>(hitPixels.load()) * spp;
   // Error statistics over the pixels that hit geometry, in a fixed order (deterministic sums).
   double sum = 0.0, mx = 0.0;
@@ -170,7 +160,7 @@ void ReferenceTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
 }
 
 std::vector<std::pair<std::string, double>> ReferenceTechnique::stats() const {
-  const double seconds = timings_.get("visibility") / 1000.0;
+  const double seconds = timings().get("visibility") / 1000.0;
   return {{"rays", rayCount_},
           {"rays_per_second", seconds > 0.0 ? rayCount_ / seconds : 0.0},
           {"mean_std_error", meanStdError_},
@@ -182,20 +172,7 @@ TechniqueInfo referenceTechniqueInfo() {
   info.name = "reference";
   info.summary = "stratified Monte Carlo ray tracing over the light's emitting area (Embree occlusion rays)";
   info.source = "ground truth";
-  info.params = {
-      ParamSpec{.name = "spp", .type = ParamType::Int, .defaultValue = int64_t{256}, .min = 1.0, .max = 65536.0, .choices = {},
-                .unit = "samples",
-                // 65536 puts the standard error of V under 0.002, half an 8-bit step: more buys nothing.
-                .help = "samples per pixel (shadow rays, CMJ-stratified over the light)"},
-      ParamSpec{.name = "seed", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 0.0, .max = 4294967295.0, .choices = {},
-                .unit = "", .help = "random seed; the same seed gives bit-identical output"},
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    ReferenceOptions options;
-    options.samplesPerPixel = static_cast<uint32_t>(params.getInt("spp"));
-    options.seed = static_cast<uint64_t>(params.getInt("seed"));
-    return std::make_unique<ReferenceTechnique>(options);
-  };
+  info.setOptions<ReferenceOptions>([](const ReferenceOptions& o) { return std::make_unique<ReferenceTechnique>(o); });
   return info;
 }
 

@@ -51,7 +51,6 @@
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "techniques/parker/outer_objects.h"
 #include "rt/shadow_ray.h"
 
@@ -63,6 +62,26 @@ struct ParkerOptions {
   rt::OuterCombine combine = rt::OuterCombine::Min;
   bool analyticSpheres = true;
   std::optional<float> lightDiameter;  //!< world units (directional: per unit distance); nullopt = derived
+
+  static void describe(OptionFields<ParkerOptions>& f) {
+    f.add(&ParkerOptions::falloff,
+          OptionDecl("falloff").help("attenuation across the outer object: bernstein s = 3 tau^2 - 2 tau^3 (the "
+                                     "paper's), or the exact sinusoid (1 + sin(pi tau - pi/2)) / 2 of a straight edge "
+                                     "under a spherical light"),
+          {{"bernstein", rt::OuterFalloff::Bernstein}, {"sinusoid", rt::OuterFalloff::Sinusoid}});
+    f.add(&ParkerOptions::combine,
+          OptionDecl("combine").help("how the attenuations of several grazed objects combine: min (the paper's "
+                                     "thresholding, never darker than it should be), product s1 s2, or sum 1 - ((1 - "
+                                     "s1) + (1 - s2)) (at least 0)"),
+          {{"min", rt::OuterCombine::Min}, {"product", rt::OuterCombine::Product}, {"sum", rt::OuterCombine::Sum}});
+    f.add(&ParkerOptions::analyticSpheres,
+          OptionDecl("analytic_spheres").help("objects made from a sphere primitive are the true sphere (inner radius "
+                                              "R, outer R + b) instead of their tessellated mesh"));
+    f.add(&ParkerOptions::lightDiameter,
+          OptionDecl("light_diameter").range(1e-6, 1e6).unit("world units (directional: per unit distance)").help(
+              "D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: 2 "
+              "tan(angular_diameter / 2))"));
+  }
 };
 
 class ParkerTechnique final : public ShadowTechnique {
@@ -71,13 +90,12 @@ class ParkerTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "parker"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     if (light.shape() == LightShape::Segment)
       fail("parker: a segment light is not supported (its penumbra runs only along the segment, which an outer object "
            "grown equally in every direction cannot give); supported: sphere, disk, rect, polygon, directional; use "
            "heidrich for a segment light");
-    timings_ = {};
-    Timer timer;
     // The paper's D: the diameter of the (roughly spherical) light.
     const float diameter = options_.lightDiameter.value_or(2.0f * light.extent());
     rt::OuterObjectOptions outerOptions;
@@ -136,12 +154,10 @@ class ParkerTechnique final : public ShadowTechnique {
     light_ = light;
     // The full scene's scale, as raytraced-hard and the reference use, so the rays are the same.
     epsilon_ = shadowRayEpsilon(scene.bounds());
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (!rays_ || !outer_ || !light_) fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
-    Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     const Light& light = *light_;
@@ -212,14 +228,9 @@ class ParkerTechnique final : public ShadowTechnique {
       rays += rangeRays;
     });
     rayCount_ = static_cast<double>(rays.load());
-    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first == "visibility"; }),
-                          timings_.passes.end());
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
+ public:
   std::vector<std::pair<std::string, double>> stats() const override {
     if (!outer_) return {};
     return {{"analytic_spheres", static_cast<double>(outer_->analyticSphereCount())},
@@ -241,7 +252,6 @@ class ParkerTechnique final : public ShadowTechnique {
   bool innerRebuilt_ = false;         //!< the last prepare built rays_ (else it kept it)
   float epsilon_ = 0.0f;
   double rayCount_ = 0.0;
-  PassTimings timings_;
 };
 
 }  // namespace
@@ -251,34 +261,7 @@ TechniqueInfo parkerTechniqueInfo() {
   info.name = "parker";
   info.summary = "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the penumbra";
   info.source = "Parker, Shirley & Smits 1998, Single sample soft shadows";
-  info.params = {
-      ParamSpec{.name = "falloff", .type = ParamType::String, .defaultValue = std::string("bernstein"), .min = std::nullopt,
-                .max = std::nullopt, .choices = {"bernstein", "sinusoid"}, .unit = "",
-                .help = "attenuation across the outer object: bernstein s = 3 tau^2 - 2 tau^3 (the paper's), or the exact "
-                        "sinusoid (1 + sin(pi tau - pi/2)) / 2 of a straight edge under a spherical light"},
-      ParamSpec{.name = "combine", .type = ParamType::String, .defaultValue = std::string("min"), .min = std::nullopt,
-                .max = std::nullopt, .choices = {"min", "product", "sum"}, .unit = "",
-                .help = "how the attenuations of several grazed objects combine: min (the paper's thresholding, never "
-                        "darker than it should be), product s1 s2, or sum 1 - ((1 - s1) + (1 - s2)) (at least 0)"},
-      ParamSpec{.name = "analytic_spheres", .type = ParamType::Bool, .defaultValue = true, .min = std::nullopt,
-                .max = std::nullopt, .choices = {}, .unit = "",
-                .help = "objects made from a sphere primitive are the true sphere (inner radius R, outer R + b) instead of "
-                        "their tessellated mesh"},
-      ParamSpec{.name = "light_diameter", .type = ParamType::Float, .defaultValue = 0.0, .min = 1e-6, .max = 1e6,
-                .choices = {}, .unit = "world units (directional: per unit distance)",
-                .help = "D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: "
-                        "2 tan(angular_diameter / 2))",
-                .autoDefault = true},
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    ParkerOptions o;
-    o.falloff = params.getString("falloff") == "sinusoid" ? rt::OuterFalloff::Sinusoid : rt::OuterFalloff::Bernstein;
-    const std::string& combine = params.getString("combine");
-    o.combine = combine == "product" ? rt::OuterCombine::Product : combine == "sum" ? rt::OuterCombine::Sum : rt::OuterCombine::Min;
-    o.analyticSpheres = params.getBool("analytic_spheres");
-    if (!params.isAuto("light_diameter")) o.lightDiameter = static_cast<float>(params.getFloat("light_diameter"));
-    return std::make_unique<ParkerTechnique>(o);
-  };
+  info.setOptions<ParkerOptions>([](const ParkerOptions& o) { return std::make_unique<ParkerTechnique>(o); });
   return info;
 }
 

@@ -37,7 +37,6 @@
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "techniques/ribbon/plm.h"
 #include "techniques/shadow_map/shadow_map.h"
 
@@ -45,10 +44,17 @@ namespace penumbra {
 namespace {
 
 struct KirschOptions {
-  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  int mapSize = 1024;         //!< texels per side
   DepthBias bias;             //!< of the hard compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every ribbon's width, in [0, 64]
+  float marginTexels = 2.0f;  //!< added to every ribbon's width
   bool illuminationTable = true;
+
+  static void describe(OptionFields<KirschOptions>& f) {
+    f.add(&KirschOptions::mapSize, mapSizeOption());
+    f.nest(&KirschOptions::bias);
+    f.add(&KirschOptions::marginTexels, ribbonMarginOption());
+    f.add(&KirschOptions::illuminationTable, illuminationTableOption());
+  }
 };
 
 class KirschTechnique final : public ShadowTechnique {
@@ -57,9 +63,8 @@ class KirschTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "kirsch"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "kirsch");
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "kirsch");
@@ -68,12 +73,10 @@ class KirschTechnique final : public ShadowTechnique {
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
                           plm::RibbonSides::Inner, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_, widths_);
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("kirsch: visibility() called before prepare()");
-    Timer timer;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
@@ -85,12 +88,8 @@ class KirschTechnique final : public ShadowTechnique {
       const float blocked = std::clamp(-width.w * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
       return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   KirschOptions options_;
   LightMap map_;
   plm::Space space_;
@@ -98,7 +97,6 @@ class KirschTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> widths_;
   Image<float> farthest_;  //!< prepare()'s working image, kept between calls
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
-  PassTimings timings_;
 };
 
 }  // namespace
@@ -108,16 +106,7 @@ TechniqueInfo kirschTechniqueInfo() {
   info.name = "kirsch";
   info.summary = "hard shadow map plus a shadow-width map that fades the shadow inwards (inner penumbra only)";
   info.source = "Kirsch & Döllner 2003, Real-time soft shadows using a single light sample (baseline in Lawlor 2006)";
-  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
-                 illuminationTableParamSpec()};
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    KirschOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.bias = depthBiasFromParams(params);
-    options.marginTexels = static_cast<float>(params.getFloat("margin"));
-    options.illuminationTable = params.getBool("illumination_table");
-    return std::make_unique<KirschTechnique>(options);
-  };
+  info.setOptions<KirschOptions>([](const KirschOptions& o) { return std::make_unique<KirschTechnique>(o); });
   return info;
 }
 

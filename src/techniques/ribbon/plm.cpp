@@ -89,7 +89,6 @@
 #include "techniques/silhouette/mesh_topology.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "raster/rasterizer.h"
 #include "techniques/parker/outer_objects.h"
 #include "techniques/shadow_map/shadow_map.h"
@@ -581,10 +580,17 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
 namespace {
 
 struct PlmOptions {
-  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  int mapSize = 1024;         //!< texels per side
   DepthBias bias;             //!< of the compares with g, c and b (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every ribbon's half-width, in [0, 64]
+  float marginTexels = 2.0f;  //!< added to every ribbon's half-width
   bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
+
+  static void describe(OptionFields<PlmOptions>& f) {
+    f.add(&PlmOptions::mapSize, mapSizeOption());
+    f.nest(&PlmOptions::bias);
+    f.add(&PlmOptions::marginTexels, ribbonMarginOption());
+    f.add(&PlmOptions::illuminationTable, illuminationTableOption());
+  }
 };
 
 // The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
@@ -619,9 +625,8 @@ class PlmTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "plm"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "plm");
@@ -680,12 +685,10 @@ class PlmTechnique final : public ShadowTechnique {
         }
       }
     });
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("plm: visibility() called before prepare()");
-    Timer timer;
     const int n = map_.size;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       const Vec3& position = gbuffer.wsPosition(x, y);
@@ -738,12 +741,8 @@ class PlmTechnique final : public ShadowTechnique {
       const float lg = equation2(texel, z, zc);
       return options_.illuminationTable ? table_(lg) : lg;
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
   // receiver at depth z. The compare with g is made at zc, z moved towards the light by the bias;
   // those with c and b at z itself: the bias keeps a surface from shadowing itself through its own
@@ -871,39 +870,16 @@ class PlmTechnique final : public ShadowTechnique {
   std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
   std::vector<rt::MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
-  PassTimings timings_;
 };
 
 }  // namespace
-
-ParamSpec ribbonMarginParamSpec() {
-  return ParamSpec{.name = "margin", .type = ParamType::Float, .defaultValue = 2.0, .min = 0.0, .max = 64.0, .choices = {},
-                   .unit = "texels",
-                   .help = "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon"};
-}
-
-ParamSpec illuminationTableParamSpec() {
-  return ParamSpec{.name = "illumination_table", .type = ParamType::Bool, .defaultValue = true, .min = {}, .max = {},
-                   .choices = {}, .unit = "",
-                   .help = "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A "
-                           "table for the light's profile (disk lights; identity for rect, polygon)"};
-}
 
 TechniqueInfo plmTechniqueInfo() {
   TechniqueInfo info;
   info.name = "plm";
   info.summary = "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
   info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
-  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
-                 illuminationTableParamSpec()};
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    PlmOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.bias = depthBiasFromParams(params);
-    options.marginTexels = static_cast<float>(params.getFloat("margin"));
-    options.illuminationTable = params.getBool("illumination_table");
-    return std::make_unique<PlmTechnique>(options);
-  };
+  info.setOptions<PlmOptions>([](const PlmOptions& o) { return std::make_unique<PlmTechnique>(o); });
   return info;
 }
 

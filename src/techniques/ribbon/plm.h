@@ -55,7 +55,7 @@
 #include "penumbra/image.h"
 #include "penumbra/light.h"
 #include "penumbra/math.h"
-#include "penumbra/params.h"
+#include "penumbra/options.h"
 #include "penumbra/raster.h"
 #include "penumbra/scene.h"
 
@@ -162,7 +162,14 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
 }  // namespace penumbra::plm
 
 namespace penumbra {
-// Schema entries shared by the ribbon techniques.
-ParamSpec ribbonMarginParamSpec();
-ParamSpec illuminationTableParamSpec();
+// Parameters shared by the ribbon techniques (plm, smoothies, kirsch), declared once (options.h).
+inline OptionDecl ribbonMarginOption() {
+  return OptionDecl("margin").range(0, 64).unit("texels").help(
+      "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon");
+}
+inline OptionDecl illuminationTableOption() {
+  return OptionDecl("illumination_table")
+      .help("map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A table for the "
+            "light's profile (disk lights; identity for rect, polygon)");
+}
 }  // namespace penumbra

@@ -35,7 +35,6 @@
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "techniques/ribbon/plm.h"
 #include "techniques/shadow_map/shadow_map.h"
 
@@ -43,10 +42,17 @@ namespace penumbra {
 namespace {
 
 struct SmoothiesOptions {
-  int mapSize = 1024;         //!< texels per side, in [16, 8192]
+  int mapSize = 1024;         //!< texels per side
   DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every smoothie's width, in [0, 64]
+  float marginTexels = 2.0f;  //!< added to every smoothie's width
   bool illuminationTable = true;
+
+  static void describe(OptionFields<SmoothiesOptions>& f) {
+    f.add(&SmoothiesOptions::mapSize, mapSizeOption());
+    f.nest(&SmoothiesOptions::bias);
+    f.add(&SmoothiesOptions::marginTexels, ribbonMarginOption());
+    f.add(&SmoothiesOptions::illuminationTable, illuminationTableOption());
+  }
 };
 
 class SmoothiesTechnique final : public ShadowTechnique {
@@ -55,9 +61,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "smoothies"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "smoothies");
     createShadowMap(scene, light, options_.mapSize, map_);
     space_ = plm::makeSpace(map_, light, "smoothies");
@@ -65,12 +70,10 @@ class SmoothiesTechnique final : public ShadowTechnique {
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
                           plm::RibbonSides::Outer, options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("smoothies: visibility() called before prepare()");
-    Timer timer;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       if (!r.inMap) return 1.0f;
@@ -82,12 +85,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
       const float alpha = std::clamp(s.w * space_.ratePerTexel / (z - s.c), 0.0f, 1.0f);
       return options_.illuminationTable ? table_(alpha) : alpha;
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   SmoothiesOptions options_;
   LightMap map_;
   plm::Space space_;
@@ -95,7 +94,6 @@ class SmoothiesTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> smoothies_;
   Image<float> farthest_;  //!< prepare()'s working image, kept between calls
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
-  PassTimings timings_;
 };
 
 }  // namespace
@@ -105,16 +103,7 @@ TechniqueInfo smoothiesTechniqueInfo() {
   info.name = "smoothies";
   info.summary = "hard shadow map plus silhouette strips that fade the shadow outwards (outer penumbra only)";
   info.source = "Chan & Durand 2003, Rendering fake soft shadows with smoothies (baseline in Lawlor 2006)";
-  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec(), ribbonMarginParamSpec(),
-                 illuminationTableParamSpec()};
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    SmoothiesOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.bias = depthBiasFromParams(params);
-    options.marginTexels = static_cast<float>(params.getFloat("margin"));
-    options.illuminationTable = params.getBool("illumination_table");
-    return std::make_unique<SmoothiesTechnique>(options);
-  };
+  info.setOptions<SmoothiesOptions>([](const SmoothiesOptions& o) { return std::make_unique<SmoothiesTechnique>(o); });
   return info;
 }
 

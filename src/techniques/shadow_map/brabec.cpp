@@ -18,7 +18,6 @@
 
 #include "penumbra/error.h"
 #include "penumbra/sampling.h"
-#include "penumbra/timer.h"
 
 namespace penumbra {
 
@@ -429,9 +428,7 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
     fail("brabec: jitter = {} is not valid: expected a float in [0, 0.5] (texels)", options.jitter);
 }
 
-void BrabecTechnique::prepare(const Scene& scene, const Light& light) {
-  timings_ = {};
-  Timer timer;
+void BrabecTechnique::prepareImpl(const Scene& scene, const Light& light) {
   light_ = light;
   lightRadius_ = light.extent();
   createShadowMap(scene, light, options_.mapSize, map_);
@@ -469,7 +466,6 @@ void BrabecTechnique::prepare(const Scene& scene, const Light& light) {
     jitterS_ = {};
     jitterT_ = {};
   }
-  timings_.add("prepare", timer.elapsedMs());
 }
 
 BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, int y) const {
@@ -695,17 +691,13 @@ std::vector<int> groupBorders(int length) {
 
 }  // namespace
 
-void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!light_) fail("brabec: visibility() called before prepare(); call prepare(scene, light) first");
-  Timer timer;
   const int width = gbuffer.width(), height = gbuffer.height();
   v.reset(width, height, 1.0f);
   searches_ = 0.0;
   hitPixels_ = 0.0;
-  if (width == 0 || height == 0) {
-    timings_.add("visibility", timer.elapsedMs());
-    return;
-  }
+  if (width == 0 || height == 0) return;
 
   std::atomic<int64_t> hits{0}, searches{0};
   auto searched = [](const Pixel& p) { return p.cls == Pixel::Lit || p.cls == Pixel::Blocked; };
@@ -820,7 +812,6 @@ void BrabecTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   }
   searches_ = static_cast<double>(searches.load());
   hitPixels_ = static_cast<double>(hits.load());
-  timings_.add("visibility", timer.elapsedMs());
 }
 
 std::vector<std::pair<std::string, double>> BrabecTechnique::stats() const {
@@ -834,84 +825,7 @@ TechniqueInfo brabecTechniqueInfo() {
   info.name = "brabec";
   info.summary = "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer penumbra";
   info.source = "Brabec & Seidel 2002, Single sample soft shadows using depth maps";
-  info.params.push_back(mapSizeParamSpec(1024));
-  info.params.push_back(biasConstantParamSpec());
-  info.params.push_back(biasSlopeParamSpec());
-  // Every field spelled out (designated initializers), so -Wextra sees no missing initializer.
-  auto add = [&](std::string name, ParamType type, ParamValue defaultValue, std::optional<double> min,
-                 std::optional<double> max, std::string unit, std::string help, bool autoDefault = false) {
-    info.params.push_back(ParamSpec{.name = std::move(name), .type = type, .defaultValue = std::move(defaultValue),
-                                    .min = min, .max = max, .choices = {}, .unit = std::move(unit),
-                                    .help = std::move(help), .autoDefault = autoDefault});
-  };
-  add("meet", ParamType::Float, 0.5, 0.0, 1.0, "",
-      "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)");
-  add("r_scale", ParamType::Float, 0.0, 0.0, 1.0e6, "texels per world unit",
-      "paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
-      "(give r_scale, r_bias and r_shrink together)",
-      true);
-  add("r_bias", ParamType::Float, 0.0, 0.0, 1.0e6, "texels",
-      "paper's knob: search radius at depth 0 (with r_scale and r_shrink)", true);
-  add("r_shrink", ParamType::Float, 0.0, 0.0, 1.0e6, "1 / world unit",
-      "paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
-      "(with r_scale and r_bias)",
-      true);
-  add("max_radius", ParamType::Int, int64_t{96}, 1.0, 1024.0, "texels",
-      "hard cap of the search radius: bounds the cost of a pixel (it grows with the radius squared) "
-      "when the nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds "
-      "the widest physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)");
-  add("interpolate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
-      "adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel");
-  add("interpolate_max_step", ParamType::Float, 1.0, 0.0, 1.0, "",
-      "also search the middle of a group whose border V differ by more than this; 1 = off");
-  add("interpolate_kinks", ParamType::Bool, true, std::nullopt, std::nullopt, "",
-      "also search the middle of a group across a kink of V: one border at the end of the penumbra "
-      "(r >= r_max) and the other not, or the borders' nearest texels in directions more than "
-      "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria");
-  add("interpolate_max_angle", ParamType::Float, 30.0, 0.0, 180.0, "degrees",
-      "interpolate_kinks: largest angle between the directions from the two borders to the texels "
-      "their searches found");
-  add("accelerate", ParamType::Bool, true, std::nullopt, std::nullopt, "",
-      "tile summary and local search radius: change the cost, never V; false runs the plain Sec. 4.2 "
-      "search (for measuring what they save)");
-  add("jitter", ParamType::Float, 0.0, 0.0, 0.5, "texels",
-      "jitter of the texel positions the distances are measured to (Sec. 4.3), deterministic; 0 = off");
-  add("id_test", ParamType::Bool, true, std::nullopt, std::nullopt, "",
-      "object-id test of the searches (Sec. 3.2); false shows the self-shadowing of Fig. 3");
-  add("coverage_bound", ParamType::Bool, true, std::nullopt, std::nullopt, "",
-      "our extension, not the paper's: V is at least 1 - f, f the fraction of the texels in the light's "
-      "footprint at the blocker's silhouette depth (its shape scaled to the penumbra width there) that "
-      "block the receiver; lightens the dark blob of an occluder smaller than the light (see "
-      "docs/small-occluders.md); false = the paper's V");
-  add("coverage_min_texels", ParamType::Int, int64_t{32}, 1.0, 1.0e6, "texels",
-      "coverage_bound: smallest footprint (texels; samples along a segment light) the bound is applied "
-      "at; smaller footprints cannot resolve the covered fraction (contact shadows, small maps). 32: "
-      "measured on the corpus, teapots and the built-in scenes, see docs/small-occluders.md");
-  add("coverage_samples", ParamType::Int, int64_t{256}, 16.0, 1.0e6, "texels",
-      "coverage_bound: most texels counted per footprint; a wider footprint is counted on a lattice of "
-      "every k-th texel in s and t. 256 resolves the covered fraction to about one 8-bit step; measured: "
-      "RMSE8 within 0.1 of the full count on every scene and light of docs/small-occluders.md");
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    BrabecOptions o;
-    o.mapSize = static_cast<int>(params.getInt("map_size"));
-    o.bias = depthBiasFromParams(params);
-    o.meet = static_cast<float>(params.getFloat("meet"));
-    if (!params.isAuto("r_scale")) o.rScale = static_cast<float>(params.getFloat("r_scale"));
-    if (!params.isAuto("r_bias")) o.rBias = static_cast<float>(params.getFloat("r_bias"));
-    if (!params.isAuto("r_shrink")) o.rShrink = static_cast<float>(params.getFloat("r_shrink"));
-    o.maxRadius = static_cast<int>(params.getInt("max_radius"));
-    o.interpolate = params.getBool("interpolate");
-    o.interpolateMaxStep = static_cast<float>(params.getFloat("interpolate_max_step"));
-    o.interpolateKinks = params.getBool("interpolate_kinks");
-    o.interpolateMaxAngle = static_cast<float>(params.getFloat("interpolate_max_angle"));
-    o.accelerate = params.getBool("accelerate");
-    o.jitter = static_cast<float>(params.getFloat("jitter"));
-    o.idTest = params.getBool("id_test");
-    o.coverageBound = params.getBool("coverage_bound");
-    o.coverageMinTexels = static_cast<int>(params.getInt("coverage_min_texels"));
-    o.coverageSamples = static_cast<int>(params.getInt("coverage_samples"));
-    return std::make_unique<BrabecTechnique>(o);
-  };
+  info.setOptions<BrabecOptions>([](const BrabecOptions& o) { return std::make_unique<BrabecTechnique>(o); });
   return info;
 }
 

@@ -137,22 +137,79 @@ namespace penumbra {
 struct BrabecOptions {
   int mapSize = 1024;            //!< light depth/id map, texels per side (the paper: 256 for 512x512 images)
   DepthBias bias;                //!< of the hard test and of the searches' depth layer
-  float meet = 0.5f;             //!< V on the hard-shadow edge, where inner and outer penumbra meet, [0, 1]
+  float meet = 0.5f;             //!< V on the hard-shadow edge, where inner and outer penumbra meet
   std::optional<float> rScale;   //!< paper: search radius per world unit of |z|, texels / world unit
   std::optional<float> rBias;    //!< paper: search radius at z = 0, texels
   std::optional<float> rShrink;  //!< paper: r_max factor per world unit of depth difference, 1 / world unit
   int maxRadius = 96;            //!< hard cap of the search radius, texels (see the file comment)
   bool interpolate = true;       //!< Sec. 4.3 adaptive 4x4 block interpolation
-  float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more, [0, 1]
+  float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more
   bool interpolateKinks = true;  //!< also refine across the kinks of V (r = r_max, ridges of r); see the file comment
-  float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees, [0, 180]
-  float jitter = 0.0f;           //!< texel position jitter amplitude, texels, [0, 0.5]
+  float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees
+  float jitter = 0.0f;           //!< texel position jitter amplitude, texels
   bool idTest = true;            //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
   bool scalarSearch = false;     //!< use the scalar oracle search (tests)
   bool accelerate = true;        //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
   bool coverageBound = true;     //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
-  int coverageMinTexels = 32;    //!< coverage bound: smallest footprint applied at, texels (segment: samples), >= 1
-  int coverageSamples = 256;     //!< coverage bound: most texels counted per footprint (wider: a sparser lattice), >= 16
+  int coverageMinTexels = 32;    //!< coverage bound: smallest footprint applied at, texels (segment: samples)
+  int coverageSamples = 256;     //!< coverage bound: most texels counted per footprint (wider: a sparser lattice)
+
+  static void describe(OptionFields<BrabecOptions>& f) {
+    using O = BrabecOptions;
+    f.add(&O::mapSize, mapSizeOption());
+    f.nest(&O::bias);
+    f.add(&O::meet, OptionDecl("meet").range(0, 1).help(
+                        "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)"));
+    f.add(&O::rScale, OptionDecl("r_scale").range(0, 1e6).unit("texels per world unit").help(
+                          "paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
+                          "(give r_scale, r_bias and r_shrink together)"));
+    f.add(&O::rBias, OptionDecl("r_bias").range(0, 1e6).unit("texels").help(
+                         "paper's knob: search radius at depth 0 (with r_scale and r_shrink)"));
+    f.add(&O::rShrink, OptionDecl("r_shrink").range(0, 1e6).unit("1 / world unit").help(
+                           "paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
+                           "(with r_scale and r_bias)"));
+    f.add(&O::maxRadius,
+          OptionDecl("max_radius").range(1, 1024).unit("texels").help(
+              "hard cap of the search radius: bounds the cost of a pixel (it grows with the radius squared) when the "
+              "nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds the widest "
+              "physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)"));
+    f.add(&O::interpolate, OptionDecl("interpolate").help(
+                               "adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel"));
+    f.add(&O::interpolateMaxStep, OptionDecl("interpolate_max_step").range(0, 1).help(
+                                      "also search the middle of a group whose border V differ by more than this; 1 = off"));
+    f.add(&O::interpolateKinks,
+          OptionDecl("interpolate_kinks").help(
+              "also search the middle of a group across a kink of V: one border at the end of the penumbra (r >= "
+              "r_max) and the other not, or the borders' nearest texels in directions more than "
+              "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria"));
+    f.add(&O::interpolateMaxAngle,
+          OptionDecl("interpolate_max_angle").range(0, 180).unit("degrees").help(
+              "interpolate_kinks: largest angle between the directions from the two borders to the texels their "
+              "searches found"));
+    f.add(&O::accelerate, OptionDecl("accelerate").help(
+                              "tile summary and local search radius: change the cost, never V; false runs the plain "
+                              "Sec. 4.2 search (for measuring what they save)"));
+    f.add(&O::jitter, OptionDecl("jitter").range(0, 0.5).unit("texels").help(
+                          "jitter of the texel positions the distances are measured to (Sec. 4.3), deterministic; 0 = off"));
+    f.add(&O::idTest, OptionDecl("id_test").help(
+                          "object-id test of the searches (Sec. 3.2); false shows the self-shadowing of Fig. 3"));
+    f.add(&O::coverageBound,
+          OptionDecl("coverage_bound").help(
+              "our extension, not the paper's: V is at least 1 - f, f the fraction of the texels in the light's "
+              "footprint at the blocker's silhouette depth (its shape scaled to the penumbra width there) that block "
+              "the receiver; lightens the dark blob of an occluder smaller than the light (see "
+              "docs/small-occluders.md); false = the paper's V"));
+    f.add(&O::coverageMinTexels,
+          OptionDecl("coverage_min_texels").range(1, 1e6).unit("texels").help(
+              "coverage_bound: smallest footprint (texels; samples along a segment light) the bound is applied at; "
+              "smaller footprints cannot resolve the covered fraction (contact shadows, small maps). 32: measured on "
+              "the corpus, teapots and the built-in scenes, see docs/small-occluders.md"));
+    f.add(&O::coverageSamples,
+          OptionDecl("coverage_samples").range(16, 1e6).unit("texels").help(
+              "coverage_bound: most texels counted per footprint; a wider footprint is counted on a lattice of every "
+              "k-th texel in s and t. 256 resolves the covered fraction to about one 8-bit step; measured: RMSE8 "
+              "within 0.1 of the full count on every scene and light of docs/small-occluders.md"));
+  }
 };
 
 namespace brabec {
@@ -231,9 +288,6 @@ class BrabecTechnique final : public ShadowTechnique {
   explicit BrabecTechnique(const BrabecOptions& options);
 
   std::string_view name() const override { return "brabec"; }
-  void prepare(const Scene& scene, const Light& light) override;
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override;
-  PassTimings timings() const override { return timings_; }
   // "searches" (searched pixels), "search_fraction" (of pixels that see geometry), "map_min_depth".
   std::vector<std::pair<std::string, double>> stats() const override;
 
@@ -241,6 +295,8 @@ class BrabecTechnique final : public ShadowTechnique {
   const LightMap& lightMap() const { return map_; }
 
  private:
+  void prepareImpl(const Scene& scene, const Light& light) override;
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
   struct Pixel;
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
   // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
@@ -267,7 +323,6 @@ class BrabecTechnique final : public ShadowTechnique {
   Vec2 segmentAxis_{0.0f};
   std::vector<Vec2> polygon_;
   float polygonArea_ = 0.0f;  //!< of polygon_
-  PassTimings timings_;
   double searches_ = 0.0;
   double hitPixels_ = 0.0;
   // The interpolation's per-pixel scratch (brabec.cpp), kept between frames so that a frame does not

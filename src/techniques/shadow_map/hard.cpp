@@ -11,14 +11,18 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "shadow_map.h"
 
 namespace penumbra {
 
 struct HardShadowOptions {
-  int mapSize = 1024;  //!< texels per side of the light map, in [16, 8192]
+  int mapSize = 1024;  //!< texels per side of the light map
   DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+
+  static void describe(OptionFields<HardShadowOptions>& f) {
+    f.add(&HardShadowOptions::mapSize, mapSizeOption());
+    f.nest(&HardShadowOptions::bias);
+  }
 };
 
 class HardShadowTechnique final : public ShadowTechnique {
@@ -27,28 +31,20 @@ class HardShadowTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "hard"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     createShadowMap(scene, light, options_.mapSize, map_);
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("hard: visibility() called before prepare()");
-    Timer timer;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       return hardShadow(map_, makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   HardShadowOptions options_;
   LightMap map_;
-  PassTimings timings_;
 };
 
 TechniqueInfo hardTechniqueInfo() {
@@ -56,13 +52,7 @@ TechniqueInfo hardTechniqueInfo() {
   info.name = "hard";
   info.summary = "shadow map from the light's centre sample, one depth compare per pixel (hard shadow)";
   info.source = "Williams 1978 (baseline)";
-  info.params = {mapSizeParamSpec(), biasConstantParamSpec(), biasSlopeParamSpec()};
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    HardShadowOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.bias = depthBiasFromParams(params);
-    return std::make_unique<HardShadowTechnique>(options);
-  };
+  info.setOptions<HardShadowOptions>([](const HardShadowOptions& o) { return std::make_unique<HardShadowTechnique>(o); });
   return info;
 }
 

@@ -539,14 +539,12 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
          options.edgeThreshold);
 }
 
-void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
+void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   prepared_ = false;  // a failed prepare() leaves nothing for visibility() to use
   if (light.shape() != LightShape::Segment)
     fail("heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "
          "(\"type\": \"segment\" with end points a and b)",
          toString(light.shape()));
-  timings_ = {};
-  Timer total;
   const int k = options_.subdivisions;
   const auto samples = static_cast<size_t>(k + 1);
   // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps
@@ -599,13 +597,10 @@ void HeidrichTechnique::prepare(const Scene& scene, const Light& light) {
   }
   visibilityMapsMs_ = stage.elapsedMs();
   prepared_ = true;
-  prepareMs_ = total.elapsedMs();
-  timings_.add("prepare", prepareMs_);
 }
 
-void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+void HeidrichTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!prepared_) fail("heidrich: visibility() called before prepare()");
-  Timer timer;
   const int k = static_cast<int>(maps_.size()) - 1;
   const float subWeight = 1.0f / static_cast<float>(k);
   const LightMap& map0 = maps_[0];
@@ -648,9 +643,6 @@ void HeidrichTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
     }
     return std::min(1.0f, sum * subWeight);  // k terms of at most 1 each, times 1 / k, plus rounding
   });
-  timings_ = {};
-  timings_.add("prepare", prepareMs_);
-  timings_.add("visibility", timer.elapsedMs());
 }
 
 std::vector<std::pair<std::string, double>> HeidrichTechnique::stats() const {
@@ -670,27 +662,7 @@ TechniqueInfo heidrichTechniqueInfo() {
       "soft shadow maps for linear lights: a depth + visibility map per sample point, skin polygons of the "
       "depth discontinuities warped into the other view and Gouraud-shaded (segment lights)";
   info.source = "Heidrich, Brabec & Seidel 2000, Soft shadow maps for linear lights";
-  info.params = {
-      mapSizeParamSpec(),
-      ParamSpec{.name = "subdivisions", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 1.0, .max = 64.0,
-                .choices = {}, .unit = "sub-segments",
-                .help = "k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); "
-                        "raise it where part of the light shows between occluders that hide both end points"},
-      ParamSpec{.name = "edge_threshold", .type = ParamType::Float, .defaultValue = double{HeidrichOptions{}.edgeThreshold},
-                .min = 0.01, .max = 1000.0, .choices = {}, .unit = "texels",
-                .help = "smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel "
-                        "at its depth"},
-      biasConstantParamSpec(),
-      biasSlopeParamSpec(),
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    HeidrichOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.subdivisions = static_cast<int>(params.getInt("subdivisions"));
-    options.edgeThreshold = static_cast<float>(params.getFloat("edge_threshold"));
-    options.bias = depthBiasFromParams(params);
-    return std::make_unique<HeidrichTechnique>(options);
-  };
+  info.setOptions<HeidrichOptions>([](const HeidrichOptions& o) { return std::make_unique<HeidrichTechnique>(o); });
   return info;
 }
 

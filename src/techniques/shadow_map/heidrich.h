@@ -19,10 +19,23 @@
 namespace penumbra {
 
 struct HeidrichOptions {
-  int mapSize = 1024;        //!< texels per side of each sample point's shadow and visibility map, in [16, 8192]
-  int subdivisions = 1;      //!< k: sub-segments of the light (k + 1 sample points), in [1, 64]
-  float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth, > 0
+  int mapSize = 1024;        //!< texels per side of each sample point's shadow and visibility map
+  int subdivisions = 1;      //!< k: sub-segments of the light (k + 1 sample points)
+  float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth
   DepthBias bias;            //!< depth-compare bias of the shadow-map channel (shadow_map.h)
+
+  static void describe(OptionFields<HeidrichOptions>& f) {
+    f.add(&HeidrichOptions::mapSize, mapSizeOption());
+    f.add(&HeidrichOptions::subdivisions,
+          OptionDecl("subdivisions").range(1, 64).unit("sub-segments").help(
+              "k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); raise it "
+              "where part of the light shows between occluders that hide both end points"));
+    f.add(&HeidrichOptions::edgeThreshold,
+          OptionDecl("edge_threshold").range(0.01, 1000).unit("texels").help(
+              "smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel at its "
+              "depth"));
+    f.nest(&HeidrichOptions::bias);
+  }
 };
 
 namespace heidrich {
@@ -92,12 +105,6 @@ class HeidrichTechnique final : public ShadowTechnique {
   explicit HeidrichTechnique(const HeidrichOptions& options);
 
   std::string_view name() const override { return "heidrich"; }
-  // Renders the k + 1 shadow maps and the 2k visibility maps; throws Error for a light that is not a
-  // segment. Always rebuilds: prepare() is the call that says the light or the scene changed.
-  void prepare(const Scene& scene, const Light& light) override;
-  // Reads the maps only: a camera-only change (a new G-buffer) re-runs this pass alone.
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override;
-  PassTimings timings() const override { return timings_; }
   // "sample_points", "skin_triangles" (of the last prepare), "shadow_maps_built" and
   // "visibility_maps_built" (counted over the technique's lifetime), and the prepare stages in ms:
   // "shadow_maps_ms", "edges_and_skins_ms", "visibility_maps_ms".
@@ -117,6 +124,12 @@ class HeidrichTechnique final : public ShadowTechnique {
   int visibilityMapsBuilt() const { return visibilityMapsBuilt_; }
 
  private:
+  // Renders the k + 1 shadow maps and the 2k visibility maps; throws Error for a light that is not a
+  // segment. Always rebuilds: prepare() is the call that says the light or the scene changed.
+  void prepareImpl(const Scene& scene, const Light& light) override;
+  // Reads the maps only: a camera-only change (a new G-buffer) re-runs this pass alone.
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
+
   HeidrichOptions options_;
   bool prepared_ = false;                //!< the maps below are whole (a failed prepare() clears it)
   std::vector<LightMap> maps_;           //!< sample point j's shadow map (depth channel)
@@ -138,8 +151,6 @@ class HeidrichTechnique final : public ShadowTechnique {
   int shadowMapsBuilt_ = 0;
   int visibilityMapsBuilt_ = 0;
   double shadowMapsMs_ = 0.0, skinsMs_ = 0.0, visibilityMapsMs_ = 0.0;
-  PassTimings timings_;
-  double prepareMs_ = 0.0;
 };
 
 }  // namespace penumbra

@@ -21,16 +21,23 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
-#include "penumbra/timer.h"
 #include "shadow_map.h"
 
 namespace penumbra {
 
 struct MultisampleOptions {
-  int mapSize = 1024;   //!< texels per side of each light map, in [16, 8192]
-  int samples = 16;     //!< light samples = shadow maps, in [1, 1024]
+  int mapSize = 1024;   //!< texels per side of each light map
+  int samples = 16;     //!< light samples = shadow maps
   uint32_t seed = 1;    //!< selects the stratified sample pattern
   DepthBias bias;       //!< depth-compare bias (shadow_map.h)
+
+  static void describe(OptionFields<MultisampleOptions>& f) {
+    f.add(&MultisampleOptions::mapSize, mapSizeOption());
+    f.add(&MultisampleOptions::samples, OptionDecl("samples").range(1, 1024).unit("samples").help(
+                                            "light samples, one shadow map each (CMJ-stratified over the emitter)"));
+    f.add(&MultisampleOptions::seed, OptionDecl("seed").range(0, 4294967295.0).help("selects the stratified sample pattern"));
+    f.nest(&MultisampleOptions::bias);
+  }
 };
 
 namespace {
@@ -72,9 +79,8 @@ class MultisampleTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "multisample"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     maps_.clear();
     weights_.clear();
     const CmjSampler sampler(static_cast<uint32_t>(options_.samples));
@@ -89,12 +95,10 @@ class MultisampleTechnique final : public ShadowTechnique {
       reportProgress(static_cast<double>(k + 1) / sampler.count());
     }
     for (float& w : weights_) w /= weightSum;
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (maps_.empty()) fail("multisample: visibility() called before prepare()");
-    Timer timer;
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       const Vec3& p = gbuffer.wsPosition(x, y);
       const Vec3& n = gbuffer.wsGeometricNormal(x, y);
@@ -102,16 +106,11 @@ class MultisampleTechnique final : public ShadowTechnique {
       for (size_t k = 0; k < maps_.size(); ++k) sum += weights_[k] * hardShadow(maps_[k], makeReceiver(maps_[k], p, n, options_.bias));
       return std::min(sum, 1.0f);  // the normalized weights can sum to 1 + rounding
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   MultisampleOptions options_;
   std::vector<LightMap> maps_;
   std::vector<float> weights_;
-  PassTimings timings_;
 };
 
 TechniqueInfo multisampleTechniqueInfo() {
@@ -119,23 +118,7 @@ TechniqueInfo multisampleTechniqueInfo() {
   info.name = "multisample";
   info.summary = "N hard shadow maps from N stratified light samples, averaged";
   info.source = "baseline (Lawlor 2006's \"16 samples\" row)";
-  info.params = {
-      mapSizeParamSpec(),
-      ParamSpec{.name = "samples", .type = ParamType::Int, .defaultValue = int64_t{16}, .min = 1.0, .max = 1024.0, .choices = {},
-                .unit = "samples", .help = "light samples, one shadow map each (CMJ-stratified over the emitter)"},
-      ParamSpec{.name = "seed", .type = ParamType::Int, .defaultValue = int64_t{1}, .min = 0.0, .max = 4294967295.0, .choices = {},
-                .unit = "", .help = "selects the stratified sample pattern"},
-      biasConstantParamSpec(),
-      biasSlopeParamSpec(),
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    MultisampleOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.samples = static_cast<int>(params.getInt("samples"));
-    options.seed = static_cast<uint32_t>(params.getInt("seed"));
-    options.bias = depthBiasFromParams(params);
-    return std::make_unique<MultisampleTechnique>(options);
-  };
+  info.setOptions<MultisampleOptions>([](const MultisampleOptions& o) { return std::make_unique<MultisampleTechnique>(o); });
   return info;
 }
 

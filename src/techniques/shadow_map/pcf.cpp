@@ -16,15 +16,21 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "shadow_map.h"
 
 namespace penumbra {
 
 struct PcfOptions {
-  int mapSize = 1024;  //!< texels per side of the light map, in [16, 8192]
-  int kernel = 3;      //!< width of the box kernel in texels, odd, in [1, 63]
+  int mapSize = 1024;  //!< texels per side of the light map
+  int kernel = 3;      //!< width of the box kernel in texels, odd
   DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+
+  static void describe(OptionFields<PcfOptions>& f) {
+    f.add(&PcfOptions::mapSize, mapSizeOption());
+    f.add(&PcfOptions::kernel, OptionDecl("kernel").range(1, 63).unit("texels").help(
+                                   "width of the box kernel (odd); border texels weigh their covered fraction"));
+    f.nest(&PcfOptions::bias);
+  }
 };
 
 class PcfTechnique final : public ShadowTechnique {
@@ -36,30 +42,22 @@ class PcfTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "pcf"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     createShadowMap(scene, light, options_.mapSize, map_);
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcf: visibility() called before prepare()");
-    Timer timer;
     const float width = static_cast<float>(options_.kernel);
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
       const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       return r.inMap ? pcfBox(map_, r, r.s, r.t, width) : 1.0f;
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
- private:
   PcfOptions options_;
   LightMap map_;
-  PassTimings timings_;
 };
 
 TechniqueInfo pcfTechniqueInfo() {
@@ -67,20 +65,7 @@ TechniqueInfo pcfTechniqueInfo() {
   info.name = "pcf";
   info.summary = "percentage-closer filtering of the shadow-map compare over a fixed box kernel";
   info.source = "Reeves, Salesin, Cook 1987 (baseline)";
-  info.params = {
-      mapSizeParamSpec(),
-      ParamSpec{.name = "kernel", .type = ParamType::Int, .defaultValue = int64_t{3}, .min = 1.0, .max = 63.0, .choices = {},
-                .unit = "texels", .help = "width of the box kernel (odd); border texels weigh their covered fraction"},
-      biasConstantParamSpec(),
-      biasSlopeParamSpec(),
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    PcfOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.kernel = static_cast<int>(params.getInt("kernel"));
-    options.bias = depthBiasFromParams(params);
-    return std::make_unique<PcfTechnique>(options);
-  };
+  info.setOptions<PcfOptions>([](const PcfOptions& o) { return std::make_unique<PcfTechnique>(o); });
   return info;
 }
 

@@ -64,19 +64,40 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "shadow_map.h"
 
 namespace penumbra {
 
 struct PcssOptions {
-  int mapSize = 1024;                //!< texels per side of the light map, in [16, 8192]
-  int blockerSamples = 16;           //!< taps of the blocker search, in [1, 1024]
-  int filterSamples = 32;            //!< taps of the PCF filter, in [1, 1024]
+  int mapSize = 1024;                //!< texels per side of the light map
+  int blockerSamples = 16;           //!< taps of the blocker search
+  int filterSamples = 32;            //!< taps of the PCF filter
   std::optional<float> lightSize;    //!< light radius, world units (directional: tan of the half angle); empty = Light::extent() (segment, rect: as the map sees it, file comment)
   bool rotate = true;                //!< rotate the sample disks per pixel by a hash
-  float bilinearMaxRadius = 4.0f;    //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel), >= 0
+  float bilinearMaxRadius = 4.0f;    //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel)
   DepthBias bias;                    //!< depth-compare bias (shadow_map.h)
+
+  static void describe(OptionFields<PcssOptions>& f) {
+    f.add(&PcssOptions::mapSize, mapSizeOption());
+    f.add(&PcssOptions::blockerSamples, OptionDecl("blocker_samples").range(1, 1024).unit("samples").help(
+                                            "taps of the blocker search (Vogel disk)"));
+    f.add(&PcssOptions::filterSamples,
+          OptionDecl("filter_samples").range(1, 1024).unit("samples").help(
+              "taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"));
+    f.add(&PcssOptions::lightSize,
+          OptionDecl("light_size").range(1e-6, 1e6).unit("world units").help(
+              "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its "
+              "half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or "
+              "filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)"));
+    f.add(&PcssOptions::rotate, OptionDecl("rotate").help(
+                                    "rotate the sample disks per pixel by a hash (noise instead of banding); segment and "
+                                    "rect lights keep their orientation"));
+    f.add(&PcssOptions::bilinearMaxRadius,
+          OptionDecl("bilinear_max_radius").range(0, kMaxShadowMapSize).unit("texels").help(
+              "filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "
+              "nearest-texel compare per tap (8192: always bilinear)"));
+    f.nest(&PcssOptions::bias);
+  }
 };
 
 class PcssTechnique final : public ShadowTechnique {
@@ -90,9 +111,8 @@ class PcssTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return "pcss"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
-    Timer timer;
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
     createShadowMap(scene, light, options_.mapSize, map_);
     // Segment and rect lights: the taps lie on the light's own image in the map (see the file
@@ -121,12 +141,10 @@ class PcssTechnique final : public ShadowTechnique {
     zMin_ = minMapDepth(map_);
     // The search radius's factors that do not depend on the pixel (one division per pixel fewer).
     searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;
-    timings_.add("prepare", timer.elapsedMs());
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
-    Timer timer;
     v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
     std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
     // As forEachReceiverPixel, with per-range counts of the paths the pixels took.
@@ -139,14 +157,13 @@ class PcssTechnique final : public ShadowTechnique {
       }
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
-    timings_.add("visibility", timer.elapsedMs());
     int64_t total = 0;
     for (size_t k = 0; k < kPathCount; ++k) total += counts[k];
     for (size_t k = 0; k <= kPathCount; ++k)
       pathFractions_[k] = total > 0 ? static_cast<double>(counts[k]) / static_cast<double>(total) : 0.0;
   }
 
-  PassTimings timings() const override { return timings_; }
+ public:
   std::vector<std::pair<std::string, double>> stats() const override {
     std::vector<std::pair<std::string, double>> s = {{"light_size", lightSize_}, {"min_map_depth", zMin_}};
     for (size_t k = 0; k <= kPathCount; ++k) s.emplace_back(kPathNames[k], pathFractions_[k]);
@@ -235,7 +252,6 @@ class PcssTechnique final : public ShadowTechnique {
   float lightSize_ = 0.0f;
   float zMin_ = 0.0f;
   float searchScale_ = 0.0f;  //!< lightSize_ (orthographic) or lightSize_ / zMin_ (perspective)
-  PassTimings timings_;
   std::array<double, kPathCount + 1> pathFractions_{};
 };
 
@@ -244,36 +260,7 @@ TechniqueInfo pcssTechniqueInfo() {
   info.name = "pcss";
   info.summary = "percentage-closer soft shadows: blocker search, penumbra width by similar triangles, PCF";
   info.source = "Fernando 2005 (modern baseline)";
-  info.params = {
-      mapSizeParamSpec(),
-      ParamSpec{.name = "blocker_samples", .type = ParamType::Int, .defaultValue = int64_t{16}, .min = 1.0, .max = 1024.0, .choices = {},
-                .unit = "samples", .help = "taps of the blocker search (Vogel disk)"},
-      ParamSpec{.name = "filter_samples", .type = ParamType::Int, .defaultValue = int64_t{32}, .min = 1.0, .max = 1024.0, .choices = {},
-                .unit = "samples", .help = "taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"},
-      ParamSpec{.name = "light_size", .type = ParamType::Float, .defaultValue = 0.0, .min = 1e-6, .max = 1e6, .choices = {}, .unit = "world units",
-                .help = "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)",
-                .autoDefault = true},
-      ParamSpec{.name = "rotate", .type = ParamType::Bool, .defaultValue = true, .min = std::nullopt,
-                .max = std::nullopt, .choices = {}, .unit = "",
-                .help = "rotate the sample disks per pixel by a hash (noise instead of banding); segment and rect lights keep their orientation"},
-      ParamSpec{.name = "bilinear_max_radius", .type = ParamType::Float, .defaultValue = 4.0, .min = 0.0,
-                .max = static_cast<double>(kMaxShadowMapSize), .choices = {}, .unit = "texels",
-                .help = "filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "
-                        "nearest-texel compare per tap (8192: always bilinear)"},
-      biasConstantParamSpec(),
-      biasSlopeParamSpec(),
-  };
-  info.create = [](const Params& params) -> std::unique_ptr<ShadowTechnique> {
-    PcssOptions options;
-    options.mapSize = static_cast<int>(params.getInt("map_size"));
-    options.blockerSamples = static_cast<int>(params.getInt("blocker_samples"));
-    options.filterSamples = static_cast<int>(params.getInt("filter_samples"));
-    if (!params.isAuto("light_size")) options.lightSize = static_cast<float>(params.getFloat("light_size"));
-    options.rotate = params.getBool("rotate");
-    options.bilinearMaxRadius = static_cast<float>(params.getFloat("bilinear_max_radius"));
-    options.bias = depthBiasFromParams(params);
-    return std::make_unique<PcssTechnique>(options);
-  };
+  info.setOptions<PcssOptions>([](const PcssOptions& o) { return std::make_unique<PcssTechnique>(o); });
   return info;
 }
 

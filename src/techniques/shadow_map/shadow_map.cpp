@@ -16,43 +16,6 @@
 
 namespace penumbra {
 
-ParamSpec mapSizeParamSpec(int64_t defaultSize) {
-  return ParamSpec{.name = "map_size",
-                   .type = ParamType::Int,
-                   .defaultValue = defaultSize,
-                   .min = static_cast<double>(kMinShadowMapSize),
-                   .max = static_cast<double>(kMaxShadowMapSize), .choices = {},
-                   .unit = "texels",
-                   .help = "width and height of the square light-space depth map"};
-}
-
-ParamSpec biasConstantParamSpec() {
-  return ParamSpec{.name = "bias_constant",
-                   .type = ParamType::Float,
-                   .defaultValue = double{DepthBias{}.constantTexels},
-                   .min = 0.0,
-                   .max = 64.0, .choices = {},
-                   .unit = "texels",
-                   .help = "constant depth bias, in world sizes of one texel at the receiver's depth"};
-}
-
-ParamSpec biasSlopeParamSpec() {
-  return ParamSpec{.name = "bias_slope",
-                   .type = ParamType::Float,
-                   .defaultValue = double{DepthBias{}.slope},
-                   .min = 0.0,
-                   .max = 64.0, .choices = {},
-                   .unit = "",
-                   .help = "slope-scaled depth bias: multiplies the receiver's depth change per texel"};
-}
-
-DepthBias depthBiasFromParams(const Params& params) {
-  DepthBias bias;
-  bias.constantTexels = static_cast<float>(params.getFloat("bias_constant"));
-  bias.slope = static_cast<float>(params.getFloat("bias_slope"));
-  return bias;
-}
-
 LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize) {
   LightMap map;
   createShadowMap(scene, light, mapSize, map);

@@ -44,7 +44,7 @@
 #include "penumbra/image.h"
 #include "penumbra/light.h"
 #include "penumbra/math.h"
-#include "penumbra/params.h"
+#include "penumbra/options.h"
 #include "penumbra/raster.h"
 #include "penumbra/sampling.h"
 #include "penumbra/scene.h"
@@ -56,17 +56,28 @@ inline constexpr int kMaxShadowMapSize = 8192;
 // Receiver-plane slope limit, in texel sizes of depth per texel (tan 84 degrees ~ 9.5).
 inline constexpr float kMaxDepthSlope = 10.0f;
 
-// Depth bias of the compare (see the file comment).
+// Depth bias of the compare (see the file comment); every shadow-map technique nests it in its
+// options, so bias_constant and bias_slope read the same everywhere.
 struct DepthBias {
-  float constantTexels = 0.5f;  //!< in texel sizes at the receiver's depth (world size of one texel), >= 0
-  float slope = 1.0f;           //!< multiplies the receiver plane's depth change per texel, >= 0
+  float constantTexels = 0.5f;  //!< in texel sizes at the receiver's depth (world size of one texel)
+  float slope = 1.0f;           //!< multiplies the receiver plane's depth change per texel
+
+  static void describe(OptionFields<DepthBias>& f) {
+    f.add(&DepthBias::constantTexels,
+          OptionDecl("bias_constant").range(0, 64).unit("texels").help(
+              "constant depth bias, in world sizes of one texel at the receiver's depth"));
+    f.add(&DepthBias::slope, OptionDecl("bias_slope").range(0, 64).help(
+                                 "slope-scaled depth bias: multiplies the receiver's depth change per texel"));
+  }
 };
 
-// Schema entries shared by every shadow-map technique, so they read the same everywhere.
-ParamSpec mapSizeParamSpec(int64_t defaultSize = 1024);
-ParamSpec biasConstantParamSpec();
-ParamSpec biasSlopeParamSpec();
-DepthBias depthBiasFromParams(const Params& params);
+// The map size parameter every light-map technique shares (its default is the options' initializer).
+inline OptionDecl mapSizeOption() {
+  return OptionDecl("map_size")
+      .range(kMinShadowMapSize, kMaxShadowMapSize)
+      .unit("texels")
+      .help("width and height of the square light-space depth map");
+}
 
 // The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
 // Throws Error if mapSize is outside [kMinShadowMapSize, kMaxShadowMapSize].

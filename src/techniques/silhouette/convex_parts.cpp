@@ -20,60 +20,7 @@ class ConvexPartsTechnique final : public ShadowTechnique {
 
   std::string_view name() const override { return name_; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    prepared_ = 0;
-    std::vector<Light> lights;
-    weights_.clear();
-    const bool split = (light.shape() == LightShape::Polygon || light.shape() == LightShape::Rect) && !light.convex();
-    if (split) {
-      double total = 0.0;
-      for (const std::vector<Vec3>& part : light.convexParts()) {
-        Light piece = Light::polygon(part);
-        piece.setIntensity(light.intensity());
-        weights_.push_back(piece.area());
-        total += piece.area();
-        lights.push_back(std::move(piece));
-      }
-      for (double& w : weights_) w /= total;
-    } else {
-      lights.push_back(light);
-      weights_.push_back(1.0);
-    }
-    while (instances_.size() < lights.size()) instances_.push_back(make_());
-    const size_t count = lights.size();
-    for (size_t k = 0; k < count; ++k) {
-      instances_[k]->setProgressCallback([this, k, count](double f) { reportProgress((static_cast<double>(k) + f) / count); });
-      instances_[k]->prepare(scene, lights[k]);
-    }
-    prepared_ = count;
-  }
-
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
-    if (prepared_ == 0) fail("{}: visibility() called before prepare(); call prepare(scene, light) first", name_);
-    if (prepared_ == 1) {
-      instances_[0]->visibility(gbuffer, v);
-      return;
-    }
-    parts_.resize(prepared_);
-    for (size_t k = 0; k < prepared_; ++k) instances_[k]->visibility(gbuffer, parts_[k]);
-    const int width = gbuffer.width(), height = gbuffer.height();
-    v.reset(width, height, 1.0f);
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
-      for (int y = range.begin(); y < range.end(); ++y)
-        for (int x = 0; x < width; ++x) {
-          // The hidden fraction, summed in double; all pieces lit (hidden) gives exactly 1 (0).
-          double hidden = 0.0;
-          bool allHidden = true;
-          for (size_t k = 0; k < prepared_; ++k) {
-            const float vk = parts_[k](x, y);
-            hidden += weights_[k] * (1.0 - static_cast<double>(vk));
-            allHidden = allHidden && vk == 0.0f;
-          }
-          v(x, y) = allHidden ? 0.0f : static_cast<float>(std::clamp(1.0 - hidden, 0.0, 1.0));
-        }
-    });
-  }
-
+  // The instances' passes, added up by name (each instance times its own).
   PassTimings timings() const override {
     if (prepared_ <= 1) return instances_.empty() ? PassTimings{} : instances_[0]->timings();
     PassTimings sum;
@@ -102,6 +49,60 @@ class ConvexPartsTechnique final : public ShadowTechnique {
   }
 
  private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
+    prepared_ = 0;
+    std::vector<Light> lights;
+    weights_.clear();
+    const bool split = (light.shape() == LightShape::Polygon || light.shape() == LightShape::Rect) && !light.convex();
+    if (split) {
+      double total = 0.0;
+      for (const std::vector<Vec3>& part : light.convexParts()) {
+        Light piece = Light::polygon(part);
+        piece.setIntensity(light.intensity());
+        weights_.push_back(piece.area());
+        total += piece.area();
+        lights.push_back(std::move(piece));
+      }
+      for (double& w : weights_) w /= total;
+    } else {
+      lights.push_back(light);
+      weights_.push_back(1.0);
+    }
+    while (instances_.size() < lights.size()) instances_.push_back(make_());
+    const size_t count = lights.size();
+    for (size_t k = 0; k < count; ++k) {
+      instances_[k]->setProgressCallback([this, k, count](double f) { reportProgress((static_cast<double>(k) + f) / count); });
+      instances_[k]->prepare(scene, lights[k]);
+    }
+    prepared_ = count;
+  }
+
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
+    if (prepared_ == 0) fail("{}: visibility() called before prepare(); call prepare(scene, light) first", name_);
+    if (prepared_ == 1) {
+      instances_[0]->visibility(gbuffer, v);
+      return;
+    }
+    parts_.resize(prepared_);
+    for (size_t k = 0; k < prepared_; ++k) instances_[k]->visibility(gbuffer, parts_[k]);
+    const int width = gbuffer.width(), height = gbuffer.height();
+    v.reset(width, height, 1.0f);
+    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
+      for (int y = range.begin(); y < range.end(); ++y)
+        for (int x = 0; x < width; ++x) {
+          // The hidden fraction, summed in double; all pieces lit (hidden) gives exactly 1 (0).
+          double hidden = 0.0;
+          bool allHidden = true;
+          for (size_t k = 0; k < prepared_; ++k) {
+            const float vk = parts_[k](x, y);
+            hidden += weights_[k] * (1.0 - static_cast<double>(vk));
+            allHidden = allHidden && vk == 0.0f;
+          }
+          v(x, y) = allHidden ? 0.0f : static_cast<float>(std::clamp(1.0 - hidden, 0.0, 1.0));
+        }
+    });
+  }
+
   std::string name_;
   std::function<std::unique_ptr<ShadowTechnique>()> make_;
   std::vector<std::unique_ptr<ShadowTechnique>> instances_;  //!< kept across prepares (their storage is reused)

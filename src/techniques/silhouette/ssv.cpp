@@ -117,7 +117,6 @@
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
 #include "techniques/silhouette/convex_parts.h"
 
@@ -390,6 +389,24 @@ struct SsvOptions {
   float mergeTolerance = 0.01f;     //!< slicing: cuts closer than this (fraction of the light's side) merge
   int grid = 64;                    //!< cells per side of the light-space binning grid
   bool areaEdgeVisibility = false;  //!< per edge, the exact light area past its line instead of the linear ramp
+
+  static void describe(OptionFields<SsvOptions>& f) {
+    f.add(&SsvOptions::integration,
+          OptionDecl("integration").help("visible fraction from the visibility curves: slicing (variable "
+                                         "quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)"),
+          {{"slicing", Integration::Slicing}, {"8x8", Integration::Fixed8}, {"16x16", Integration::Fixed16}});
+    f.add(&SsvOptions::mergeTolerance,
+          OptionDecl("merge_tolerance").range(0, 0.25).unit("fraction of the light's side").help(
+              "slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)"));
+    f.add(&SsvOptions::grid, OptionDecl("grid").range(1, 1024).unit("cells per side").help(
+                                 "resolution of the light-space (direction from the light's centre) grid that bins the "
+                                 "edge shadows"));
+    f.add(&SsvOptions::areaEdgeVisibility,
+          OptionDecl("edge_visibility").help("visible fraction past one edge shadow: linear between its front and "
+                                             "back planes (the thesis, Section 3.3) or the exact area of the light "
+                                             "past the edge's line"),
+          {{"linear", false}, {"area", true}});
+  }
 };
 
 constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping plane (no silhouette edge)
@@ -473,10 +490,9 @@ class SsvTechnique final : public ShadowTechnique {
   explicit SsvTechnique(const SsvOptions& options) : options_(options) {}
   std::string_view name() const override { return "ssv"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     prepared_ = false;
-    Timer timer;
     const Bounds3 bounds = scene.bounds();
     sides_[0] = Side{};
     sides_[1] = Side{};
@@ -492,27 +508,20 @@ class SsvTechnique final : public ShadowTechnique {
     // The other face of the light is built when a receiver lies behind the light's plane.
     buildSide(sides_[0]);
     backBuilt_ = false;
-    timings_.add("prepare", timer.elapsedMs());
     prepared_ = true;
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("ssv: visibility() called before prepare(); call prepare(scene, light) first");
-    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "prepare" && p.first != "back face silhouettes"; }),
-                          timings_.passes.end());
-    Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
       buildSide(sides_[1]);
       backBuilt_ = true;
-      timings_.add("back face silhouettes", timer.elapsedMs());
-      timer = Timer();
+      endPass("back face silhouettes");
     }
     for (Side& side : sides_) bin(side, gbuffer);
-    timings_.add("binning", timer.elapsedMs());
-    Timer pixelTimer;
+    endPass("binning");
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       Scratch scratch;
       for (int y = range.begin(); y < range.end(); ++y)
@@ -532,11 +541,9 @@ class SsvTechnique final : public ShadowTechnique {
           v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blocker);
         }
     });
-    timings_.add("visibility", pixelTimer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
-
+ public:
   std::vector<std::pair<std::string, double>> stats() const override {
     size_t umbraRings = 0, umbraEdges = 0;
     for (const Ring& r : sides_[0].rings) {
@@ -1137,7 +1144,6 @@ class SsvTechnique final : public ShadowTechnique {
   float zNear_ = 0.0f;
   size_t facets_ = 0;
   bool prepared_ = false;
-  PassTimings timings_;
 };
 
 }  // namespace
@@ -1147,45 +1153,10 @@ TechniqueInfo ssvTechniqueInfo() {
   info.name = "ssv";
   info.summary = "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its fewest convex parts)";
   info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
-  ParamSpec integration;
-  integration.name = "integration";
-  integration.type = ParamType::String;
-  integration.defaultValue = std::string("slicing");
-  integration.choices = {"slicing", "8x8", "16x16"};
-  integration.help = "visible fraction from the visibility curves: slicing (variable quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)";
-  ParamSpec merge;
-  merge.name = "merge_tolerance";
-  merge.type = ParamType::Float;
-  merge.defaultValue = 0.01;
-  merge.min = 0.0;
-  merge.max = 0.25;
-  merge.unit = "fraction of the light's side";
-  merge.help = "slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)";
-  ParamSpec grid;
-  grid.name = "grid";
-  grid.type = ParamType::Int;
-  grid.defaultValue = int64_t{64};
-  grid.min = 1;
-  grid.max = 1024;
-  grid.unit = "cells per side";
-  grid.help = "resolution of the light-space (direction from the light's centre) grid that bins the edge shadows";
-  ParamSpec edge;
-  edge.name = "edge_visibility";
-  edge.type = ParamType::String;
-  edge.defaultValue = std::string("linear");
-  edge.choices = {"linear", "area"};
-  edge.help = "visible fraction past one edge shadow: linear between its front and back planes (the thesis, Section 3.3) or the exact area of the light past the edge's line";
-  info.params = {integration, merge, grid, edge};
-  info.create = [](const Params& p) -> std::unique_ptr<ShadowTechnique> {
-    SsvOptions o;
-    const std::string& mode = p.getString("integration");
-    o.integration = mode == "8x8" ? Integration::Fixed8 : mode == "16x16" ? Integration::Fixed16 : Integration::Slicing;
-    o.mergeTolerance = static_cast<float>(p.getFloat("merge_tolerance"));
-    o.grid = static_cast<int>(p.getInt("grid"));
-    o.areaEdgeVisibility = p.getString("edge_visibility") == "area";
+  info.setOptions<SsvOptions>([](const SsvOptions& o) {
     // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
     return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
-  };
+  });
   return info;
 }
 

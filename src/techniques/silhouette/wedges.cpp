@@ -56,7 +56,6 @@
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "penumbra/timer.h"
 #include "rt/shadow_ray.h"
 #include "techniques/silhouette/convex_parts.h"
 #include "techniques/silhouette/ssv.h"
@@ -85,15 +84,24 @@ struct Side {
   bool binned = false;
 };
 
+struct WedgesOptions {
+  int grid = 64;  //!< cells per side of the light-space binning grid
+
+  static void describe(OptionFields<WedgesOptions>& f) {
+    f.add(&WedgesOptions::grid, OptionDecl("grid").range(1, 1024).unit("cells per side").help(
+                                    "resolution of the light-space (direction from the light's centre) grid that bins "
+                                    "the silhouette rings"));
+  }
+};
+
 class WedgesTechnique final : public ShadowTechnique {
  public:
-  explicit WedgesTechnique(int grid) : grid_(grid) {}
+  explicit WedgesTechnique(const WedgesOptions& options) : grid_(options.grid) {}
   std::string_view name() const override { return "wedges"; }
 
-  void prepare(const Scene& scene, const Light& light) override {
-    timings_ = {};
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
     prepared_ = false;
-    Timer timer;
     const Bounds3 bounds = scene.bounds();
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
     edges_ = 0;
@@ -108,23 +116,17 @@ class WedgesTechnique final : public ShadowTechnique {
     // The other face of the light is built when a receiver lies behind the light's plane.
     buildSide(sides_[0]);
     backBuilt_ = false;
-    timings_.add("prepare", timer.elapsedMs());
     prepared_ = true;
   }
 
-  void visibility(const GBuffer& gbuffer, Image<float>& v) override {
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("wedges: visibility() called before prepare(); call prepare(scene, light) first");
-    timings_.passes.erase(std::remove_if(timings_.passes.begin(), timings_.passes.end(),
-                                         [](const auto& p) { return p.first != "prepare" && p.first != "back face silhouette"; }),
-                          timings_.passes.end());
-    Timer timer;
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
       buildSide(sides_[1]);
       backBuilt_ = true;
-      timings_.add("back face silhouette", timer.elapsedMs());
-      timer = Timer();
+      endPass("back face silhouette");
     }
     for (Side& side : sides_) {
       Vec2 lower, upper;
@@ -159,10 +161,9 @@ class WedgesTechnique final : public ShadowTechnique {
           v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), clipped, tmp, blocker);
         }
     });
-    timings_.add("visibility", timer.elapsedMs());
   }
 
-  PassTimings timings() const override { return timings_; }
+ public:
   std::vector<std::pair<std::string, double>> stats() const override {
     return {{"silhouette_edges", double(edges_)}, {"rings", double(sides_[0].rings.size())}};
   }
@@ -287,7 +288,6 @@ class WedgesTechnique final : public ShadowTechnique {
   size_t edges_ = 0;
   float zNear_ = 0.0f;
   bool prepared_ = false;
-  PassTimings timings_;
 };
 
 }  // namespace
@@ -297,20 +297,10 @@ TechniqueInfo wedgesTechniqueInfo() {
   info.name = "wedges";
   info.summary = "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a concave polygonal light in its fewest convex parts)";
   info.source = "baseline in Rouf 2007 (Assarsson & Akenine-Moeller 2003)";
-  ParamSpec grid;
-  grid.name = "grid";
-  grid.type = ParamType::Int;
-  grid.defaultValue = int64_t{64};
-  grid.min = 1;
-  grid.max = 1024;
-  grid.unit = "cells per side";
-  grid.help = "resolution of the light-space (direction from the light's centre) grid that bins the silhouette rings";
-  info.params = {grid};
-  info.create = [](const Params& p) -> std::unique_ptr<ShadowTechnique> {
-    const int grid = static_cast<int>(p.getInt("grid"));
+  info.setOptions<WedgesOptions>([](const WedgesOptions& o) {
     // A concave light runs as its convex parts, V combined by area (convex_parts.h).
-    return overConvexParts("wedges", [grid] { return std::make_unique<WedgesTechnique>(grid); });
-  };
+    return overConvexParts("wedges", [o] { return std::make_unique<WedgesTechnique>(o); });
+  });
   return info;
 }
 

@@ -1,0 +1,28 @@
+// The timing around every technique's passes: see technique.h.
+#include "penumbra/technique.h"
+
+namespace penumbra {
+
+void ShadowTechnique::prepare(const Scene& scene, const Light& light) {
+  timings_ = {};
+  preparePasses_ = 0;
+  passTimer_.reset();
+  prepareImpl(scene, light);
+  timings_.add("prepare", passTimer_.elapsedMs());
+  preparePasses_ = timings_.passes.size();
+}
+
+void ShadowTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
+  // A new visibility pass replaces the previous one's timings; the prepare's stay.
+  timings_.passes.erase(timings_.passes.begin() + static_cast<std::ptrdiff_t>(preparePasses_), timings_.passes.end());
+  passTimer_.reset();
+  visibilityImpl(gbuffer, v);
+  timings_.add("visibility", passTimer_.elapsedMs());
+}
+
+void ShadowTechnique::endPass(std::string name) {
+  timings_.add(std::move(name), passTimer_.elapsedMs());
+  passTimer_.reset();
+}
+
+}  // namespace penumbra
