@@ -341,20 +341,32 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
   // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
   // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
-  std::vector<Vec4> clip;
-  std::vector<float> lsZ;
-  std::vector<glm::uvec3> triangles;
-  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
-  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  // Set up as renderLightMap sets up its input (oneTBB's scratch allocator, which keeps freed blocks
+  // for the next frame; vertices in parallel).
+  raster::ScratchVector<Vec4> clip;
+  raster::ScratchVector<float> lsZ;
+  raster::ScratchVector<glm::uvec3> triangles;
+  triangles.reserve(scene.triangleCount());
   for (const Object& object : scene.objects) {
     const auto offset = static_cast<uint32_t>(clip.size());
-    for (const Vec3& p : object.mesh.positions) {
-      const Vec3 l = map.lsFromWs(p);
-      clip.push_back(map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
-                                      : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z));
-      lsZ.push_back(l.z);
-    }
     for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
+    clip.resize(clip.size() + object.mesh.positions.size());
+  }
+  lsZ.resize(clip.size());
+  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
+  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  size_t base = 0;
+  for (const Object& object : scene.objects) {
+    const Mesh& mesh = object.mesh;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Vec3 l = map.lsFromWs(mesh.positions[i]);
+        clip[base + i] = map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
+                                          : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z);
+        lsZ[base + i] = l.z;
+      }
+    });
+    base += mesh.positions.size();
   }
   far.reset(map.size, map.size, space.zetaNone);
   if (triangles.empty()) return;
@@ -458,6 +470,18 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
         const float xLo = std::min(e.a.x, e.b.x), xHi = std::max(e.a.x, e.b.x);
         const float yLo = std::min(e.a.y, e.b.y), yHi = std::max(e.a.y, e.b.y);
         const float h = box.halfWidth;
+        // Each row's span is trimmed at both ends to the texels this edge may still take: a texel
+        // whose winner's priority is at most the least this edge can give there (c at least its
+        // lesser end's, the distance at least the row's to the segment's box and the texel's to its
+        // line, lowered by a margin well beyond the rounding of the per-texel values) is one the
+        // per-texel compare p < priority rejects anyway.
+        const float cLeast = std::min(e.zetaA, e.zetaB);
+        const float cFloor = cLeast - 1e-5f * std::abs(cLeast);
+        const float rateFloor = space.ratePerTexel * (1.0f - 1e-5f);
+        const auto least = [&](float dy, float across) {
+          const float distance = std::max(dy, std::abs(across));
+          return cFloor + std::max(distance - 0.01f - 1e-5f * distance, 0.0f) * rateFloor;
+        };
         for (int j = j0; j <= j1; ++j) {
           // The texels of the row within h of the segment lie within h of its bounding box and
           // within h of its line: only that span is visited (widened by a texel against rounding;
@@ -474,15 +498,25 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             spanLo = std::max(spanLo, std::min(x0, x1));
             spanHi = std::min(spanHi, std::max(x0, x1));
           }
-          const int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
+          int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = out.row(j);
           // Two passes over the span: the geometry of every texel without branches (four texels to
           // an SSE vector, the same operations in the same order as the scalar tail, so the same
           // values bit for bit), then the candidates that beat the texel's current winner through
           // the filters, which only drop candidates and read other images.
-          const int count = si1 - si0 + 1;
+          int count = si1 - si0 + 1;
           if (count <= 0) continue;
+          {
+            const float* rowPriority = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
+            const float across0 = (static_cast<float>(si0) + 0.5f - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y;
+            int lo = 0, hi = count - 1;
+            while (lo <= hi && rowPriority[lo] <= least(dy, across0 + static_cast<float>(lo) * e.outward.x)) ++lo;
+            while (hi >= lo && rowPriority[hi] <= least(dy, across0 + static_cast<float>(hi) * e.outward.x)) --hi;
+            if (hi < lo) continue;
+            si0 += lo;
+            count = hi - lo + 1;
+          }
           float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
           const float aqy = y - e.a.y, by = y - e.b.y;
           int m = 0;
@@ -831,7 +865,8 @@ class PlmTechnique final : public ShadowTechnique {
           if (!(probeDepth > 0.0f)) continue;
           const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
           const float predicted = options_.illuminationTable ? table_(l) : l;
-          if (!(predicted > 0.0f)) continue;
+          // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
+          if (!(predicted * kProfileSamples >= kProfileMinDeficit)) continue;
           const Vec3 probe = wsHit - lift * ray.direction;
           Ray toLight[kProfileSamples];
           bool blocked[kProfileSamples];
