@@ -86,12 +86,11 @@
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
-#include "techniques/silhouette/mesh_topology.h"
+#include "techniques/mesh_edges.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
 #include "raster/rasterizer.h"
-#include "techniques/parker/outer_objects.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
@@ -138,76 +137,58 @@ namespace {
 // the two rasterizations of one surface stays well inside it).
 constexpr float kBelowEdge = 1e-5f;
 
-uint64_t edgeKey(uint32_t a, uint32_t b) {
-  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
-}
-
-// One triangle's use of one edge, in triangle order (`use` increases with it).
-struct EdgeRecord {
-  uint64_t key;
-  uint32_t use;
-  uint32_t triangle;  //!< index among the mesh's kept triangles
-  uint32_t opposite;  //!< the triangle's third (welded) vertex
-};
-
 }  // namespace
 
-// One mesh's edges, which depend on its geometry alone: vertices welded by exact position
-// (primitives repeat vertices where normals differ: a box's corners), the triangles kept (neither
-// two welded corners alike nor a degenerate normal) with their normal and centroid, and each edge's
-// uses by those triangles in triangle order, the edges in order of first use.
-struct MeshEdges {
-  rt::MeshFingerprint key;
-  std::vector<Vec3> positions;       //!< welded
+// One mesh's silhouette candidates, which depend on its geometry alone, taken from its edge
+// adjacency (techniques/mesh_edges.h): the triangles kept (no two welded corners alike, a
+// non-degenerate normal) with their normal and centroid, and each edge's uses by those triangles in
+// triangle order, the edges in order of first use (edges no kept triangle uses are left out).
+// Vertex ids are the adjacency's welded ids (the first vertex at a position).
+struct SilhouetteMesh {
   std::vector<Vec3> normals, centroids;  //!< per kept triangle
   std::vector<uint32_t> a, b;        //!< per edge: welded end points, a < b
   std::vector<uint32_t> firstUse;    //!< per edge, and one past the last: its uses in the two arrays below
-  std::vector<uint32_t> useTriangle, useOpposite;
+  std::vector<uint32_t> useTriangle, useOpposite;  //!< per use: the kept triangle, its third (welded) vertex
 
-  void build(const Mesh& mesh) {
-    const std::vector<uint32_t> canonical = weldVertices(mesh.positions, positions);
+  void build(const Mesh& mesh, const MeshEdges& edges) {
+    const std::vector<uint32_t>& weld = edges.weld;
+    constexpr uint32_t kDropped = 0xffffffffu;
+    std::vector<uint32_t> kept(mesh.triangles.size(), kDropped);  // per triangle: its index among the kept
     normals.clear();
     centroids.clear();
-    std::vector<EdgeRecord> records;
-    records.reserve(3 * mesh.triangles.size());
     for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
       const glm::uvec3& tri = mesh.triangles[ti];
-      const uint32_t v[3] = {canonical[tri.x], canonical[tri.y], canonical[tri.z]};
+      const uint32_t v[3] = {weld[tri.x], weld[tri.y], weld[tri.z]};
       if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
       const Vec3 n = mesh.faceNormal(ti);
       if (!(glm::dot(n, n) > 0.0f)) continue;  // degenerate
-      const auto kept = static_cast<uint32_t>(normals.size());
+      kept[ti] = static_cast<uint32_t>(normals.size());
       normals.push_back(n);
-      centroids.push_back((positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f);
-      for (int k = 0; k < 3; ++k)
-        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)), kept,
-                           v[(k + 2) % 3]});
+      centroids.push_back((mesh.positions[v[0]] + mesh.positions[v[1]] + mesh.positions[v[2]]) / 3.0f);
     }
-    // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
-    // (key, use) orders the records totally (a use is one triangle's one edge), so a parallel sort
-    // gives the one order.
-    tbb::parallel_sort(records.begin(), records.end(),
-                       [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
-    std::vector<std::pair<uint32_t, uint32_t>> order;  // (first use, first record) per edge
-    for (size_t i = 0; i < records.size();) {
-      order.emplace_back(records[i].use, static_cast<uint32_t>(i));
-      const uint64_t key = records[i].key;
-      while (i < records.size() && records[i].key == key) ++i;
-    }
-    tbb::parallel_sort(order.begin(), order.end());  // first uses are distinct: one order
+    // The edges in order of their first use by a kept triangle (3 * triangle + corner: distinct, so one order).
+    std::vector<std::pair<uint64_t, uint32_t>> order;
+    for (size_t e = 0; e < edges.edgeCount(); ++e)
+      for (uint32_t u = edges.firstUse[e]; u < edges.firstUse[e + 1]; ++u)
+        if (kept[edges.useTriangle[u]] != kDropped) {
+          order.emplace_back(3 * uint64_t{edges.useTriangle[u]} + edges.useCorner[u], static_cast<uint32_t>(e));
+          break;
+        }
+    tbb::parallel_sort(order.begin(), order.end());
     a.clear();
     b.clear();
     firstUse.clear();
     useTriangle.clear();
     useOpposite.clear();
-    for (const auto& [use, first] : order) {
-      const uint64_t key = records[first].key;
-      a.push_back(static_cast<uint32_t>(key >> 32));
-      b.push_back(static_cast<uint32_t>(key & 0xffffffffu));
+    for (const auto& [first, e] : order) {
+      a.push_back(edges.low[e]);
+      b.push_back(edges.high[e]);
       firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
-      for (size_t i = first; i < records.size() && records[i].key == key; ++i) {
-        useTriangle.push_back(records[i].triangle);
-        useOpposite.push_back(records[i].opposite);
+      for (uint32_t u = edges.firstUse[e]; u < edges.firstUse[e + 1]; ++u) {
+        const uint32_t t = edges.useTriangle[u];
+        if (kept[t] == kDropped) continue;
+        useTriangle.push_back(kept[t]);
+        useOpposite.push_back(weld[mesh.triangles[t][static_cast<int>((edges.useCorner[u] + 2) % 3)]]);
       }
     }
     firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
@@ -215,7 +196,8 @@ struct MeshEdges {
 };
 
 struct EdgeCache::Impl {
-  std::vector<std::optional<MeshEdges>> meshes;  //!< per object index
+  MeshEdgeCache adjacency;  //!< per object index, the mesh's edge adjacency
+  std::vector<std::optional<SilhouetteMesh>> meshes;  //!< per object index, built from it
   // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
   // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
   std::vector<uint8_t> front, isSilhouette;
@@ -230,6 +212,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   EdgeCache local;
   EdgeCache& edgeCache = cache ? *cache : local;
   edgeCache.impl_->meshes.resize(scene.objects.size());
+  edgeCache.impl_->adjacency.resize(scene.objects.size());
   std::vector<Edge> edges;
   std::vector<uint8_t>& front = edgeCache.impl_->front;
   std::vector<uint8_t>& isSilhouette = edgeCache.impl_->isSilhouette;
@@ -238,15 +221,15 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
     const Object& object = scene.objects[objectIndex];
     const size_t firstEdge = edges.size();
     std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
-    std::optional<MeshEdges>& cached = edgeCache.impl_->meshes[objectIndex];
-    const rt::MeshFingerprint key = rt::meshFingerprint(object.mesh);
-    if (!cached || !(cached->key == key)) {
+    std::optional<SilhouetteMesh>& cached = edgeCache.impl_->meshes[objectIndex];
+    bool rebuilt = false;
+    const MeshEdges& adjacency = edgeCache.impl_->adjacency.edges(objectIndex, object.mesh, &rebuilt);
+    if (!cached || rebuilt) {
       cached.emplace();
-      cached->build(object.mesh);
-      cached->key = key;
+      cached->build(object.mesh, adjacency);
     }
-    const MeshEdges& topology = *cached;
-    const std::vector<Vec3>& positions = topology.positions;
+    const SilhouetteMesh& topology = *cached;
+    const std::vector<Vec3>& positions = object.mesh.positions;  // at the welded ids: the welded positions
     // A triangle faces the light when its normal points to the light's centre (directional: along its direction).
     front.resize(topology.normals.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, front.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
@@ -826,9 +809,9 @@ class PlmTechnique final : public ShadowTechnique {
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
-    std::vector<rt::MeshFingerprint> key;
+    std::vector<MeshFingerprint> key;
     key.reserve(scene.objects.size());
-    for (const Object& object : scene.objects) key.push_back(rt::meshFingerprint(object.mesh));
+    for (const Object& object : scene.objects) key.push_back(meshFingerprint(object.mesh));
     if (!rays_ || key != raysKey_) {
       rays_.reset();
       rays_ = std::make_unique<RayScene>(scene);
@@ -904,7 +887,7 @@ class PlmTechnique final : public ShadowTechnique {
   std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
   std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
-  std::vector<rt::MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
+  std::vector<MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
   PassTimings timings_;
 };
