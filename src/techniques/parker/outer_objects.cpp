@@ -42,9 +42,9 @@
 // the principal axis of what it holds. Building takes one pass over a run per split: O(n log n) in
 // the number of pieces n, nearly linear at the sizes met (bench/parker_bench.cpp).
 //
-// Silhouettes. Per mesh, vertices are welded by position (a hash of their coordinates' bits) and
-// the half-edges of the triangles that can be hit are bucketed by their lower welded vertex (a
-// counting sort), then by the higher: linear in the triangles.
+// Silhouettes. Per mesh, the edge adjacency of techniques/mesh_edges.h (vertices welded by
+// position, the half-edges of the triangles that can be hit matched by their welded ends), shared
+// with the ribbon techniques and kept while the mesh is unchanged.
 //
 // The per-ray and per-group loops read 8 capsules, 8 node children or 8 rays at a time
 // branch-free, so the compiler turns them into vector operations (CMakeLists.txt builds this file
@@ -740,161 +740,29 @@ class TreeBuilder {
   std::vector<Bounds3> box_;
 };
 
-// The edges of a mesh, matched in linear time: vertices welded by position (a hash of their
-// coordinates' bits, -0 as +0; each vertex maps to the first at its position), the half-edges of
-// the triangles that can be hit (finite, non-zero area) bucketed by their lower welded vertex (a
-// counting sort, stable, so each edge's half-edges stay in triangle order), then by the higher.
-// The matching depends on the geometry alone; which edges are kept, on the light.
-class EdgeTable {
- public:
-  // Welds the mesh's vertices and matches the edges of its triangles that can be hit.
-  void match(const Mesh& mesh) {
-    weld(mesh.positions);
-    std::vector<Half> half;
-    half.reserve(3 * mesh.triangles.size());
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const glm::uvec3& tri = mesh.triangles[t];
-      const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
-      const Vec3 n = glm::cross(p1 - p0, p2 - p0);
-      const float n2 = glm::dot(n, n);
-      if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2)) continue;  // cannot be hit
-      const uint32_t v[3] = {tri.x, tri.y, tri.z};
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t a = v[k], b = v[(k + 1) % 3];
-        const uint32_t wa = weld_[a], wb = weld_[b];
-        if (wa == wb) continue;
-        half.push_back({std::min(wa, wb), std::max(wa, wb), a, b, static_cast<uint32_t>(t)});
-      }
-    }
-    // Counting sort by the lower welded vertex.
-    std::vector<uint32_t> start(weld_.size() + 1, 0);
-    for (const Half& h : half) ++start[h.low + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    sorted_.resize(half.size());
-    std::vector<uint32_t> next(start.begin(), start.end() - 1);
-    for (const Half& h : half) sorted_[next[h.low]++] = h;
-    // Within each bucket (a vertex's edges: a handful), by the higher one: an insertion sort, stable.
-    for (size_t v = 0; v + 1 < start.size(); ++v)
-      for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i) {
-        const Half h = sorted_[i];
-        uint32_t j = i;
-        for (; j > start[v] && sorted_[j - 1].high > h.high; --j) sorted_[j] = sorted_[j - 1];
-        sorted_[j] = h;
-      }
-    weld_ = {};
-    table_ = {};
-  }
-
-  // Calls keep(a, b) for each kept edge (an open boundary: one face; a silhouette: two faces, one
-  // towards the light; a non-manifold edge: three or more, its outline status ambiguous), with the
-  // vertices of its first half-edge. `front(p0, n)`: whether the triangle with first vertex p0
-  // and normal n faces the light.
-  template <typename Front, typename Keep>
-  void forEachKept(const Mesh& mesh, Front front, Keep keep) const {
-    const auto facing = [&](uint32_t t) {
-      const glm::uvec3& tri = mesh.triangles[t];
-      const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
-      return front(p0, glm::cross(p1 - p0, p2 - p0));
-    };
-    for (size_t i = 0; i < sorted_.size();) {
-      size_t j = i + 1;
-      while (j < sorted_.size() && sorted_[j].low == sorted_[i].low && sorted_[j].high == sorted_[i].high) ++j;
-      if (j - i != 2 || facing(sorted_[i].triangle) != facing(sorted_[i + 1].triangle)) keep(sorted_[i].a, sorted_[i].b);
-      i = j;
-    }
-  }
-
- private:
-  struct Half {
-    uint32_t low, high;  //!< welded vertices
-    uint32_t a, b;       //!< the half-edge's vertices in the mesh
-    uint32_t triangle;   //!< its triangle
+// Calls keep(a, b) for each kept edge of a mesh (techniques/mesh_edges.h: the edges of its
+// triangles that can be hit): an open boundary (one face), a silhouette (two faces, one towards the
+// light) or a non-manifold edge (three or more, its outline status ambiguous), with the vertices of
+// its first half-edge. `front(p0, n)`: whether the triangle with first vertex p0 and normal n faces
+// the light.
+template <typename Front, typename Keep>
+void forEachKept(const MeshEdges& edges, const Mesh& mesh, Front front, Keep keep) {
+  const auto facing = [&](uint32_t t) {
+    const glm::uvec3& tri = mesh.triangles[t];
+    const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
+    return front(p0, glm::cross(p1 - p0, p2 - p0));
   };
-  void weld(const std::vector<Vec3>& positions) {
-    const size_t n = positions.size();
-    int bits = 4;
-    while ((size_t{1} << bits) < 2 * n) ++bits;
-    const size_t size = size_t{1} << bits;
-    table_.assign(size, kEmpty);
-    weld_.resize(n);
-    // A 64-bit finalizer (MurmurHash3's fmix64) of the coordinates' bits; the slot from its top bits.
-    const auto fmix = [](uint64_t h) {
-      h ^= h >> 33;
-      h *= 0xFF51AFD7ED558CCDull;
-      h ^= h >> 33;
-      h *= 0xC4CEB9FE1A85EC53ull;
-      h ^= h >> 33;
-      return h;
-    };
-    for (uint32_t i = 0; i < n; ++i) {
-      const Vec3 q = positions[i] + Vec3(0.0f);  // -0 as +0
-      uint32_t word[3];
-      std::memcpy(word, &q, sizeof(word));
-      const uint64_t h = fmix(fmix(uint64_t{word[0]} << 32 | word[1]) ^ word[2]);
-      for (size_t slot = h >> (64 - bits);; slot = (slot + 1) & (size - 1)) {
-        const uint32_t j = table_[slot];
-        if (j == kEmpty) {
-          table_[slot] = i;
-          weld_[i] = i;
-          break;
-        }
-        const Vec3 r = positions[j] + Vec3(0.0f);
-        if (std::memcmp(&q, &r, sizeof(q)) == 0) {
-          weld_[i] = j;
-          break;
-        }
-      }
+  for (size_t e = 0; e < edges.edgeCount(); ++e) {
+    const uint32_t u = edges.firstUse[e], count = edges.firstUse[e + 1] - u;
+    if (count != 2 || facing(edges.useTriangle[u]) != facing(edges.useTriangle[u + 1])) {
+      const glm::uvec3& tri = mesh.triangles[edges.useTriangle[u]];
+      const uint32_t k = edges.useCorner[u];
+      keep(tri[static_cast<int>(k)], tri[static_cast<int>((k + 1) % 3)]);
     }
   }
-
-  static constexpr uint32_t kEmpty = 0xffffffffu;
-  std::vector<uint32_t> table_, weld_;  //!< while matching
-  std::vector<Half> sorted_;
-};
+}
 
 }  // namespace
-
-struct OuterObjects::EdgeCache::Impl {
-  struct Entry {
-    bool matched = false;
-    MeshFingerprint key;
-    EdgeTable edges;
-  };
-  std::vector<Entry> entries;  //!< per object index
-  size_t matches = 0;
-};
-
-OuterObjects::EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
-OuterObjects::EdgeCache::~EdgeCache() = default;
-size_t OuterObjects::EdgeCache::matchCount() const { return impl_->matches; }
-
-MeshFingerprint meshFingerprint(const Mesh& mesh) {
-  MeshFingerprint key{0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full};
-  const auto mix = [&](uint64_t word) {
-    key.a = (key.a ^ word) * 0xFF51AFD7ED558CCDull;
-    key.a ^= key.a >> 32;
-    key.b = (key.b + word) * 0xC4CEB9FE1A85EC53ull;
-    key.b ^= key.b >> 29;
-  };
-  const auto words = [&](const void* data, size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i + 8 <= bytes; i += 8) {
-      uint64_t w;
-      std::memcpy(&w, p + i, 8);
-      mix(w);
-    }
-    if (bytes % 8 != 0) {
-      uint64_t w = 0;
-      std::memcpy(&w, p + bytes / 8 * 8, bytes % 8);
-      mix(w);
-    }
-  };
-  mix(mesh.positions.size());
-  mix(mesh.triangles.size());
-  words(mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
-  words(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
-  return key;
-}
 
 OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options, EdgeCache* cache) {
   if (!(options.lightDiameter > 0.0f) || !std::isfinite(options.lightDiameter))
@@ -916,7 +784,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   analytic_.assign(scene.objects.size(), false);
   EdgeCache local;
   EdgeCache& edgeCache = cache ? *cache : local;
-  edgeCache.impl_->entries.resize(scene.objects.size());
+  edgeCache.resize(scene.objects.size());
   for (size_t objectIndex = 0; objectIndex < scene.objects.size(); ++objectIndex) {
     const Object& object = scene.objects[objectIndex];
     const int32_t index = static_cast<int32_t>(objectIndex);
@@ -935,16 +803,9 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     }
     // Per edge (its vertices welded by position: split normals or UV seams make duplicates) the
     // faces that share it, matched again only where the mesh changed since the cache's last use.
-    EdgeCache::Impl::Entry& entry = edgeCache.impl_->entries[objectIndex];
-    const MeshFingerprint key = meshFingerprint(mesh);
-    if (!entry.matched || !(entry.key == key)) {
-      entry.edges.match(mesh);
-      entry.key = key;
-      entry.matched = true;
-      ++edgeCache.impl_->matches;
-    }
-    entry.edges.forEachKept(
-        mesh, [&](const Vec3& p0, const Vec3& n) { return glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f; },
+    const MeshEdges& edges = edgeCache.edges(objectIndex, mesh);
+    forEachKept(
+        edges, mesh, [&](const Vec3& p0, const Vec3& n) { return glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f; },
         [&](uint32_t a, uint32_t b) {
           const Vec3 pa = mesh.positions[a];
           capsules.add(pa, mesh.positions[b] - pa, 0.0f, index);

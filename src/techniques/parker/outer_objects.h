@@ -58,6 +58,7 @@
 #include "penumbra/light.h"
 #include "penumbra/math.h"
 #include "penumbra/scene.h"
+#include "techniques/mesh_edges.h"
 
 namespace penumbra::rt {
 
@@ -76,33 +77,17 @@ inline float outerFalloff(float tau, OuterFalloff falloff) {
   return t * t * (3.0f - 2.0f * t);
 }
 
-// A 128-bit fingerprint of a mesh's geometry: its positions and triangles, bit for bit (two
-// independent 64-bit multiply-xorshift hashes of every 64-bit word).
-struct MeshFingerprint {
-  uint64_t a = 0, b = 0;
-  bool operator==(const MeshFingerprint&) const = default;
-};
-MeshFingerprint meshFingerprint(const Mesh& mesh);
+// The meshes' fingerprints (techniques/mesh_edges.h), under the names parker uses.
+using penumbra::MeshFingerprint;
+using penumbra::meshFingerprint;
 
 class OuterObjects {
  public:
-  // The meshes' edge adjacency (welded vertices, edges matched with their faces), which depends on
-  // the geometry alone: a caller that builds the outer objects again for the same objects under
-  // another light passes the same cache, and a mesh whose positions and triangles are the same to
-  // the bit (meshFingerprint) as at the cache's last use is not matched again.
-  class EdgeCache {
-   public:
-    EdgeCache();
-    ~EdgeCache();
-    EdgeCache(const EdgeCache&) = delete;
-    EdgeCache& operator=(const EdgeCache&) = delete;
-    size_t matchCount() const;  //!< meshes matched so far (the others were found in the cache)
-
-   private:
-    friend class OuterObjects;
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
-  };
+  // The meshes' edge adjacency (techniques/mesh_edges.h), which depends on the geometry alone: a
+  // caller that builds the outer objects again for the same objects under another light passes the
+  // same cache, and a mesh whose positions and triangles are the same to the bit as at the cache's
+  // last use is not matched again.
+  using EdgeCache = MeshEdgeCache;
 
   // Builds the capsules of every object of `scene` (silhouettes seen from light.center(), or along
   // light.direction() for a directional light) and their hierarchy. Throws Error for a light

@@ -86,11 +86,10 @@
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
-#include "techniques/silhouette/mesh_topology.h"
+#include "techniques/mesh_edges.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "raster/rasterizer.h"
-#include "techniques/parker/outer_objects.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
@@ -137,76 +136,58 @@ namespace {
 // the two rasterizations of one surface stays well inside it).
 constexpr float kBelowEdge = 1e-5f;
 
-uint64_t edgeKey(uint32_t a, uint32_t b) {
-  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
-}
-
-// One triangle's use of one edge, in triangle order (`use` increases with it).
-struct EdgeRecord {
-  uint64_t key;
-  uint32_t use;
-  uint32_t triangle;  //!< index among the mesh's kept triangles
-  uint32_t opposite;  //!< the triangle's third (welded) vertex
-};
-
 }  // namespace
 
-// One mesh's edges, which depend on its geometry alone: vertices welded by exact position
-// (primitives repeat vertices where normals differ: a box's corners), the triangles kept (neither
-// two welded corners alike nor a degenerate normal) with their normal and centroid, and each edge's
-// uses by those triangles in triangle order, the edges in order of first use.
-struct MeshEdges {
-  rt::MeshFingerprint key;
-  std::vector<Vec3> positions;       //!< welded
+// One mesh's silhouette candidates, which depend on its geometry alone, taken from its edge
+// adjacency (techniques/mesh_edges.h): the triangles kept (no two welded corners alike, a
+// non-degenerate normal) with their normal and centroid, and each edge's uses by those triangles in
+// triangle order, the edges in order of first use (edges no kept triangle uses are left out).
+// Vertex ids are the adjacency's welded ids (the first vertex at a position).
+struct SilhouetteMesh {
   std::vector<Vec3> normals, centroids;  //!< per kept triangle
   std::vector<uint32_t> a, b;        //!< per edge: welded end points, a < b
   std::vector<uint32_t> firstUse;    //!< per edge, and one past the last: its uses in the two arrays below
-  std::vector<uint32_t> useTriangle, useOpposite;
+  std::vector<uint32_t> useTriangle, useOpposite;  //!< per use: the kept triangle, its third (welded) vertex
 
-  void build(const Mesh& mesh) {
-    const std::vector<uint32_t> canonical = weldVertices(mesh.positions, positions);
+  void build(const Mesh& mesh, const MeshEdges& edges) {
+    const std::vector<uint32_t>& weld = edges.weld;
+    constexpr uint32_t kDropped = 0xffffffffu;
+    std::vector<uint32_t> kept(mesh.triangles.size(), kDropped);  // per triangle: its index among the kept
     normals.clear();
     centroids.clear();
-    std::vector<EdgeRecord> records;
-    records.reserve(3 * mesh.triangles.size());
     for (size_t ti = 0; ti < mesh.triangles.size(); ++ti) {
       const glm::uvec3& tri = mesh.triangles[ti];
-      const uint32_t v[3] = {canonical[tri.x], canonical[tri.y], canonical[tri.z]};
+      const uint32_t v[3] = {weld[tri.x], weld[tri.y], weld[tri.z]};
       if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
       const Vec3 n = mesh.faceNormal(ti);
       if (!(glm::dot(n, n) > 0.0f)) continue;  // degenerate
-      const auto kept = static_cast<uint32_t>(normals.size());
+      kept[ti] = static_cast<uint32_t>(normals.size());
       normals.push_back(n);
-      centroids.push_back((positions[v[0]] + positions[v[1]] + positions[v[2]]) / 3.0f);
-      for (int k = 0; k < 3; ++k)
-        records.push_back({edgeKey(v[k], v[(k + 1) % 3]), static_cast<uint32_t>(3 * ti + static_cast<size_t>(k)), kept,
-                           v[(k + 2) % 3]});
+      centroids.push_back((mesh.positions[v[0]] + mesh.positions[v[1]] + mesh.positions[v[2]]) / 3.0f);
     }
-    // Each edge's uses in triangle order, then the edges in order of first use (deterministic output).
-    // (key, use) orders the records totally (a use is one triangle's one edge), so a parallel sort
-    // gives the one order.
-    tbb::parallel_sort(records.begin(), records.end(),
-                       [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
-    std::vector<std::pair<uint32_t, uint32_t>> order;  // (first use, first record) per edge
-    for (size_t i = 0; i < records.size();) {
-      order.emplace_back(records[i].use, static_cast<uint32_t>(i));
-      const uint64_t key = records[i].key;
-      while (i < records.size() && records[i].key == key) ++i;
-    }
-    tbb::parallel_sort(order.begin(), order.end());  // first uses are distinct: one order
+    // The edges in order of their first use by a kept triangle (3 * triangle + corner: distinct, so one order).
+    std::vector<std::pair<uint64_t, uint32_t>> order;
+    for (size_t e = 0; e < edges.edgeCount(); ++e)
+      for (uint32_t u = edges.firstUse[e]; u < edges.firstUse[e + 1]; ++u)
+        if (kept[edges.useTriangle[u]] != kDropped) {
+          order.emplace_back(3 * uint64_t{edges.useTriangle[u]} + edges.useCorner[u], static_cast<uint32_t>(e));
+          break;
+        }
+    tbb::parallel_sort(order.begin(), order.end());
     a.clear();
     b.clear();
     firstUse.clear();
     useTriangle.clear();
     useOpposite.clear();
-    for (const auto& [use, first] : order) {
-      const uint64_t key = records[first].key;
-      a.push_back(static_cast<uint32_t>(key >> 32));
-      b.push_back(static_cast<uint32_t>(key & 0xffffffffu));
+    for (const auto& [first, e] : order) {
+      a.push_back(edges.low[e]);
+      b.push_back(edges.high[e]);
       firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
-      for (size_t i = first; i < records.size() && records[i].key == key; ++i) {
-        useTriangle.push_back(records[i].triangle);
-        useOpposite.push_back(records[i].opposite);
+      for (uint32_t u = edges.firstUse[e]; u < edges.firstUse[e + 1]; ++u) {
+        const uint32_t t = edges.useTriangle[u];
+        if (kept[t] == kDropped) continue;
+        useTriangle.push_back(kept[t]);
+        useOpposite.push_back(weld[mesh.triangles[t][static_cast<int>((edges.useCorner[u] + 2) % 3)]]);
       }
     }
     firstUse.push_back(static_cast<uint32_t>(useTriangle.size()));
@@ -214,7 +195,8 @@ struct MeshEdges {
 };
 
 struct EdgeCache::Impl {
-  std::vector<std::optional<MeshEdges>> meshes;  //!< per object index
+  MeshEdgeCache adjacency;  //!< per object index, the mesh's edge adjacency
+  std::vector<std::optional<SilhouetteMesh>> meshes;  //!< per object index, built from it
   // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
   // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
   std::vector<uint8_t> front, isSilhouette;
@@ -229,6 +211,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   EdgeCache local;
   EdgeCache& edgeCache = cache ? *cache : local;
   edgeCache.impl_->meshes.resize(scene.objects.size());
+  edgeCache.impl_->adjacency.resize(scene.objects.size());
   std::vector<Edge> edges;
   std::vector<uint8_t>& front = edgeCache.impl_->front;
   std::vector<uint8_t>& isSilhouette = edgeCache.impl_->isSilhouette;
@@ -237,15 +220,15 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
     const Object& object = scene.objects[objectIndex];
     const size_t firstEdge = edges.size();
     std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
-    std::optional<MeshEdges>& cached = edgeCache.impl_->meshes[objectIndex];
-    const rt::MeshFingerprint key = rt::meshFingerprint(object.mesh);
-    if (!cached || !(cached->key == key)) {
+    std::optional<SilhouetteMesh>& cached = edgeCache.impl_->meshes[objectIndex];
+    bool rebuilt = false;
+    const MeshEdges& adjacency = edgeCache.impl_->adjacency.edges(objectIndex, object.mesh, &rebuilt);
+    if (!cached || rebuilt) {
       cached.emplace();
-      cached->build(object.mesh);
-      cached->key = key;
+      cached->build(object.mesh, adjacency);
     }
-    const MeshEdges& topology = *cached;
-    const std::vector<Vec3>& positions = topology.positions;
+    const SilhouetteMesh& topology = *cached;
+    const std::vector<Vec3>& positions = object.mesh.positions;  // at the welded ids: the welded positions
     // A triangle faces the light when its normal points to the light's centre (directional: along its direction).
     front.resize(topology.normals.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, front.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
@@ -340,20 +323,32 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
   // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
   // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
-  std::vector<Vec4> clip;
-  std::vector<float> lsZ;
-  std::vector<glm::uvec3> triangles;
-  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
-  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  // Set up as renderLightMap sets up its input (oneTBB's scratch allocator, which keeps freed blocks
+  // for the next frame; vertices in parallel).
+  raster::ScratchVector<Vec4> clip;
+  raster::ScratchVector<float> lsZ;
+  raster::ScratchVector<glm::uvec3> triangles;
+  triangles.reserve(scene.triangleCount());
   for (const Object& object : scene.objects) {
     const auto offset = static_cast<uint32_t>(clip.size());
-    for (const Vec3& p : object.mesh.positions) {
-      const Vec3 l = map.lsFromWs(p);
-      clip.push_back(map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
-                                      : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z));
-      lsZ.push_back(l.z);
-    }
     for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
+    clip.resize(clip.size() + object.mesh.positions.size());
+  }
+  lsZ.resize(clip.size());
+  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
+  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
+  size_t base = 0;
+  for (const Object& object : scene.objects) {
+    const Mesh& mesh = object.mesh;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Vec3 l = map.lsFromWs(mesh.positions[i]);
+        clip[base + i] = map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
+                                          : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z);
+        lsZ[base + i] = l.z;
+      }
+    });
+    base += mesh.positions.size();
   }
   far.reset(map.size, map.size, space.zetaNone);
   if (triangles.empty()) return;
@@ -457,6 +452,18 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
         const float xLo = std::min(e.a.x, e.b.x), xHi = std::max(e.a.x, e.b.x);
         const float yLo = std::min(e.a.y, e.b.y), yHi = std::max(e.a.y, e.b.y);
         const float h = box.halfWidth;
+        // Each row's span is trimmed at both ends to the texels this edge may still take: a texel
+        // whose winner's priority is at most the least this edge can give there (c at least its
+        // lesser end's, the distance at least the row's to the segment's box and the texel's to its
+        // line, lowered by a margin well beyond the rounding of the per-texel values) is one the
+        // per-texel compare p < priority rejects anyway.
+        const float cLeast = std::min(e.zetaA, e.zetaB);
+        const float cFloor = cLeast - 1e-5f * std::abs(cLeast);
+        const float rateFloor = space.ratePerTexel * (1.0f - 1e-5f);
+        const auto least = [&](float dy, float across) {
+          const float distance = std::max(dy, std::abs(across));
+          return cFloor + std::max(distance - 0.01f - 1e-5f * distance, 0.0f) * rateFloor;
+        };
         for (int j = j0; j <= j1; ++j) {
           // The texels of the row within h of the segment lie within h of its bounding box and
           // within h of its line: only that span is visited (widened by a texel against rounding;
@@ -473,15 +480,25 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             spanLo = std::max(spanLo, std::min(x0, x1));
             spanHi = std::min(spanHi, std::max(x0, x1));
           }
-          const int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
+          int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = out.row(j);
           // Two passes over the span: the geometry of every texel without branches (four texels to
           // an SSE vector, the same operations in the same order as the scalar tail, so the same
           // values bit for bit), then the candidates that beat the texel's current winner through
           // the filters, which only drop candidates and read other images.
-          const int count = si1 - si0 + 1;
+          int count = si1 - si0 + 1;
           if (count <= 0) continue;
+          {
+            const float* rowPriority = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
+            const float across0 = (static_cast<float>(si0) + 0.5f - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y;
+            int lo = 0, hi = count - 1;
+            while (lo <= hi && rowPriority[lo] <= least(dy, across0 + static_cast<float>(lo) * e.outward.x)) ++lo;
+            while (hi >= lo && rowPriority[hi] <= least(dy, across0 + static_cast<float>(hi) * e.outward.x)) --hi;
+            if (hi < lo) continue;
+            si0 += lo;
+            count = hi - lo + 1;
+          }
           float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
           const float aqy = y - e.a.y, by = y - e.b.y;
           int m = 0;
@@ -791,9 +808,9 @@ class PlmTechnique final : public ShadowTechnique {
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
-    std::vector<rt::MeshFingerprint> key;
+    std::vector<MeshFingerprint> key;
     key.reserve(scene.objects.size());
-    for (const Object& object : scene.objects) key.push_back(rt::meshFingerprint(object.mesh));
+    for (const Object& object : scene.objects) key.push_back(meshFingerprint(object.mesh));
     if (!rays_ || key != raysKey_) {
       rays_.reset();
       rays_ = std::make_unique<RayScene>(scene);
@@ -830,7 +847,8 @@ class PlmTechnique final : public ShadowTechnique {
           if (!(probeDepth > 0.0f)) continue;
           const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
           const float predicted = options_.illuminationTable ? table_(l) : l;
-          if (!(predicted > 0.0f)) continue;
+          // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
+          if (!(predicted * kProfileSamples >= kProfileMinDeficit)) continue;
           const Vec3 probe = wsHit - lift * ray.direction;
           Ray toLight[kProfileSamples];
           bool blocked[kProfileSamples];
@@ -868,7 +886,7 @@ class PlmTechnique final : public ShadowTechnique {
   std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
   std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
-  std::vector<rt::MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
+  std::vector<MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 

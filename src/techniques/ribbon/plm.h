@@ -45,7 +45,8 @@
 // Cost (docs/real-meshes.md, "Cost at 1024²"). The welding and edge matching depend on the geometry
 // alone and are kept between prepares (EdgeCache); an edge whose every candidate the hidden-shadow
 // test would drop is not rasterized at all (most silhouettes of a dense model lie behind its own
-// front); neither changes a texel.
+// front); each row of a ribbon is trimmed to the texels whose current winner it may still beat (a
+// bound on its priority there); none of these changes a texel.
 #pragma once
 
 #include <cstdint>
@@ -91,10 +92,11 @@ struct Edge {
   int32_t neighbourA = -1, neighbourB = -1;
 };
 
-// The meshes' welded vertices and edge adjacency, which depend on the geometry alone: a technique
-// passes the same cache to every prepare, and a mesh whose positions and triangles are the same to
-// the bit (rt::meshFingerprint) as at the cache's last use is not welded and matched again; only
-// the faces' orientation to the light and the silhouettes are found again.
+// The meshes' welded vertices and edge adjacency (MeshEdgeCache of ../mesh_edges.h, shared with
+// parker's outer objects), which depend on the geometry alone: a technique passes the same cache to
+// every prepare, and a mesh whose positions and triangles are the same to the bit (meshFingerprint)
+// as at the cache's last use is not welded and matched again; only the faces' orientation to the
+// light and the silhouettes are found again.
 class EdgeCache {
  public:
   EdgeCache();

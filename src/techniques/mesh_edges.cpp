@@ -1,0 +1,122 @@
+// A mesh's edge adjacency and its cache (mesh_edges.h).
+#include "techniques/mesh_edges.h"
+
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+#include <tbb/parallel_sort.h>
+
+#include "penumbra/math.h"
+#include "techniques/silhouette/mesh_topology.h"
+
+namespace penumbra {
+
+MeshFingerprint meshFingerprint(const Mesh& mesh) {
+  MeshFingerprint key{0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full};
+  const auto mix = [&](uint64_t word) {
+    key.a = (key.a ^ word) * 0xFF51AFD7ED558CCDull;
+    key.a ^= key.a >> 32;
+    key.b = (key.b + word) * 0xC4CEB9FE1A85EC53ull;
+    key.b ^= key.b >> 29;
+  };
+  const auto words = [&](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i + 8 <= bytes; i += 8) {
+      uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      mix(w);
+    }
+    if (bytes % 8 != 0) {
+      uint64_t w = 0;
+      std::memcpy(&w, p + bytes / 8 * 8, bytes % 8);
+      mix(w);
+    }
+  };
+  mix(mesh.positions.size());
+  mix(mesh.triangles.size());
+  words(mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
+  words(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+  return key;
+}
+
+namespace {
+
+// One half-edge: its edge's welded ends as one key (low << 32 | high) and its place in triangle
+// and corner order (3 * triangle + corner), which orders the half-edges totally.
+struct HalfEdge {
+  uint64_t key;
+  uint64_t use;
+};
+
+}  // namespace
+
+void MeshEdges::build(const Mesh& mesh) {
+  weld = firstVertexAtSamePosition(mesh.positions);
+  std::vector<HalfEdge> half;
+  half.reserve(3 * mesh.triangles.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const glm::uvec3& tri = mesh.triangles[t];
+    const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
+    const Vec3 n = glm::cross(p1 - p0, p2 - p0);
+    const float n2 = glm::dot(n, n);
+    if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2)) continue;  // cannot be hit
+    const uint32_t v[3] = {tri.x, tri.y, tri.z};
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t wa = weld[v[k]], wb = weld[v[(k + 1) % 3]];
+      if (wa == wb) continue;
+      half.push_back({uint64_t{std::min(wa, wb)} << 32 | std::max(wa, wb), 3 * uint64_t{t} + k});
+    }
+  }
+  // (key, use) is a total order: a parallel sort gives the one order.
+  tbb::parallel_sort(half.begin(), half.end(),
+                     [](const HalfEdge& x, const HalfEdge& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
+  low.clear();
+  high.clear();
+  firstUse.clear();
+  useTriangle.resize(half.size());
+  useCorner.resize(half.size());
+  for (size_t i = 0; i < half.size(); ++i) {
+    if (i == 0 || half[i].key != half[i - 1].key) {
+      low.push_back(static_cast<uint32_t>(half[i].key >> 32));
+      high.push_back(static_cast<uint32_t>(half[i].key & 0xffffffffu));
+      firstUse.push_back(static_cast<uint32_t>(i));
+    }
+    useTriangle[i] = static_cast<uint32_t>(half[i].use / 3);
+    useCorner[i] = static_cast<uint8_t>(half[i].use % 3);
+  }
+  firstUse.push_back(static_cast<uint32_t>(half.size()));
+}
+
+struct MeshEdgeCache::Impl {
+  struct Entry {
+    MeshFingerprint key;
+    std::optional<MeshEdges> edges;
+  };
+  std::vector<Entry> entries;  //!< per object index
+  size_t matches = 0;
+};
+
+MeshEdgeCache::MeshEdgeCache() : impl_(std::make_unique<Impl>()) {}
+MeshEdgeCache::~MeshEdgeCache() = default;
+
+void MeshEdgeCache::resize(size_t objectCount) { impl_->entries.resize(objectCount); }
+
+const MeshEdges& MeshEdgeCache::edges(size_t objectIndex, const Mesh& mesh, bool* rebuilt) {
+  if (objectIndex >= impl_->entries.size()) impl_->entries.resize(objectIndex + 1);
+  Impl::Entry& entry = impl_->entries[objectIndex];
+  const MeshFingerprint key = meshFingerprint(mesh);
+  const bool build = !entry.edges || !(entry.key == key);
+  if (build) {
+    entry.edges.emplace();
+    entry.edges->build(mesh);
+    entry.key = key;
+    ++impl_->matches;
+  }
+  if (rebuilt) *rebuilt = build;
+  return *entry.edges;
+}
+
+size_t MeshEdgeCache::matchCount() const { return impl_->matches; }
+
+}  // namespace penumbra
