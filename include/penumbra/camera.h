@@ -1,7 +1,7 @@
 // Pinhole camera. Camera space is right-handed and looks down -z (OpenGL convention); the view
 // depth csDepth of a point is its distance along the viewing axis (-z in camera space).
 // Raster space: pixel (x, y) covers [x, x+1) x [y, y+1), y grows downwards, and is sampled at its
-// centre. generateRay() and renderFromClip()/clipFromRender() describe the same projection, so
+// centre. generateRay() and clipFromCamera() * cameraFromWs() describe the same projection, so
 // the rasterizer and the ray tracer see the same pixels.
 #pragma once
 
@@ -18,7 +18,7 @@ struct Camera {
   // Throws Error if position == lookAt, up is parallel to the view direction, or fov is out of range.
   void validate() const;
 
-  Mat4 cameraFromRender() const;  //!< world -> camera (glm::lookAt)
+  Mat4 cameraFromWs() const;  //!< world -> camera (glm::lookAt)
   // Perspective projection for an image of the given aspect (width / height), OpenGL clip space.
   Mat4 clipFromCamera(float aspect, float zNear, float zFar) const;
 

@@ -1,6 +1,6 @@
 // Small math vocabulary shared by every part of penumbra: glm vector aliases, bounds, frames.
 // Names carry their space as a prefix where it matters (wsPosition, lsDepth, csDepth), following
-// Filament; transforms are named X-from-Y (renderFromLight), following pbrt-v4.
+// Filament; transforms are named X-from-Y (lsFromWs, cameraFromWs), following pbrt-v4.
 #pragma once
 
 #include <algorithm>

@@ -15,6 +15,6 @@ Mesh makeCylinder(float radius, float height, int segments);  //!< axis +y, cent
 Mesh makeTriangle(const Vec3& a, const Vec3& b, const Vec3& c);  //!< one triangle, as given
 
 // Applies an affine transform to positions and (inverse-transpose) to normals.
-void transformMesh(Mesh& mesh, const Mat4& renderFromObject);
+void transformMesh(Mesh& mesh, const Mat4& wsFromObject);
 
 }  // namespace penumbra

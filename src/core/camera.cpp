@@ -16,7 +16,7 @@ void Camera::validate() const {
   if (!(fovYDegrees > 0.0f && fovYDegrees < 180.0f)) fail("camera: fov_y must be in (0, 180) degrees (got {})", fovYDegrees);
 }
 
-Mat4 Camera::cameraFromRender() const { return glm::lookAt(position, lookAt, up); }
+Mat4 Camera::cameraFromWs() const { return glm::lookAt(position, lookAt, up); }
 
 Mat4 Camera::clipFromCamera(float aspect, float zNear, float zFar) const {
   return glm::perspective(radians(fovYDegrees), aspect, zNear, zFar);
@@ -28,7 +28,7 @@ Ray Camera::generateRay(float px, float py, int width, int height) const {
   const float ndcX = 2.0f * px / static_cast<float>(width) - 1.0f;
   const float ndcY = 1.0f - 2.0f * py / static_cast<float>(height);
   const Vec3 csDirection(ndcX * tanHalf * aspect, ndcY * tanHalf, -1.0f);
-  // Camera-space axes in world space: the rows of the rotation part of cameraFromRender.
+  // Camera-space axes in world space: the rows of the rotation part of cameraFromWs.
   const Vec3 f = glm::normalize(lookAt - position);
   const Vec3 s = glm::normalize(glm::cross(f, up));
   const Vec3 u = glm::cross(s, f);

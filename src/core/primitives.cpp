@@ -174,12 +174,12 @@ Mesh makeTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return m;
 }
 
-void transformMesh(Mesh& mesh, const Mat4& renderFromObject) {
-  const Mat3 linear(renderFromObject);
+void transformMesh(Mesh& mesh, const Mat4& wsFromObject) {
+  const Mat3 linear(wsFromObject);
   const float det = glm::determinant(linear);
   if (!std::isfinite(det) || det == 0.0f)
     fail("transform is singular or overflows (determinant {}); expected non-zero scale factors whose product is within float range", det);
-  for (Vec3& p : mesh.positions) p = Vec3(renderFromObject * Vec4(p, 1.0f));
+  for (Vec3& p : mesh.positions) p = Vec3(wsFromObject * Vec4(p, 1.0f));
   const Mat3 normalFromObject = glm::transpose(glm::inverse(linear));
   for (Vec3& n : mesh.normals) {
     const Vec3 t = normalFromObject * n;

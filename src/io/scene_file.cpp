@@ -508,10 +508,10 @@ Mat4 readMatrix(const Field& field) {
   return m;
 }
 
-// The world-space sphere that a centred sphere of `radius` becomes under renderFromObject, or
+// The world-space sphere that a centred sphere of `radius` becomes under wsFromObject, or
 // nothing when the transform shears or scales it unevenly (the object is then only a mesh).
-std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& renderFromObject) {
-  const Mat3 m(renderFromObject);
+std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& wsFromObject) {
+  const Mat3 m(wsFromObject);
   const float scale = glm::length(m[0]);
   // Relative tolerance of a few float ulps of a rotation's entries (glm::rotate rounds them).
   const float tolerance = 1e-5f * scale;
@@ -519,7 +519,7 @@ std::optional<AnalyticSphere> analyticSphere(float radius, const Mat4& renderFro
     if (!(std::abs(glm::length(m[i]) - scale) <= tolerance)) return std::nullopt;
     if (!(std::abs(glm::dot(m[i], m[(i + 1) % 3])) <= tolerance * scale)) return std::nullopt;
   }
-  return AnalyticSphere{Vec3(renderFromObject[3]), radius * scale};
+  return AnalyticSphere{Vec3(wsFromObject[3]), radius * scale};
 }
 
 // Coordinates the ray tracer accepts (Embree refuses rays beyond about 1.8e18; squared distances
@@ -586,22 +586,22 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir, 
   }
 
   if (o.has("transform") && o.has("matrix")) field.error("expected at most one of 'transform' and 'matrix', got both");
-  Mat4 renderFromObject(1.0f);
+  Mat4 wsFromObject(1.0f);
   if (auto t = o.optional("transform"))
-    withPath(*t, [&] { return transformMesh(object.mesh, renderFromObject = readTransform(*t)), 0; });
+    withPath(*t, [&] { return transformMesh(object.mesh, wsFromObject = readTransform(*t)), 0; });
   if (auto m = o.optional("matrix"))
-    withPath(*m, [&] { return transformMesh(object.mesh, renderFromObject = readMatrix(*m)), 0; });
+    withPath(*m, [&] { return transformMesh(object.mesh, wsFromObject = readMatrix(*m)), 0; });
   if (auto f = o.optional("fit")) {
     const Mat4 fit = readFit(*f, object.mesh);
     transformMesh(object.mesh, fit);
-    renderFromObject = fit * renderFromObject;
+    wsFromObject = fit * wsFromObject;
   }
   const Bounds3 bounds = object.mesh.bounds();
   const Vec3 reach = glm::max(glm::abs(bounds.lower), glm::abs(bounds.upper));
   checkWorldReach(field, std::max({reach.x, reach.y, reach.z}), "the object (after its transform)");
   // A sphere primitive stays a true sphere under rotation, uniform scale and translation.
   if (auto p = o.optional("primitive"); p && p->value().at("type") == "sphere")
-    object.sphere = analyticSphere(p->child("radius").number(), renderFromObject);
+    object.sphere = analyticSphere(p->child("radius").number(), wsFromObject);
   if (auto a = o.optional("analytic_sphere")) {
     // Written by sceneToJson next to the inline tessellation, in world space.
     if (!o.has("inline") || o.has("transform") || o.has("matrix") || o.has("fit"))

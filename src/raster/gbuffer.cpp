@@ -1,6 +1,6 @@
 // renderGBuffer (include/penumbra/raster.h): the camera G-buffer by rasterization.
 //
-// The projection is the camera's own: Camera::cameraFromRender and the x/y rows of
+// The projection is the camera's own: Camera::cameraFromWs and the x/y rows of
 // Camera::clipFromCamera, so pixel (x, y) sees what Camera::generateRay(x + 0.5, y + 0.5) sees, up
 // to float rounding and the rasterizer's 1/256-pixel vertex snapping (which can only move
 // silhouette pixels). The depth row is replaced by a reversed, infinite-far key (z_clip = -zNear,
@@ -41,15 +41,15 @@ void resetGBuffer(GBuffer& g, int width, int height) {
 }
 
 // The camera's projection fitted to the scene bounds (see the file comment): clipFromCamera's x/y
-// rows with the reversed, infinite-far depth key, times cameraFromRender. Empty when the whole scene
+// rows with the reversed, infinite-far depth key, times cameraFromWs. Empty when the whole scene
 // lies behind the camera.
-std::optional<Mat4> fittedClipFromRender(const Camera& camera, const Bounds3& bounds, int width, int height) {
-  const Mat4 cameraFromRender = camera.cameraFromRender();
+std::optional<Mat4> fittedClipFromWs(const Camera& camera, const Bounds3& bounds, int width, int height) {
+  const Mat4 cameraFromWs = camera.cameraFromWs();
   float minDepth = kInfinity, maxDepth = -kInfinity;
   for (int i = 0; i < 8; ++i) {
     const Vec3 corner((i & 1) ? bounds.upper.x : bounds.lower.x, (i & 2) ? bounds.upper.y : bounds.lower.y,
                       (i & 4) ? bounds.upper.z : bounds.lower.z);
-    const float depth = -(cameraFromRender * Vec4(corner, 1.0f)).z;
+    const float depth = -(cameraFromWs * Vec4(corner, 1.0f)).z;
     minDepth = std::min(minDepth, depth);
     maxDepth = std::max(maxDepth, depth);
   }
@@ -59,7 +59,7 @@ std::optional<Mat4> fittedClipFromRender(const Camera& camera, const Bounds3& bo
   Mat4 clipFromCamera = camera.clipFromCamera(static_cast<float>(width) / static_cast<float>(height), zNear, zFar);
   clipFromCamera[2][2] = 0.0f;  // z_clip = -zNear: reversed, infinite-far depth key
   clipFromCamera[3][2] = -zNear;
-  return clipFromCamera * cameraFromRender;
+  return clipFromCamera * cameraFromWs;
 }
 
 // The scene flattened for the rasterizer: one vertex array, triangles indexing into it, and per
@@ -72,7 +72,7 @@ struct FlatScene {
   raster::ScratchVector<Vec3> faceNormals;
 };
 
-void flattenScene(const Scene& scene, const Mat4& clipFromRender, FlatScene& flat) {
+void flattenScene(const Scene& scene, const Mat4& clipFromWs, FlatScene& flat) {
   size_t vertexCount = 0, triangleCount = 0;
   for (const Object& object : scene.objects) {
     flat.firstVertex.push_back(vertexCount);
@@ -90,7 +90,7 @@ void flattenScene(const Scene& scene, const Mat4& clipFromRender, FlatScene& fla
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 8192),
                       [&](const tbb::blocked_range<size_t>& r) {
                         for (size_t i = r.begin(); i < r.end(); ++i)
-                          flat.clip[flat.firstVertex[o] + i] = clipFromRender * Vec4(mesh.positions[i], 1.0f);
+                          flat.clip[flat.firstVertex[o] + i] = clipFromWs * Vec4(mesh.positions[i], 1.0f);
                       });
     const auto offset = static_cast<uint32_t>(flat.firstVertex[o]);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size(), 8192),
@@ -192,10 +192,10 @@ void renderGBuffer(const Scene& scene, int width, int height, GBuffer& g) {
   resetGBuffer(g, width, height);
   const Bounds3 bounds = scene.bounds();
   if (bounds.empty()) return;
-  const std::optional<Mat4> clipFromRender = fittedClipFromRender(scene.camera, bounds, width, height);
-  if (!clipFromRender) return;
+  const std::optional<Mat4> clipFromWs = fittedClipFromWs(scene.camera, bounds, width, height);
+  if (!clipFromWs) return;
   FlatScene flat;
-  flattenScene(scene, *clipFromRender, flat);
+  flattenScene(scene, *clipFromWs, flat);
   raster::RasterInput input;
   input.width = width;
   input.height = height;

@@ -20,13 +20,13 @@ Camera testCamera() {
 
 TEST(Camera, RayParameterIsTheViewDepth) {
   const Camera cam = testCamera();
-  const Mat4 cameraFromRender = cam.cameraFromRender();
+  const Mat4 cameraFromWs = cam.cameraFromWs();
   for (const Vec2 px : {Vec2(0.5f, 0.5f), Vec2(63.5f, 10.5f), Vec2(20.25f, 47.75f)}) {
     const Ray ray = cam.generateRay(px.x, px.y, 64, 48);
     EXPECT_EQ(ray.origin, cam.position);
     for (const float t : {0.5f, 3.0f, 10.0f}) {
       const Vec3 wsP = ray.origin + t * ray.direction;
-      const Vec4 csP = cameraFromRender * Vec4(wsP, 1.0f);
+      const Vec4 csP = cameraFromWs * Vec4(wsP, 1.0f);
       EXPECT_NEAR(-csP.z, t, 1e-4f * t);  // view depth: distance along -z in camera space
     }
   }
@@ -43,10 +43,10 @@ TEST(Camera, CentrePixelLooksAlongTheViewAxis) {
 TEST(Camera, RaysMatchTheProjectionMatrices) {
   const Camera cam = testCamera();
   const int w = 64, h = 48;
-  const Mat4 clipFromRender = cam.clipFromCamera(static_cast<float>(w) / h, 0.1f, 100.0f) * cam.cameraFromRender();
+  const Mat4 clipFromWs = cam.clipFromCamera(static_cast<float>(w) / h, 0.1f, 100.0f) * cam.cameraFromWs();
   for (const Vec2 px : {Vec2(0.5f, 0.5f), Vec2(63.5f, 47.5f), Vec2(10.5f, 30.5f), Vec2(32.0f, 24.0f)}) {
     const Ray ray = cam.generateRay(px.x, px.y, w, h);
-    const Vec4 clip = clipFromRender * Vec4(ray.origin + 4.0f * ray.direction, 1.0f);
+    const Vec4 clip = clipFromWs * Vec4(ray.origin + 4.0f * ray.direction, 1.0f);
     const float sx = (clip.x / clip.w * 0.5f + 0.5f) * w;
     const float sy = (0.5f - clip.y / clip.w * 0.5f) * h;  // raster y grows downwards
     EXPECT_NEAR(sx, px.x, 1e-3f);
@@ -54,7 +54,7 @@ TEST(Camera, RaysMatchTheProjectionMatrices) {
   }
   // Top-left pixel looks up and to the left.
   const Ray topLeft = cam.generateRay(0.5f, 0.5f, w, h);
-  const Vec4 cs = cam.cameraFromRender() * Vec4(cam.position + topLeft.direction, 1.0f);
+  const Vec4 cs = cam.cameraFromWs() * Vec4(cam.position + topLeft.direction, 1.0f);
   EXPECT_LT(cs.x, 0.0f);
   EXPECT_GT(cs.y, 0.0f);
 }

@@ -197,8 +197,8 @@ TEST(Primitives, RejectsDegenerateSizes) {
 
 TEST(Primitives, TransformMovesPositionsAndKeepsNormalsPerpendicular) {
   Mesh m = makeSphere(1.0f, 32, 16);
-  const Mat4 renderFromObject = glm::scale(glm::translate(Mat4(1.0f), Vec3(1, 2, 3)), Vec3(2.0f, 1.0f, 0.5f));
-  transformMesh(m, renderFromObject);
+  const Mat4 wsFromObject = glm::scale(glm::translate(Mat4(1.0f), Vec3(1, 2, 3)), Vec3(2.0f, 1.0f, 0.5f));
+  transformMesh(m, wsFromObject);
   expectBounds(m, Vec3(-1.0f, 1.0f, 2.5f), Vec3(3.0f, 3.0f, 3.5f), 1e-5f);
   EXPECT_EQ(closedViolation(m), "");
   EXPECT_NEAR(signedVolume(m) / (4.0 / 3.0 * M_PI), 1.0, 0.02);

@@ -10,11 +10,11 @@
 
 namespace penumbra::rastertest {
 
-inline Object object(int32_t id, Mesh mesh, const Mat4& renderFromObject) {
+inline Object object(int32_t id, Mesh mesh, const Mat4& wsFromObject) {
   Object o;
   o.name = "object " + std::to_string(id);
   o.id = id;
-  transformMesh(mesh, renderFromObject);
+  transformMesh(mesh, wsFromObject);
   o.mesh = std::move(mesh);
   return o;
 }

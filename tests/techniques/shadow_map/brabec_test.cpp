@@ -287,12 +287,12 @@ struct ScanLine {
 float edgeWidth(const ShadowTestScene& s, const Image<float>& v, const ScanLine& line) {
   const GBuffer& g = s.gbuffer;
   const int w = g.width(), h = g.height();
-  const Mat4 clipFromRender = s.scene.camera.clipFromCamera(static_cast<float>(w) / h, 0.01f, 100.0f) *
-                              s.scene.camera.cameraFromRender();
+  const Mat4 clipFromWs = s.scene.camera.clipFromCamera(static_cast<float>(w) / h, 0.01f, 100.0f) *
+                              s.scene.camera.cameraFromWs();
   float lastDark = -1.0f;
   for (float d = 0.0f; d <= line.length; d += 0.005f) {
     const Vec3 p = line.wsStart + d * line.wsDirection;
-    const Vec4 clip = clipFromRender * Vec4(p, 1.0f);
+    const Vec4 clip = clipFromWs * Vec4(p, 1.0f);
     const int x = static_cast<int>((clip.x / clip.w * 0.5f + 0.5f) * w);
     const int y = static_cast<int>((0.5f - clip.y / clip.w * 0.5f) * h);
     if (x < 0 || y < 0 || x >= w || y >= h) continue;

@@ -44,12 +44,12 @@ namespace {
 
 using testing::groundLineGBuffer;
 
-Object box(int32_t id, const Mat4& renderFromObject, const Vec3& size) {
+Object box(int32_t id, const Mat4& wsFromObject, const Vec3& size) {
   Object o;
   o.id = id;
   o.name = "box" + std::to_string(id);
   o.mesh = makeBox(size);
-  transformMesh(o.mesh, renderFromObject);
+  transformMesh(o.mesh, wsFromObject);
   return o;
 }
 
