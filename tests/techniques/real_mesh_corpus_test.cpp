@@ -191,8 +191,9 @@ const RecordedMisses kRecordedMisses[] = {
      "as a blocker"},
     {"pcf", "umbra leaks", 1, "the fixed box blurs the umbra of jeep's segment light (every width from 3 to 9 texels)"},
     {"pcss", "speckle", 8,
-     "method: Fernando 2005's blocker search takes \"the depths that are closer to the light source\" than the "
-     "receiver and sizes the filter by \"the parallel planes approximation\" from their mean. Of its 146 specks "
+     "method: PCSS (Fernando 2005) reads the one shadow map seen from the light's centre, averages the depths of "
+     "the texels in front of the receiver and sizes its filter from that mean by similar triangles, as if blocker "
+     "and receiver were parallel planes. Of its 146 specks "
      "in the 8 cases (hard: 75), 78 lie in the reference's umbra, 55 of them beside a pixel where hard leaks or "
      "speckles (the filter reads the same centre map and spreads its misses over part of their neighbours); 35 are lit pixels on a "
      "crease or beside a rising surface, whose texels a texel away lie closer than the receiver plane (filter "
