@@ -70,9 +70,13 @@
 //    set reaches beyond p (p on or beside its object), the closing segments project far outside
 //    the light and could pass around it either way; which side of its curves is hidden is then
 //    fixed by one ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h; what
-//    the hard shadow of a shadow-volume pass gives): the silhouette hides the centre when the
-//    first thing the ray meets is its object. Elsewhere no ray is traced: the curves and the
-//    angle sweep agree with the projection to the last bit, a ray would not.
+//    the hard shadow of a shadow-volume pass gives): the object hides the centre when the first
+//    thing the ray meets is the object. The ray sees the object, not one of its silhouettes: the
+//    object's outlines (penumbra and umbra silhouettes) are flipped only where together they
+//    disagree with it; the straddled walls' silhouette below, and a cut silhouette with no edge
+//    shadow on the light, follow it each (SsvTechnique::fixCutSides says why). Elsewhere no ray is
+//    traced: the curves and the angle sweep agree with the projection to the last bit, a
+//    ray would not.
 //  - Receivers behind the light's plane are handled in the light space of its other face (planar
 //    lights emit from both). An edge seen (nearly) end-on from the centre has no direction: its
 //    curve piece is dropped and its neighbours meet at its projection.
@@ -419,6 +423,7 @@ struct Ring {
 // of a ring-shaped object): their windings add.
 struct Group {
   int32_t objectId = 0;
+  bool straddled = false;  //!< the straddled shell triangles' silhouette (walls crossed), not an outline
   bool sheet = false;
   bool crossesLightPlane = false;
   float zMin = kInfinity, zMax = 0.0f;
@@ -439,8 +444,19 @@ struct Approximant {
   bool contributes;  //!< its edge shadow contains p: the projected edge meets the square
 };
 
+// One group's pieces at one pixel (Scratch::pieces[firstPiece, endPiece)) and what fixes its hidden
+// side.
+struct GroupRun {
+  uint32_t group;
+  int32_t objectId;
+  size_t firstPiece, endPiece;
+  int centreWinding;  //!< of its rings' projections around the light's centre
+  bool cut;           //!< its facet set reaches beyond p or behind the light's plane
+};
+
 // Per-thread buffers of the per-pixel pass.
 struct Scratch {
+  std::vector<GroupRun> runs;
   std::vector<Vec3> loop, tmp;
   std::vector<int32_t> loopEdge, tmpEdge;
   std::vector<Approximant> approximants;
@@ -626,11 +642,11 @@ class SsvTechnique final : public ShadowTechnique {
       straddled[facing[back] && !facing[front] ? back : front] = 1;
       anyStraddled = true;
     }
-    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true);
+    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true, true);
   }
 
   void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,
-                bool umbra) const {
+                bool umbra, bool straddled = false) const {
     auto uOf = [&](const Vec3& p) {
       const float z = std::max(p.z, zNear_);
       return Vec2(p.x / z, p.y / z);
@@ -639,6 +655,7 @@ class SsvTechnique final : public ShadowTechnique {
     Group g;
     g.objectId = o.objectId;
     g.sheet = o.sheet;
+    g.straddled = straddled;
     for (const auto& ringEdges : rings) {
       Ring ring;
       ring.group = group;
@@ -739,9 +756,69 @@ class SsvTechnique final : public ShadowTechnique {
 
   // A loop around the light square adds `winding` to every winding inside it; only its right side
   // can cross a ray towards +x.
+  static Piece loopPiece(int winding, uint32_t group) {
+    return {Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group};
+  }
   static void loopAround(Scratch& s, int winding, uint32_t group) {
-    for (int i = 0; i < std::abs(winding); ++i)
-      s.pieces.push_back({Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group});
+    for (int i = 0; i < std::abs(winding); ++i) s.pieces.push_back(loopPiece(winding, group));
+  }
+
+  // Whether a run's pieces are only loops around the square: its winding is the same at every
+  // point of the light.
+  static bool onlyLoops(const Scratch& s, const GroupRun& run) {
+    for (size_t k = run.firstPiece; k < run.endPiece; ++k)
+      if (!(s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f)) return false;
+    return true;
+  }
+
+  // The hidden side of the cut silhouettes of one object (runs [begin, end) of s.runs). A facet set
+  // reaching beyond p (p on or beside its object) or behind the light's plane is cut there and
+  // closed along the cut: the closing segments project far outside the light and could pass around
+  // it either way, which adds or removes one winding everywhere on the square. Which side is hidden
+  // is then fixed by whether the object hides the light's centre from p: one ray, what the hard
+  // shadow of a shadow-volume pass gives. A silhouette that disagrees with it is flipped:
+  //  - a cut silhouette whose winding is the same over the whole square (only loops: no edge shadow
+  //    contains p) says nothing but hidden or not, and follows the ray; so does the straddled
+  //    walls' silhouette (header), which counts walls rather than outlining the object;
+  //  - the object's outlines (its penumbra and umbra silhouettes) are flipped only where together
+  //    they disagree with the ray. The ray sees the object, not one outline: outlines compete, and
+  //    in a penumbra on the object one may leave the centre visible (its curve cutting the square
+  //    elsewhere) while the other hides it; flipping the first would hide nearly the whole light
+  //    on single pixels.
+  // Whether a silhouette hides the centre is its rings' projections' winding, not its curve's: an
+  // approximant may pass the centre on the other side than its projected edge, in the penumbra.
+  template <typename Blocker>
+  static void fixCutSides(const Side& side, Scratch& s, size_t begin, size_t end, Blocker& blocker) {
+    bool anyCut = false, anyOutline = false;
+    for (size_t k = begin; k < end; ++k) {
+      anyCut = anyCut || s.runs[k].cut;
+      anyOutline = anyOutline || !side.groups[s.runs[k].group].straddled;
+    }
+    if (!anyCut) return;
+    const bool hidesCentre = blocker() == s.runs[begin].objectId;
+    // A loop goes right after the run's pieces (a group's pieces stay consecutive for
+    // hiddenCells), moving those of the runs after it.
+    auto flip = [&](size_t k) {
+      GroupRun& run = s.runs[k];
+      const int loop = hidesCentre ? 1 : -run.centreWinding;
+      const size_t count = static_cast<size_t>(std::abs(loop));
+      s.pieces.insert(s.pieces.begin() + static_cast<std::ptrdiff_t>(run.endPiece), count, loopPiece(loop, run.group));
+      for (size_t later = k; later < s.runs.size(); ++later) {
+        if (later > k) s.runs[later].firstPiece += count;
+        s.runs[later].endPiece += count;
+      }
+      run.centreWinding = hidesCentre ? 1 : 0;
+    };
+    auto disagrees = [&](size_t k) { return s.runs[k].cut && (s.runs[k].centreWinding != 0) != hidesCentre; };
+    auto outline = [&](size_t k) { return anyOutline && !side.groups[s.runs[k].group].straddled; };
+    bool outlinesHide = false;
+    for (size_t k = begin; k < end; ++k) {
+      if (disagrees(k) && (!outline(k) || onlyLoops(s, s.runs[k]))) flip(k);
+      if (outline(k)) outlinesHide = outlinesHide || s.runs[k].centreWinding != 0;
+    }
+    if (outlinesHide == hidesCentre) return;
+    for (size_t k = begin; k < end; ++k)
+      if (outline(k) && disagrees(k)) flip(k);
   }
 
   // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
@@ -1033,6 +1110,7 @@ class SsvTechnique final : public ShadowTechnique {
     if (s.rings.empty()) return 1.0f;
     s.pieces.clear();
     const float zMax = p.z * (1.0f - 1e-4f);
+    s.runs.clear();
     for (size_t i = 0; i < s.rings.size();) {
       // The rings of one group bound one facet set: their windings add.
       const uint32_t group = side.rings[s.rings[i]].group;
@@ -1045,24 +1123,20 @@ class SsvTechnique final : public ShadowTechnique {
         centreWinding += appendCurve(side, s.rings[i], p, s);
       }
       if (g.sheet && g.objectId == objectId) continue;
-      // A facet set reaching beyond p (p on or beside its object) or behind the light's plane is
-      // cut there, and closed along the cut: the closing segments project far outside the light
-      // and could pass around it either way. Which side of the curves is hidden is then fixed by
-      // whether the object hides the light's centre from p: one ray, what the hard shadow of a
-      // shadow-volume pass gives.
-      if ((g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z) {
-        const bool hidesCentre = blocker() == g.objectId;
-        if ((centreWinding != 0) != hidesCentre) {
-          loopAround(s, hidesCentre ? 1 : -centreWinding, group);
-          centreWinding = hidesCentre ? (centreWinding == 0 ? 1 : centreWinding) : 0;
-        }
-      }
-      // A silhouette none of whose edge shadows contains p and that winds around the square hides
-      // all of the light (the umbra): nothing else can change V.
-      bool onlyLoops = true;
-      for (size_t k = firstPiece; k < s.pieces.size() && onlyLoops; ++k) onlyLoops = s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f;
-      if (onlyLoops && centreWinding != 0 && s.pieces.size() > firstPiece) return 0.0f;
+      const bool cut = (g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z;
+      s.runs.push_back({group, g.objectId, firstPiece, s.pieces.size(), centreWinding, cut});
     }
+    // Per object (its groups are consecutive).
+    for (size_t begin = 0; begin < s.runs.size();) {
+      size_t end = begin + 1;
+      while (end < s.runs.size() && s.runs[end].objectId == s.runs[begin].objectId) ++end;
+      fixCutSides(side, s, begin, end, blocker);
+      begin = end;
+    }
+    // A silhouette none of whose edge shadows contains p and that winds around the square hides
+    // all of the light (the umbra): nothing else can change V.
+    for (const GroupRun& run : s.runs)
+      if (run.centreWinding != 0 && run.endPiece > run.firstPiece && onlyLoops(s, run)) return 0.0f;
     if (s.pieces.empty()) return 1.0f;
     // Competitive combination (3.2.4.2, 3.2.4.4): a point of the light square is hidden when any
     // ring's curve winds around it (the visibilities AND-ed).
