@@ -783,6 +783,34 @@ class TreeBuilder {
   std::vector<Bounds3> box_;
 };
 
+// Each capsule cut into pieces of at most `pieceLength` (at most 1e6 pieces per capsule), in capsule
+// order.
+std::vector<Piece> cutIntoPieces(const Capsules& capsules, float pieceLength) {
+  std::vector<Piece> pieces;
+  pieces.reserve(capsules.size());
+  for (size_t c = 0; c < capsules.size(); ++c) {
+    const Vec3 p0(capsules.p0x[c], capsules.p0y[c], capsules.p0z[c]);
+    const Vec3 e(capsules.ex[c], capsules.ey[c], capsules.ez[c]);
+    const int count = std::max(1, static_cast<int>(std::ceil(std::min(glm::length(e) / pieceLength, 1e6f))));
+    for (int k = 0; k < count; ++k)
+      pieces.push_back({p0 + e * (static_cast<float>(k) / static_cast<float>(count)),
+                        k + 1 == count ? p0 + e : p0 + e * (static_cast<float>(k + 1) / static_cast<float>(count)),
+                        capsules.radius[c], static_cast<int32_t>(c)});
+  }
+  return pieces;
+}
+
+// The built tree moved into the arrays the per-ray code reads (OuterObjects' members).
+void moveTree(TreeOut& out, std::vector<OuterObjects::Node>& nodes, const std::array<std::vector<float>*, 7>& entries,
+              const std::array<std::vector<float>*, 7>& leafBounds, std::vector<int32_t>& entryObject) {
+  nodes = std::move(out.nodes);
+  for (size_t k = 0; k < 7; ++k) {
+    *entries[k] = std::move(out.entries[k]);
+    *leafBounds[k] = std::move(out.leafBounds[k]);
+  }
+  entryObject = std::move(out.entryObject);
+}
+
 // The edges of a mesh, matched in linear time: vertices welded by position (a hash of their
 // coordinates' bits, -0 as +0; each vertex maps to the first at its position), the half-edges of
 // the triangles that can be hit (finite, non-zero area) bucketed by their lower welded vertex (a
@@ -995,19 +1023,9 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
         });
   }
 
-  // Pieces of at most sceneRadius / 64 along each capsule, in capsule order.
+  // Pieces of at most sceneRadius / 64 along each capsule.
   const float pieceLength = sceneRadius / 64.0f;
-  std::vector<Piece> pieces;
-  pieces.reserve(capsules.size());
-  for (size_t c = 0; c < capsules.size(); ++c) {
-    const Vec3 p0(capsules.p0x[c], capsules.p0y[c], capsules.p0z[c]);
-    const Vec3 e(capsules.ex[c], capsules.ey[c], capsules.ez[c]);
-    const int count = std::max(1, static_cast<int>(std::ceil(std::min(glm::length(e) / pieceLength, 1e6f))));
-    for (int k = 0; k < count; ++k)
-      pieces.push_back({p0 + e * (static_cast<float>(k) / static_cast<float>(count)),
-                        k + 1 == count ? p0 + e : p0 + e * (static_cast<float>(k + 1) / static_cast<float>(count)),
-                        capsules.radius[c], static_cast<int32_t>(c)});
-  }
+  const std::vector<Piece> pieces = cutIntoPieces(capsules, pieceLength);
   pieceCount_ = pieces.size();
   if (pieces.empty()) return;
   if (pieces.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max() / kWidth))
@@ -1016,14 +1034,8 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   TreeOut out;
   TreeBuilder(pieces, capsules, sceneMagnitude_, pieceLength).buildAll(out);
   root_ = out.nodes.empty() ? ~0 : 0;
-  nodes_ = std::move(out.nodes);
-  std::vector<float>* entries[7] = {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_};
-  std::vector<float>* leafBounds[7] = {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_};
-  for (size_t k = 0; k < 7; ++k) {
-    *entries[k] = std::move(out.entries[k]);
-    *leafBounds[k] = std::move(out.leafBounds[k]);
-  }
-  entryObject_ = std::move(out.entryObject);
+  moveTree(out, nodes_, {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_},
+           {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_}, entryObject_);
   depth_ = out.depth;
   leafCount_ = out.leaves;
   hasCapsules_ = true;

@@ -565,33 +565,16 @@ class SsvTechnique final : public ShadowTechnique {
       if (outline(k) && disagrees(k)) flip(k);
   }
 
-  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
-  // winding of the ring's projection around the light's centre.
-  //
-  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
-  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
-  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
-  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
-  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
-  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
-  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
-  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
-  // entered and left on its first and last approximants at the position of the projected edges'
-  // outer ends, clamped to the square, and the curve is closed through the projections of the
-  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
-  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
-  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
-  // direction from the light's centre lies inside the ring or not (an angle sweep).
-  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
-    const Ring& r = side.rings[ringId];
-    const float zMax = p.z * (1.0f - 1e-4f);
+  // Ring r as a closed polygon clipped to zNear <= z <= zMax in s.loop (Sutherland-Hodgman against
+  // both depth bounds; each vertex keeps in s.loopEdge the edge that leaves it, kClosure along a
+  // cut); whether it was cut.
+  bool clipRing(const Side& side, const Ring& r, float zMax, Scratch& s) const {
     s.loop.clear();
     s.loopEdge.clear();
     for (uint32_t i = 0; i < r.count; ++i) {
       s.loop.push_back(side.edges[r.first + i].a);
       s.loopEdge.push_back(static_cast<int32_t>(r.first + i));
     }
-    // Sutherland-Hodgman against both depth bounds; each vertex keeps the edge that leaves it.
     bool cut = false;
     for (const float bound : {zNear_, zMax}) {
       const bool low = bound == zNear_;
@@ -618,8 +601,13 @@ class SsvTechnique final : public ShadowTechnique {
       s.loop.swap(s.tmp);
       s.loopEdge.swap(s.tmpEdge);
     }
+    return cut;
+  }
+
+  // The clipped ring's edges (s.loop) projected from p onto the light square, each as its
+  // approximant in s.approximants (a degenerate edge has none); whether some edge shadow contains p.
+  bool makeApproximants(const Side& side, const Vec3& p, Scratch& s) const {
     const size_t n = s.loop.size();
-    if (n < 3) return 0;
     auto toSquare = [&](const Vec3& q) { return (projectFrom(p, q) - side.plane.lower) * side.squareScale; };
     s.approximants.clear();
     bool anyContribution = false;
@@ -656,31 +644,12 @@ class SsvTechnique final : public ShadowTechnique {
       }
       a = b;
     }
-    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
-    // the cut, and that closing segment, projected from p, runs far outside the light and could
-    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
-    // the light's centre from p (one ray, what a shadow-volume pass gives).
-    // The winding of the ring's projection around the light's centre.
-    int centreWinding = 0;
-    if (cut || anyContribution) {
-      const Vec2 centre = -side.plane.lower * side.squareScale;
-      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
-    }
-    if (!anyContribution) {
-      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
-      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
-      // direction from the centre around the ring.
-      if (!cut) {
-        const Vec2 u(p.x / p.z, p.y / p.z);
-        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
-        for (uint32_t i = 0; i < r.count; ++i) {
-          const Edge& e = side.edges[r.first + i];
-          centreWinding += crossing(e.uA, e.uB, u);
-        }
-      }
-      loopAround(s, centreWinding, r.group);
-      return centreWinding;
-    }
+    return anyContribution;
+  }
+
+  // The curve of s.approximants (some contributing) in s.curve: every contributing edge as its
+  // approximant, joined to the next one, and the others as their projected edges.
+  static void traceCurve(Scratch& s) {
     const size_t k = s.approximants.size();
     // The join of approximant e with the next one, f.
     auto join = [&](const Approximant& e, const Approximant& f) {
@@ -740,6 +709,57 @@ class SsvTechnique final : public ShadowTechnique {
         }
       }
     }
+  }
+
+  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
+  // winding of the ring's projection around the light's centre.
+  //
+  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
+  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
+  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
+  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
+  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
+  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
+  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
+  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
+  // entered and left on its first and last approximants at the position of the projected edges'
+  // outer ends, clamped to the square, and the curve is closed through the projections of the
+  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
+  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
+  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
+  // direction from the light's centre lies inside the ring or not (an angle sweep).
+  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
+    const Ring& r = side.rings[ringId];
+    const float zMax = p.z * (1.0f - 1e-4f);
+    const bool cut = clipRing(side, r, zMax, s);
+    if (s.loop.size() < 3) return 0;
+    const bool anyContribution = makeApproximants(side, p, s);
+    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
+    // the cut, and that closing segment, projected from p, runs far outside the light and could
+    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
+    // the light's centre from p (one ray, what a shadow-volume pass gives).
+    // The winding of the ring's projection around the light's centre.
+    int centreWinding = 0;
+    if (cut || anyContribution) {
+      const Vec2 centre = -side.plane.lower * side.squareScale;
+      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
+    }
+    if (!anyContribution) {
+      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
+      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
+      // direction from the centre around the ring.
+      if (!cut) {
+        const Vec2 u(p.x / p.z, p.y / p.z);
+        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
+        for (uint32_t i = 0; i < r.count; ++i) {
+          const Edge& e = side.edges[r.first + i];
+          centreWinding += crossing(e.uA, e.uB, u);
+        }
+      }
+      loopAround(s, centreWinding, r.group);
+      return centreWinding;
+    }
+    traceCurve(s);
     // The pieces that can cross a ray from a point of the square towards +x.
     const size_t c = s.curve.size();
     for (size_t i = 0; i < c; ++i) {
