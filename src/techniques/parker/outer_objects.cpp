@@ -1058,16 +1058,20 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
   view.diameter = diameter_;
   view.sceneMagnitude = sceneMagnitude_;
   if (combine == OuterCombine::Min) {
-    Seeds none;
-    Seeds& start = seeds && seeds->owner == this ? *seeds : none;
-    if (seeds && seeds->owner != this) *seeds = Seeds{this};
+    // Seeds of other outer objects (or of ones rebuilt at this address) are dropped: an entry must
+    // be one of these leaves'.
+    Seeds none{this};
+    Seeds& use = seeds ? *seeds : none;
+    bool valid = use.owner == this && use.count >= 0 && use.count <= kGroup;
+    for (int k = 0; valid && k < use.count; ++k) valid = use.entry[k] >= 0 && static_cast<size_t>(use.entry[k]) < entryP0x_.size();
+    if (!valid) use = Seeds{this};
 #if PENUMBRA_OUTER_AVX2
     if (avx2_) {
-      minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s, seeds ? *seeds : start);
+      minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s, use);
       return;
     }
 #endif
-    minAttenuations(view, rays, distanceToLight, count, falloff, s, seeds ? *seeds : start);
+    minAttenuations(view, rays, distanceToLight, count, falloff, s, use);
     return;
   }
   std::vector<std::pair<int32_t, float>> found;
