@@ -209,10 +209,6 @@ const RecordedMisses kRecordedMisses[] = {
      "the slides' 'Undersampling artifacts: regions where portions of the light source are visible, but none "
      "of the end points!' at the default two sample points; their remedy, subdivisions = 4, meets the bar "
      "on every case at 3.8x the default's frame time (engine, 1024^2)"},
-    {"ssv", "speckle", 1,
-     "open: on duck's rect light V drops to 0 on single pixels of a smooth penumbra where a silhouette cut "
-     "at p does not wind around the light's centre, the centre ray meets its object, and the side fix then "
-     "loops it around the whole light square"},
 };
 
 TEST(RealMeshCorpus, SoftTechniquesBeatHardWithoutLeaksOrSpeckle) {

@@ -22,8 +22,10 @@
 // One bound per node child then serves the whole group (the largest of sin(theta_i), |v_i - v0|,
 // rho_i and of bScale_i t0_i over the group): the group walks the tree once.
 //
-// The walk keeps each ray's smallest tau (starting at 1: tau >= 1 gives s = 1) and pushes the
-// children whose group bound is below the largest of them, the most promising on top. A node or
+// The walk keeps each ray's smallest tau (starting at 1: tau >= 1 gives s = 1, then lowered by the
+// seeds, the capsules that gave the previous group's minima: neighbouring rays' minima come from
+// the same few capsules, so the walk starts near its end and skips more) and pushes the children
+// whose group bound is below the largest of them, the most promising on top. A node or
 // leaf taken from the stack is first tested ray by ray, 8 rays at a time, against the ball
 // around its bound (each ray's own bound: the group's is loose where the rays start near the
 // capsules, as on a many-part mesh); a leaf's capsules are then culled by their group bound (a
@@ -296,12 +298,62 @@ struct StackItem {
   }
 }
 
+// The largest of the group's minima best[i] (unused slots hold -infinity).
+[[gnu::always_inline]] inline float largestMinimum(const float* __restrict best) {
+  alignas(32) float upper[kGroup / 2];
+  for (int i = 0; i < kGroup / 2; ++i) upper[i] = std::max(best[i], best[i + kGroup / 2]);
+  for (int width = kGroup / 4; width > 0; width /= 2)
+    for (int i = 0; i < width; ++i) upper[i] = std::max(upper[i], upper[i + width]);
+  return upper[0];
+}
+
+// Ray i's tau of leaf entry `e` lowers best[i] (and sets bestEntry[i] to e where it does), for the
+// rays [half, half + kGroup / 2), one to a vector lane.
+[[gnu::always_inline]] inline void readEntry(const CapsuleView& entries, int32_t e, const RayGroup& g, int half,
+                                             float* __restrict best, int32_t* __restrict bestEntry) {
+  const float p0x = entries.p0x[e], p0y = entries.p0y[e], p0z = entries.p0z[e], ex = entries.ex[e], ey = entries.ey[e],
+              ez = entries.ez[e], radius = entries.radius[e];
+  for (int i = half; i < half + kGroup / 2; ++i) {
+    const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i], g.vz[i],
+                                 g.bScale[i], g.tLimit[i]);
+    bestEntry[i] = tau < best[i] ? e : bestEntry[i];
+    best[i] = tau < best[i] ? tau : best[i];
+  }
+}
+
 // best[i] = the smallest tau of ray i over every capsule where it is below 1 (else 1): the
-// traversal of the top of the file.
-[[gnu::always_inline]] inline void groupMinTau(const TreeView& view, const RayGroup& g, float* __restrict best) {
-  for (int i = 0; i < kGroup; ++i) best[i] = i < g.count ? 1.0f : -kInfinity;  // unused slots read nothing
+// traversal of the top of the file. The leaf entries `seeds` (those that gave the minima of the
+// group before, whose rays are neighbours of these) are read first: the minima then start near
+// their final values and the walk skips more. Reading an entry twice changes no minimum, so the
+// minima do not depend on the seeds. `seeds` is replaced by the entries that gave this group's
+// minima.
+[[gnu::always_inline]] inline void groupMinTau(const TreeView& view, const RayGroup& g, float* __restrict best,
+                                               OuterObjects::Seeds& seeds) {
+  alignas(32) int32_t bestEntry[kGroup];
+  for (int i = 0; i < kGroup; ++i) {
+    best[i] = i < g.count ? 1.0f : -kInfinity;  // unused slots read nothing
+    bestEntry[i] = -1;
+  }
   if (view.empty) return;
-  float limit = 1.0f;  // the largest best[i]
+  const bool second = g.count > kGroup / 2;
+  for (int k = 0; k < seeds.count; ++k) {
+    readEntry(view.entries, seeds.entry[k], g, 0, best, bestEntry);
+    if (second) readEntry(view.entries, seeds.entry[k], g, kGroup / 2, best, bestEntry);
+  }
+  float limit = largestMinimum(best);
+  const auto keepSeeds = [&] {
+    seeds.count = 0;
+    for (int i = 0; i < g.count; ++i) {
+      if (bestEntry[i] < 0) continue;
+      bool known = false;
+      for (int k = 0; k < seeds.count; ++k) known = known || seeds.entry[k] == bestEntry[i];
+      if (!known) seeds.entry[seeds.count++] = bestEntry[i];
+    }
+  };
+  if (!(limit > 0.0f)) {  // every ray is inside an analytic sphere's inner object
+    keepSeeds();
+    return;
+  }
   StackItem stack[kStackSize];
   int top = 0;
   stack[top++] = {view.root, -kInfinity, -1, 0};
@@ -337,49 +389,40 @@ struct StackItem {
       capsules += capsuleBound[j] < kInfinity;
     }
     for (int n = 0; n < capsules; ++n) {
-      const int j = listed[n];
-      const float p0x = c.p0x[j], p0y = c.p0y[j], p0z = c.p0z[j], ex = c.ex[j], ey = c.ey[j], ez = c.ez[j], radius = c.radius[j];
+      const int32_t e = static_cast<int32_t>(leaf * kWidth) + listed[n];
       for (int half = first ? 0 : kGroup / 2; half < (second ? kGroup : kGroup / 2); half += kGroup / 2)
-        for (int i = half; i < half + kGroup / 2; ++i) {
-          const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i], g.vz[i],
-                                       g.bScale[i], g.tLimit[i]);
-          best[i] = tau < best[i] ? tau : best[i];
-        }
+        readEntry(view.entries, e, g, half, best, bestEntry);
     }
-    // The largest minimum (unused slots hold -infinity).
-    alignas(32) float upper[kGroup / 2];
-    for (int i = 0; i < kGroup / 2; ++i) upper[i] = std::max(best[i], best[i + kGroup / 2]);
-    for (int width = kGroup / 4; width > 0; width /= 2)
-      for (int i = 0; i < width; ++i) upper[i] = std::max(upper[i], upper[i + width]);
-    limit = upper[0];
-    if (!(limit > 0.0f)) return;  // every ray is inside an analytic sphere's inner object
+    limit = largestMinimum(best);
+    if (!(limit > 0.0f)) break;  // every ray is inside an analytic sphere's inner object
   }
+  keepSeeds();
 }
 
 // s of each ray under the min combination: the falloff of its smallest tau, group by group.
 [[gnu::always_inline]] inline void minAttenuationsOver(const TreeView& view, const Ray* rays, const float* distanceToLight,
-                                                       int count, OuterFalloff falloff, float* s) {
+                                                       int count, OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
   RayGroup g;
   for (int first = 0; first < count; first += kGroup) {
     const int n = std::min(kGroup, count - first);
     makeGroup(view, rays + first, distanceToLight + first, n, g);
     alignas(32) float best[kGroup];
-    groupMinTau(view, g, best);
+    groupMinTau(view, g, best, seeds);
     for (int i = 0; i < n; ++i) s[first + i] = best[i] <= 0.0f ? 0.0f : outerFalloff(best[i], falloff);
   }
 }
 
 void minAttenuations(const TreeView& view, const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
-                     float* s) {
-  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
+                     float* s, OuterObjects::Seeds& seeds) {
+  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 
 #if PENUMBRA_OUTER_AVX2
 // The same compiled for 8-wide vectors, where the CPU has them: the same operations per lane (no
 // multiply-add: CMakeLists.txt builds this file with -ffp-contract=off), so the same values.
 [[gnu::target("avx2")]] void minAttenuationsAvx2(const TreeView& view, const Ray* rays, const float* distanceToLight,
-                                                 int count, OuterFalloff falloff, float* s) {
-  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s);
+                                                 int count, OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
+  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 #endif
 
@@ -740,6 +783,34 @@ class TreeBuilder {
   std::vector<Bounds3> box_;
 };
 
+// Each capsule cut into pieces of at most `pieceLength` (at most 1e6 pieces per capsule), in capsule
+// order.
+std::vector<Piece> cutIntoPieces(const Capsules& capsules, float pieceLength) {
+  std::vector<Piece> pieces;
+  pieces.reserve(capsules.size());
+  for (size_t c = 0; c < capsules.size(); ++c) {
+    const Vec3 p0(capsules.p0x[c], capsules.p0y[c], capsules.p0z[c]);
+    const Vec3 e(capsules.ex[c], capsules.ey[c], capsules.ez[c]);
+    const int count = std::max(1, static_cast<int>(std::ceil(std::min(glm::length(e) / pieceLength, 1e6f))));
+    for (int k = 0; k < count; ++k)
+      pieces.push_back({p0 + e * (static_cast<float>(k) / static_cast<float>(count)),
+                        k + 1 == count ? p0 + e : p0 + e * (static_cast<float>(k + 1) / static_cast<float>(count)),
+                        capsules.radius[c], static_cast<int32_t>(c)});
+  }
+  return pieces;
+}
+
+// The built tree moved into the arrays the per-ray code reads (OuterObjects' members).
+void moveTree(TreeOut& out, std::vector<OuterObjects::Node>& nodes, const std::array<std::vector<float>*, 7>& entries,
+              const std::array<std::vector<float>*, 7>& leafBounds, std::vector<int32_t>& entryObject) {
+  nodes = std::move(out.nodes);
+  for (size_t k = 0; k < 7; ++k) {
+    *entries[k] = std::move(out.entries[k]);
+    *leafBounds[k] = std::move(out.leafBounds[k]);
+  }
+  entryObject = std::move(out.entryObject);
+}
+
 // Calls keep(a, b) for each kept edge of a mesh (techniques/mesh_edges.h: the edges of its
 // triangles that can be hit): an open boundary (one face), a silhouette (two faces, one towards the
 // light) or a non-manifold edge (three or more, its outline status ambiguous), with the vertices of
@@ -813,19 +884,9 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
         });
   }
 
-  // Pieces of at most sceneRadius / 64 along each capsule, in capsule order.
+  // Pieces of at most sceneRadius / 64 along each capsule.
   const float pieceLength = sceneRadius / 64.0f;
-  std::vector<Piece> pieces;
-  pieces.reserve(capsules.size());
-  for (size_t c = 0; c < capsules.size(); ++c) {
-    const Vec3 p0(capsules.p0x[c], capsules.p0y[c], capsules.p0z[c]);
-    const Vec3 e(capsules.ex[c], capsules.ey[c], capsules.ez[c]);
-    const int count = std::max(1, static_cast<int>(std::ceil(std::min(glm::length(e) / pieceLength, 1e6f))));
-    for (int k = 0; k < count; ++k)
-      pieces.push_back({p0 + e * (static_cast<float>(k) / static_cast<float>(count)),
-                        k + 1 == count ? p0 + e : p0 + e * (static_cast<float>(k + 1) / static_cast<float>(count)),
-                        capsules.radius[c], static_cast<int32_t>(c)});
-  }
+  const std::vector<Piece> pieces = cutIntoPieces(capsules, pieceLength);
   pieceCount_ = pieces.size();
   if (pieces.empty()) return;
   if (pieces.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max() / kWidth))
@@ -834,14 +895,8 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   TreeOut out;
   TreeBuilder(pieces, capsules, sceneMagnitude_, pieceLength).buildAll(out);
   root_ = out.nodes.empty() ? ~0 : 0;
-  nodes_ = std::move(out.nodes);
-  std::vector<float>* entries[7] = {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_};
-  std::vector<float>* leafBounds[7] = {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_};
-  for (size_t k = 0; k < 7; ++k) {
-    *entries[k] = std::move(out.entries[k]);
-    *leafBounds[k] = std::move(out.leafBounds[k]);
-  }
-  entryObject_ = std::move(out.entryObject);
+  moveTree(out, nodes_, {&entryP0x_, &entryP0y_, &entryP0z_, &entryEx_, &entryEy_, &entryEz_, &entryRadius_},
+           {&leafP0x_, &leafP0y_, &leafP0z_, &leafEx_, &leafEy_, &leafEz_, &leafRadius_}, entryObject_);
   depth_ = out.depth;
   leafCount_ = out.leaves;
   hasCapsules_ = true;
@@ -849,7 +904,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
 }
 
 void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
-                                OuterCombine combine, float* s) const {
+                                OuterCombine combine, float* s, Seeds* seeds) const {
   TreeView view;
   view.nodes = nodes_.data();
   view.root = root_;
@@ -864,13 +919,20 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
   view.diameter = diameter_;
   view.sceneMagnitude = sceneMagnitude_;
   if (combine == OuterCombine::Min) {
+    // Seeds of other outer objects (or of ones rebuilt at this address) are dropped: an entry must
+    // be one of these leaves'.
+    Seeds none{this};
+    Seeds& use = seeds ? *seeds : none;
+    bool valid = use.owner == this && use.count >= 0 && use.count <= kGroup;
+    for (int k = 0; valid && k < use.count; ++k) valid = use.entry[k] >= 0 && static_cast<size_t>(use.entry[k]) < entryP0x_.size();
+    if (!valid) use = Seeds{this};
 #if PENUMBRA_OUTER_AVX2
     if (avx2_) {
-      minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s);
+      minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s, use);
       return;
     }
 #endif
-    minAttenuations(view, rays, distanceToLight, count, falloff, s);
+    minAttenuations(view, rays, distanceToLight, count, falloff, s, use);
     return;
   }
   std::vector<std::pair<int32_t, float>> found;

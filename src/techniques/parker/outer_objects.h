@@ -99,11 +99,28 @@ class OuterObjects {
   // analytic sphere (its inner object); meshes' inner objects are the caller's (an occlusion ray).
   float attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,
                     OuterCombine combine) const;
+  // Children per node, and capsules per leaf (leaves are padded to it).
+  static constexpr int kWidth = 8;
+  // Rays that walk the hierarchy together: attenuations() takes its rays in groups of this many,
+  // in the order given (the caller groups neighbouring rays: the bounds are shared by a group).
+  static constexpr int kGroup = 16;
+
+  // The capsules that gave the smallest tau of the last group of rays (min combination): read
+  // first for the next group, whose rays are their neighbours, the walk starts near the final
+  // minima and skips more. A caller that hands over neighbouring groups one call at a time keeps
+  // one per thread. Only the order of work depends on it, not V.
+  struct Seeds {
+    const OuterObjects* owner = nullptr;  //!< the outer objects the entries index (others: none)
+    int count = 0;
+    int32_t entry[kGroup] = {};  //!< leaf entries
+  };
+
   // The same for `count` rays at once (rays[i].origin, unit rays[i].direction, distanceToLight[i])
   // into s[i]: the per-call work is shared, and the loop over the rays runs in one function built
-  // for the widest vectors the CPU has.
+  // for the widest vectors the CPU has. `seeds`, when given, carries the capsules of one call's
+  // minima to the next.
   void attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff, OuterCombine combine,
-                    float* s) const;
+                    float* s, Seeds* seeds = nullptr) const;
 
   // Objects whose analytic sphere is used (their meshes are not part of the outer objects; the
   // caller must leave them out of its inner occlusion test too).
@@ -118,12 +135,6 @@ class OuterObjects {
   size_t nodeCount() const { return nodes_.size(); }
   size_t leafCount() const { return leafCount_; }
   int treeDepth() const { return depth_; }
-
-  // Children per node, and capsules per leaf (leaves are padded to it).
-  static constexpr int kWidth = 8;
-  // Rays that walk the hierarchy together: attenuations() takes its rays in groups of this many,
-  // in the order given (the caller groups neighbouring rays: the bounds are shared by a group).
-  static constexpr int kGroup = 16;
 
   // A node of the hierarchy: kWidth children, each bounded by a capsule (segment p0 -> p0 + e,
   // `radius`, which covers the capsule points and the radii R of everything below it), and a

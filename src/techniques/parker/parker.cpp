@@ -176,6 +176,7 @@ class ParkerTechnique final : public ShadowTechnique {
       int xs[16], ys[16], openIndex[16];
       bool occluded[16];
       float toLight[16], s[16];
+      rt::OuterObjects::Seeds seeds;  // the capsules of the last tile's minima, read first for the next
       int64_t rangeRays = 0;
       for (int tileRow = range.begin(); tileRow < range.end(); ++tileRow) {
         const int y0 = tileRow * kTile, y1 = std::min(height, y0 + kTile);
@@ -221,7 +222,7 @@ class ParkerTechnique final : public ShadowTechnique {
             openIndex[openCount++] = i;
           }
           // The outer objects of the rays that miss every inner object, as one group.
-          outer.attenuations(open, toLight, openCount, falloff, combine, s);
+          outer.attenuations(open, toLight, openCount, falloff, combine, s, &seeds);
           for (int k = 0; k < openCount; ++k) v(xs[openIndex[k]], ys[openIndex[k]]) = s[k];
         }
       }

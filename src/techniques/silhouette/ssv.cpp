@@ -70,13 +70,17 @@
 //    set reaches beyond p (p on or beside its object), the closing segments project far outside
 //    the light and could pass around it either way; which side of its curves is hidden is then
 //    fixed by one ray from p to the light's centre (the offset rule of src/rt/shadow_ray.h; what
-//    the hard shadow of a shadow-volume pass gives): the silhouette hides the centre when the
-//    first thing the ray meets is its object. Elsewhere no ray is traced: the curves and the
-//    angle sweep agree with the projection to the last bit, a ray would not.
+//    the hard shadow of a shadow-volume pass gives): the object hides the centre when the first
+//    thing the ray meets is the object. The ray sees the object, not one of its silhouettes: the
+//    object's outlines (penumbra and umbra silhouettes) are flipped only where together they
+//    disagree with it; the straddled walls' silhouette below, and a cut silhouette with no edge
+//    shadow on the light, follow it each (SsvTechnique::fixCutSides says why). Elsewhere no ray is
+//    traced: the curves and the angle sweep agree with the projection to the last bit, a
+//    ray would not.
 //  - Receivers behind the light's plane are handled in the light space of its other face (planar
 //    lights emit from both). An edge seen (nearly) end-on from the centre has no direction: its
 //    curve piece is dropped and its neighbours meet at its projection.
-//  - Binning: a light-space grid over directions from the light's centre (ssv.h, which says why)
+//  - Binning: a light-space grid over directions from the light's centre (stages.h, which says why)
 //    lists per cell the rings with an edge whose region of influence reaches a receiver of the
 //    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
 //    it; a pixel combines the rings listed in its cell.
@@ -104,7 +108,7 @@
 // Parameters: integration ("slicing" | "8x8" | "16x16"), merge_tolerance (fraction of the light's
 // side, [0, 0.25], default 0.01), grid (cells per side of the light-space binning grid, default 64),
 // edge_visibility ("linear" | "area").
-#include "techniques/silhouette/ssv.h"
+#include "techniques/silhouette/stages.h"
 
 #include <algorithm>
 #include <array>
@@ -121,262 +125,6 @@
 #include "techniques/silhouette/convex_parts.h"
 
 namespace penumbra {
-namespace silhouette {
-
-LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back) {
-  if (light.shape() != LightShape::Rect && light.shape() != LightShape::Polygon)
-    fail("{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, hexagon, ...)",
-         technique, toString(light.shape()), technique);
-  if (!light.convex())
-    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique, technique);
-  const std::vector<Vec3>& ws = light.vertices();
-  if (ws.size() > static_cast<size_t>(kMaxLightVertices))
-    fail("{}: the polygon light has {} vertices; at most {} are supported", technique, ws.size(), kMaxLightVertices);
-  LightPlane plane;
-  plane.wsOrigin = light.center();
-  const Vec3 z = back ? -light.lightFrame(sceneBounds).z : light.lightFrame(sceneBounds).z;
-  Vec3 x = ws[1] - ws[0];
-  x = glm::normalize(x - z * glm::dot(x, z));
-  plane.lsFrame.z = z;
-  plane.lsFrame.x = x;
-  plane.lsFrame.y = glm::cross(z, x);
-  for (const Vec3& v : ws) {
-    const Vec3 l = plane.lsFromWs(v);
-    plane.vertices.push_back(Vec2(l.x, l.y));
-  }
-  float twiceArea = 0.0f;
-  for (size_t i = 0; i < plane.vertices.size(); ++i) {
-    const Vec2 &a = plane.vertices[i], &b = plane.vertices[(i + 1) % plane.vertices.size()];
-    twiceArea += a.x * b.y - a.y * b.x;
-  }
-  if (twiceArea < 0.0f) std::reverse(plane.vertices.begin(), plane.vertices.end());
-  plane.area = 0.5f * std::abs(twiceArea);
-  plane.lower = plane.upper = plane.vertices[0];
-  for (const Vec2& v : plane.vertices) {
-    plane.extent = std::max(plane.extent, glm::length(v));
-    plane.lower = glm::min(plane.lower, v);
-    plane.upper = glm::max(plane.upper, v);
-  }
-  return plane;
-}
-
-std::vector<Occluder> makeOccluders(const Scene& scene) {
-  std::vector<Occluder> occluders;
-  for (const Object& object : scene.objects) {
-    Occluder o;
-    o.objectId = object.id;
-    o.name = object.name;
-    o.topology = occluderTopology(object.mesh);
-    if (o.topology.triangles.empty()) continue;
-    o.sheet = o.topology.twoSidedSheet;
-    occluders.push_back(std::move(o));
-  }
-  return occluders;
-}
-
-LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
-  LightSpaceGeometry g;
-  g.positions.reserve(o.topology.positions.size());
-  g.normals.reserve(o.topology.faceNormals.size());
-  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.lsFromWs(p));
-  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFrame.toLocal(n));
-  return g;
-}
-
-namespace {
-// Clips a convex polygon to the half-plane dot(n, x) <= d (Sutherland-Hodgman).
-int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d) {
-  int m = 0;
-  for (int i = 0; i < count; ++i) {
-    const Vec2 &a = in[i], &b = in[(i + 1) % count];
-    const float da = glm::dot(n, a) - d, db = glm::dot(n, b) - d;
-    if (da <= 0.0f) out[m++] = a;
-    if ((da < 0.0f) != (db < 0.0f) && da != 0.0f && db != 0.0f) out[m++] = a + (b - a) * (da / (da - db));
-  }
-  return m;
-}
-}  // namespace
-
-float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
-  const float cross = a0.x * b0.y - a0.y * b0.x;
-  if (cross == 0.0f) return 0.0f;
-  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
-  std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
-  int n = static_cast<int>(poly.size());
-  std::copy(poly.begin(), poly.end(), bufA.begin());
-  // Inside of the counter-clockwise triangle (0, a, b): left of 0->a, a->b, b->0.
-  const Vec2 corners[3] = {Vec2(0.0f), a, b};
-  Vec2* in = bufA.data();
-  Vec2* out = bufB.data();
-  for (int e = 0; e < 3 && n > 0; ++e) {
-    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
-    const Vec2 nOut(t.y - s.y, s.x - t.x);  // right normal: outside
-    n = clipHalfPlane(in, n, out, nOut, glm::dot(nOut, s));
-    std::swap(in, out);
-  }
-  float twice = 0.0f;
-  for (int i = 0; i < n; ++i) {
-    const Vec2 &p = in[i], &q = in[(i + 1) % n];
-    twice += p.x * q.y - p.y * q.x;
-  }
-  return (cross > 0.0f ? 0.5f : -0.5f) * twice;
-}
-
-namespace {
-// The cell of u in a grid of res x res cells over lower + [0, res / scale]: -1 outside.
-int cellOf(const Vec2& lower, const Vec2& scale, int res, const Vec2& u) {
-  const Vec2 g = (u - lower) * scale;
-  if (!(g.x >= 0.0f && g.y >= 0.0f && g.x <= res && g.y <= res) || res == 0) return -1;
-  const int x = std::min(res - 1, static_cast<int>(g.x)), y = std::min(res - 1, static_cast<int>(g.y));
-  return y * res + x;
-}
-
-Vec2 gridScale(const Vec2& lower, const Vec2& upper, int res) {
-  return Vec2(static_cast<float>(res)) / glm::max(upper - lower, Vec2(1e-20f));
-}
-}  // namespace
-
-void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
-                  const std::vector<Vec2>& itemUpper) {
-  res_ = resolution;
-  lower_ = lower;
-  scale_ = gridScale(lower, upper, res_);
-  start_.assign(size_t(res_) * res_ + 1, 0);
-  auto range = [&](size_t i, int& x0, int& y0, int& x1, int& y1) {
-    const Vec2 lo = (itemLower[i] - lower_) * scale_, hi = (itemUpper[i] - lower_) * scale_;
-    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return false;
-    x0 = static_cast<int>(std::max(lo.x, 0.0f));  // clamped before the conversion: lo can be far below 0
-    y0 = static_cast<int>(std::max(lo.y, 0.0f));
-    x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
-    y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
-    return true;
-  };
-  int x0, y0, x1, y1;
-  for (size_t i = 0; i < itemLower.size(); ++i)
-    if (range(i, x0, y0, x1, y1))
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) ++start_[size_t(y) * res_ + x + 1];
-  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
-  items_.resize(start_.back());
-  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
-  for (size_t i = 0; i < itemLower.size(); ++i)
-    if (range(i, x0, y0, x1, y1))
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) items_[fill[size_t(y) * res_ + x]++] = static_cast<uint32_t>(i);
-}
-
-void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
-                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
-                           const std::vector<uint32_t>& keys) {
-  res_ = resolution;
-  lower_ = lower;
-  scale_ = gridScale(lower, upper, res_);
-  const size_t cells = size_t(res_) * res_;
-  start_.assign(cells + 1, 0);
-  items_.clear();
-  float nearestFar = kInfinity;
-  for (const float f : cellFar) nearestFar = std::min(nearestFar, f);
-  if (!(nearestFar < kInfinity)) return;  // no receivers
-  const Vec2 cellSize = Vec2(1.0f) / scale_;
-  // A cell's rectangle, padded by a little of its size so float rounding of cellOf cannot put a
-  // receiver just outside the rectangle of its own cell.
-  const Vec2 pad = 1e-3f * cellSize;
-  auto visit = [&](size_t i, auto&& add) {
-    const float growMost = itemNear[i] - nearestFar;
-    if (!(growMost >= 0.0f)) return;
-    const Vec2 lo = (itemLower[i] - growMost - lower_) * scale_, hi = (itemUpper[i] + growMost - lower_) * scale_;
-    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return;
-    const int x0 = static_cast<int>(std::max(lo.x, 0.0f)), y0 = static_cast<int>(std::max(lo.y, 0.0f));
-    const int x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
-    const int y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const size_t c = size_t(y) * res_ + x;
-        const float grow = itemNear[i] - cellFar[c];
-        if (!(grow >= 0.0f)) continue;
-        const Vec2 cellLo = lower_ + Vec2(float(x), float(y)) * cellSize - pad, cellHi = cellLo + cellSize + 2.0f * pad;
-        const Vec2 gap = glm::max(Vec2(0.0f), glm::max(itemLower[i] - cellHi, cellLo - itemUpper[i]));
-        if (gap.x <= grow && gap.y <= grow) add(c);
-      }
-  };
-  constexpr uint32_t kNone = 0xffffffffu;
-  std::vector<uint32_t> last(cells, kNone);
-  auto keyOf = [&](size_t i) { return keys.empty() ? static_cast<uint32_t>(i) : keys[i]; };
-  for (size_t i = 0; i < itemLower.size(); ++i)
-    visit(i, [&](size_t c) {
-      if (last[c] == keyOf(i)) return;
-      last[c] = keyOf(i);
-      ++start_[c + 1];
-    });
-  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
-  items_.resize(start_.back());
-  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
-  std::fill(last.begin(), last.end(), kNone);
-  for (size_t i = 0; i < itemLower.size(); ++i)
-    visit(i, [&](size_t c) {
-      if (last[c] == keyOf(i)) return;
-      last[c] = keyOf(i);
-      items_[fill[c]++] = keyOf(i);
-    });
-}
-
-int UGrid::cellIndex(const Vec2& u) const { return cellOf(lower_, scale_, res_, u); }
-
-std::pair<const uint32_t*, const uint32_t*> UGrid::cell(const Vec2& u) const {
-  const int c = cellIndex(u);
-  if (c < 0) return {nullptr, nullptr};
-  return {items_.data() + start_[c], items_.data() + start_[c + 1]};
-}
-
-bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane) {
-  for (int y = 0; y < gbuffer.height(); ++y)
-    for (int x = 0; x < gbuffer.width(); ++x)
-      if (gbuffer.hit(x, y) && !(plane.lsFromWs(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
-  return false;
-}
-
-bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper) {
-  lower = Vec2(kInfinity);
-  upper = Vec2(-kInfinity);
-  for (int y = 0; y < gbuffer.height(); ++y)
-    for (int x = 0; x < gbuffer.width(); ++x) {
-      if (!gbuffer.hit(x, y)) continue;
-      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
-      if (!(p.z > zMin)) continue;
-      const Vec2 u(p.x / p.z, p.y / p.z);
-      lower = glm::min(lower, u);
-      upper = glm::max(upper, u);
-    }
-  return lower.x <= upper.x;
-}
-
-std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
-                                   int resolution) {
-  const Vec2 scale = gridScale(lower, upper, resolution);
-  std::vector<float> deepest(size_t(resolution) * resolution, 0.0f);
-  for (int y = 0; y < gbuffer.height(); ++y)
-    for (int x = 0; x < gbuffer.width(); ++x) {
-      if (!gbuffer.hit(x, y)) continue;
-      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
-      if (!(p.z > zMin)) continue;
-      const int c = cellOf(lower, scale, resolution, Vec2(p.x / p.z, p.y / p.z));
-      if (c >= 0) deepest[size_t(c)] = std::max(deepest[size_t(c)], p.z);
-    }
-  std::vector<float> far(deepest.size());
-  for (size_t c = 0; c < far.size(); ++c) far[c] = deepest[c] > 0.0f ? plane.extent / deepest[c] : kInfinity;
-  return far;
-}
-
-int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
-  const Vec3 wsP = gbuffer.wsPosition(x, y);
-  const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-  const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
-  const std::optional<RayHit> hit =
-      rays.intersect(rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon));
-  return hit ? hit->objectId : kNoObject;
-}
-
-}  // namespace silhouette
 
 namespace {
 
@@ -436,6 +184,7 @@ struct Ring {
 // of a ring-shaped object): their windings add.
 struct Group {
   int32_t objectId = 0;
+  bool straddled = false;  //!< the straddled shell triangles' silhouette (walls crossed), not an outline
   bool sheet = false;
   bool crossesLightPlane = false;
   float zMin = kInfinity, zMax = 0.0f;
@@ -456,8 +205,19 @@ struct Approximant {
   bool contributes;  //!< its edge shadow contains p: the projected edge meets the square
 };
 
+// One group's pieces at one pixel (Scratch::pieces[firstPiece, endPiece)) and what fixes its hidden
+// side.
+struct GroupRun {
+  uint32_t group;
+  int32_t objectId;
+  size_t firstPiece, endPiece;
+  int centreWinding;  //!< of its rings' projections around the light's centre
+  bool cut;           //!< its facet set reaches beyond p or behind the light's plane
+};
+
 // Per-thread buffers of the per-pixel pass.
 struct Scratch {
+  std::vector<GroupRun> runs;
   std::vector<Vec3> loop, tmp;
   std::vector<int32_t> loopEdge, tmpEdge;
   std::vector<Approximant> approximants;
@@ -633,11 +393,11 @@ class SsvTechnique final : public ShadowTechnique {
       straddled[facing[back] && !facing[front] ? back : front] = 1;
       anyStraddled = true;
     }
-    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true);
+    if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true, true);
   }
 
   void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,
-                bool umbra) const {
+                bool umbra, bool straddled = false) const {
     auto uOf = [&](const Vec3& p) {
       const float z = std::max(p.z, zNear_);
       return Vec2(p.x / z, p.y / z);
@@ -646,6 +406,7 @@ class SsvTechnique final : public ShadowTechnique {
     Group g;
     g.objectId = o.objectId;
     g.sheet = o.sheet;
+    g.straddled = straddled;
     for (const auto& ringEdges : rings) {
       Ring ring;
       ring.group = group;
@@ -746,38 +507,81 @@ class SsvTechnique final : public ShadowTechnique {
 
   // A loop around the light square adds `winding` to every winding inside it; only its right side
   // can cross a ray towards +x.
+  static Piece loopPiece(int winding, uint32_t group) {
+    return {Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group};
+  }
   static void loopAround(Scratch& s, int winding, uint32_t group) {
-    for (int i = 0; i < std::abs(winding); ++i)
-      s.pieces.push_back({Vec2(2.0f, winding > 0 ? -1.0f : 2.0f), Vec2(2.0f, winding > 0 ? 2.0f : -1.0f), group});
+    for (int i = 0; i < std::abs(winding); ++i) s.pieces.push_back(loopPiece(winding, group));
   }
 
-  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
-  // winding of the ring's projection around the light's centre.
-  //
-  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
-  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
-  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
-  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
-  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
-  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
-  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
-  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
-  // entered and left on its first and last approximants at the position of the projected edges'
-  // outer ends, clamped to the square, and the curve is closed through the projections of the
-  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
-  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
-  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
-  // direction from the light's centre lies inside the ring or not (an angle sweep).
-  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
-    const Ring& r = side.rings[ringId];
-    const float zMax = p.z * (1.0f - 1e-4f);
+  // Whether a run's pieces are only loops around the square: its winding is the same at every
+  // point of the light.
+  static bool onlyLoops(const Scratch& s, const GroupRun& run) {
+    for (size_t k = run.firstPiece; k < run.endPiece; ++k)
+      if (!(s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f)) return false;
+    return true;
+  }
+
+  // The hidden side of the cut silhouettes of one object (runs [begin, end) of s.runs). A facet set
+  // reaching beyond p (p on or beside its object) or behind the light's plane is cut there and
+  // closed along the cut: the closing segments project far outside the light and could pass around
+  // it either way, which adds or removes one winding everywhere on the square. Which side is hidden
+  // is then fixed by whether the object hides the light's centre from p: one ray, what the hard
+  // shadow of a shadow-volume pass gives. A silhouette that disagrees with it is flipped:
+  //  - a cut silhouette whose winding is the same over the whole square (only loops: no edge shadow
+  //    contains p) says nothing but hidden or not, and follows the ray; so does the straddled
+  //    walls' silhouette (header), which counts walls rather than outlining the object;
+  //  - the object's outlines (its penumbra and umbra silhouettes) are flipped only where together
+  //    they disagree with the ray. The ray sees the object, not one outline: outlines compete, and
+  //    in a penumbra on the object one may leave the centre visible (its curve cutting the square
+  //    elsewhere) while the other hides it; flipping the first would hide nearly the whole light
+  //    on single pixels.
+  // Whether a silhouette hides the centre is its rings' projections' winding, not its curve's: an
+  // approximant may pass the centre on the other side than its projected edge, in the penumbra.
+  template <typename Blocker>
+  static void fixCutSides(const Side& side, Scratch& s, size_t begin, size_t end, Blocker& blocker) {
+    bool anyCut = false, anyOutline = false;
+    for (size_t k = begin; k < end; ++k) {
+      anyCut = anyCut || s.runs[k].cut;
+      anyOutline = anyOutline || !side.groups[s.runs[k].group].straddled;
+    }
+    if (!anyCut) return;
+    const bool hidesCentre = blocker() == s.runs[begin].objectId;
+    // A loop goes right after the run's pieces (a group's pieces stay consecutive for
+    // hiddenCells), moving those of the runs after it.
+    auto flip = [&](size_t k) {
+      GroupRun& run = s.runs[k];
+      const int loop = hidesCentre ? 1 : -run.centreWinding;
+      const size_t count = static_cast<size_t>(std::abs(loop));
+      s.pieces.insert(s.pieces.begin() + static_cast<std::ptrdiff_t>(run.endPiece), count, loopPiece(loop, run.group));
+      for (size_t later = k; later < s.runs.size(); ++later) {
+        if (later > k) s.runs[later].firstPiece += count;
+        s.runs[later].endPiece += count;
+      }
+      run.centreWinding = hidesCentre ? 1 : 0;
+    };
+    auto disagrees = [&](size_t k) { return s.runs[k].cut && (s.runs[k].centreWinding != 0) != hidesCentre; };
+    auto outline = [&](size_t k) { return anyOutline && !side.groups[s.runs[k].group].straddled; };
+    bool outlinesHide = false;
+    for (size_t k = begin; k < end; ++k) {
+      if (disagrees(k) && (!outline(k) || onlyLoops(s, s.runs[k]))) flip(k);
+      if (outline(k)) outlinesHide = outlinesHide || s.runs[k].centreWinding != 0;
+    }
+    if (outlinesHide == hidesCentre) return;
+    for (size_t k = begin; k < end; ++k)
+      if (outline(k) && disagrees(k)) flip(k);
+  }
+
+  // Ring r as a closed polygon clipped to zNear <= z <= zMax in s.loop (Sutherland-Hodgman against
+  // both depth bounds; each vertex keeps in s.loopEdge the edge that leaves it, kClosure along a
+  // cut); whether it was cut.
+  bool clipRing(const Side& side, const Ring& r, float zMax, Scratch& s) const {
     s.loop.clear();
     s.loopEdge.clear();
     for (uint32_t i = 0; i < r.count; ++i) {
       s.loop.push_back(side.edges[r.first + i].a);
       s.loopEdge.push_back(static_cast<int32_t>(r.first + i));
     }
-    // Sutherland-Hodgman against both depth bounds; each vertex keeps the edge that leaves it.
     bool cut = false;
     for (const float bound : {zNear_, zMax}) {
       const bool low = bound == zNear_;
@@ -804,8 +608,13 @@ class SsvTechnique final : public ShadowTechnique {
       s.loop.swap(s.tmp);
       s.loopEdge.swap(s.tmpEdge);
     }
+    return cut;
+  }
+
+  // The clipped ring's edges (s.loop) projected from p onto the light square, each as its
+  // approximant in s.approximants (a degenerate edge has none); whether some edge shadow contains p.
+  bool makeApproximants(const Side& side, const Vec3& p, Scratch& s) const {
     const size_t n = s.loop.size();
-    if (n < 3) return 0;
     auto toSquare = [&](const Vec3& q) { return (projectFrom(p, q) - side.plane.lower) * side.squareScale; };
     s.approximants.clear();
     bool anyContribution = false;
@@ -842,31 +651,12 @@ class SsvTechnique final : public ShadowTechnique {
       }
       a = b;
     }
-    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
-    // the cut, and that closing segment, projected from p, runs far outside the light and could
-    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
-    // the light's centre from p (one ray, what a shadow-volume pass gives).
-    // The winding of the ring's projection around the light's centre.
-    int centreWinding = 0;
-    if (cut || anyContribution) {
-      const Vec2 centre = -side.plane.lower * side.squareScale;
-      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
-    }
-    if (!anyContribution) {
-      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
-      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
-      // direction from the centre around the ring.
-      if (!cut) {
-        const Vec2 u(p.x / p.z, p.y / p.z);
-        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
-        for (uint32_t i = 0; i < r.count; ++i) {
-          const Edge& e = side.edges[r.first + i];
-          centreWinding += crossing(e.uA, e.uB, u);
-        }
-      }
-      loopAround(s, centreWinding, r.group);
-      return centreWinding;
-    }
+    return anyContribution;
+  }
+
+  // The curve of s.approximants (some contributing) in s.curve: every contributing edge as its
+  // approximant, joined to the next one, and the others as their projected edges.
+  static void traceCurve(Scratch& s) {
     const size_t k = s.approximants.size();
     // The join of approximant e with the next one, f.
     auto join = [&](const Approximant& e, const Approximant& f) {
@@ -926,6 +716,57 @@ class SsvTechnique final : public ShadowTechnique {
         }
       }
     }
+  }
+
+  // The visibility curve of ring r at p (Sections 3.2.4.1-3), appended to s.pieces; returns the
+  // winding of the ring's projection around the light's centre.
+  //
+  // The ring is clipped to the depths that can lie between p and the light (zNear <= z <=
+  // z_p (1 - 1e-4), closed along the cut) and projected from p onto the light square. The edges
+  // whose edge shadows contain p (their projection meets the square) form chains of consecutive
+  // edges, and in a chain every edge is replaced by its approximant, an axis-parallel line
+  // (approximantCut); consecutive approximants are joined where they meet: perpendicular ones at
+  // their crossing, which makes the corner's hidden part the AND of the two at a convex corner and
+  // the OR at a concave one (3.2.3.4-5, Fig. 3-7), parallel ones (a straight corner, 3.2.3.6) by a
+  // step at the projected shared vertex, the cut line both edge shadows agree on. A chain is
+  // entered and left on its first and last approximants at the position of the projected edges'
+  // outer ends, clamped to the square, and the curve is closed through the projections of the
+  // edges whose edge shadows do not contain p: they lie outside the square and only say which side
+  // of the chains is hidden, whichever way the ring is seen from p. A ring none of whose edge
+  // shadows contain p hides all of the light or none of it (3.2.5): beyond the ring, as p's
+  // direction from the light's centre lies inside the ring or not (an angle sweep).
+  int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
+    const Ring& r = side.rings[ringId];
+    const float zMax = p.z * (1.0f - 1e-4f);
+    const bool cut = clipRing(side, r, zMax, s);
+    if (s.loop.size() < 3) return 0;
+    const bool anyContribution = makeApproximants(side, p, s);
+    // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along
+    // the cut, and that closing segment, projected from p, runs far outside the light and could
+    // pass around it either way: the ring's hidden side is then fixed by whether its object hides
+    // the light's centre from p (one ray, what a shadow-volume pass gives).
+    // The winding of the ring's projection around the light's centre.
+    int centreWinding = 0;
+    if (cut || anyContribution) {
+      const Vec2 centre = -side.plane.lower * side.squareScale;
+      for (const Approximant& e : s.approximants) centreWinding += crossing(e.start, e.end, centre);
+    }
+    if (!anyContribution) {
+      // No edge shadow contains p: the ring hides all of the light or none of it, as it hides the
+      // centre or not. Beyond an uncut ring that is the umbra test (3.2.5): the angle sweep of p's
+      // direction from the centre around the ring.
+      if (!cut) {
+        const Vec2 u(p.x / p.z, p.y / p.z);
+        if (u.x < r.uLower.x || u.y < r.uLower.y || u.x > r.uUpper.x || u.y > r.uUpper.y) return 0;
+        for (uint32_t i = 0; i < r.count; ++i) {
+          const Edge& e = side.edges[r.first + i];
+          centreWinding += crossing(e.uA, e.uB, u);
+        }
+      }
+      loopAround(s, centreWinding, r.group);
+      return centreWinding;
+    }
+    traceCurve(s);
     // The pieces that can cross a ray from a point of the square towards +x.
     const size_t c = s.curve.size();
     for (size_t i = 0; i < c; ++i) {
@@ -1040,6 +881,7 @@ class SsvTechnique final : public ShadowTechnique {
     if (s.rings.empty()) return 1.0f;
     s.pieces.clear();
     const float zMax = p.z * (1.0f - 1e-4f);
+    s.runs.clear();
     for (size_t i = 0; i < s.rings.size();) {
       // The rings of one group bound one facet set: their windings add.
       const uint32_t group = side.rings[s.rings[i]].group;
@@ -1052,24 +894,20 @@ class SsvTechnique final : public ShadowTechnique {
         centreWinding += appendCurve(side, s.rings[i], p, s);
       }
       if (g.sheet && g.objectId == objectId) continue;
-      // A facet set reaching beyond p (p on or beside its object) or behind the light's plane is
-      // cut there, and closed along the cut: the closing segments project far outside the light
-      // and could pass around it either way. Which side of the curves is hidden is then fixed by
-      // whether the object hides the light's centre from p: one ray, what the hard shadow of a
-      // shadow-volume pass gives.
-      if ((g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z) {
-        const bool hidesCentre = blocker() == g.objectId;
-        if ((centreWinding != 0) != hidesCentre) {
-          loopAround(s, hidesCentre ? 1 : -centreWinding, group);
-          centreWinding = hidesCentre ? (centreWinding == 0 ? 1 : centreWinding) : 0;
-        }
-      }
-      // A silhouette none of whose edge shadows contains p and that winds around the square hides
-      // all of the light (the umbra): nothing else can change V.
-      bool onlyLoops = true;
-      for (size_t k = firstPiece; k < s.pieces.size() && onlyLoops; ++k) onlyLoops = s.pieces[k].a.x == 2.0f && s.pieces[k].b.x == 2.0f;
-      if (onlyLoops && centreWinding != 0 && s.pieces.size() > firstPiece) return 0.0f;
+      const bool cut = (g.zMax > zMax || g.crossesLightPlane) && g.zMin < p.z;
+      s.runs.push_back({group, g.objectId, firstPiece, s.pieces.size(), centreWinding, cut});
     }
+    // Per object (its groups are consecutive).
+    for (size_t begin = 0; begin < s.runs.size();) {
+      size_t end = begin + 1;
+      while (end < s.runs.size() && s.runs[end].objectId == s.runs[begin].objectId) ++end;
+      fixCutSides(side, s, begin, end, blocker);
+      begin = end;
+    }
+    // A silhouette none of whose edge shadows contains p and that winds around the square hides
+    // all of the light (the umbra): nothing else can change V.
+    for (const GroupRun& run : s.runs)
+      if (run.centreWinding != 0 && run.endPiece > run.firstPiece && onlyLoops(s, run)) return 0.0f;
     if (s.pieces.empty()) return 1.0f;
     // Competitive combination (3.2.4.2, 3.2.4.4): a point of the light square is hidden when any
     // ring's curve winds around it (the visibilities AND-ed).

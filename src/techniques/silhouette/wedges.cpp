@@ -41,12 +41,13 @@
 // kept: the ray and the winding could disagree in the last bit where the centre lies on a
 // projected edge, and V would jump there.) A two-sided planar sheet (mesh_topology.h) does not
 // shadow its own pixels; receivers behind the light's plane are
-// handled in the light space of its other face; rings are binned in the light-space grid of ssv.h
+// handled in the light space of its other face; rings are binned in the light-space grid of stages.h
 // by their regions of influence (their u-space boxes grown by R (1/z_min - 1/z_p), z_p the deepest
 // receiver of a cell).
 //
 // Parameters: grid (cells per side of the binning grid).
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <optional>
 
@@ -58,12 +59,39 @@
 #include "penumbra/registry.h"
 #include "rt/shadow_ray.h"
 #include "techniques/silhouette/convex_parts.h"
-#include "techniques/silhouette/ssv.h"
+#include "techniques/silhouette/stages.h"
 
 namespace penumbra {
 namespace {
 
 using namespace silhouette;
+
+// Area of the convex polygon `poly` (counter-clockwise) clipped to the triangle (0, a, b),
+// signed by the triangle's orientation: exact for any convex light.
+float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
+  const float cross = a0.x * b0.y - a0.y * b0.x;
+  if (cross == 0.0f) return 0.0f;
+  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
+  std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
+  int n = static_cast<int>(poly.size());
+  std::copy(poly.begin(), poly.end(), bufA.begin());
+  // Inside of the counter-clockwise triangle (0, a, b): left of 0->a, a->b, b->0.
+  const Vec2 corners[3] = {Vec2(0.0f), a, b};
+  Vec2* in = bufA.data();
+  Vec2* out = bufB.data();
+  for (int e = 0; e < 3 && n > 0; ++e) {
+    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
+    const Vec2 nOut(t.y - s.y, s.x - t.x);  // right normal: outside
+    n = clipHalfPlane(in, n, out, nOut, glm::dot(nOut, s));
+    std::swap(in, out);
+  }
+  float twice = 0.0f;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 &p = in[i], &q = in[(i + 1) % n];
+    twice += p.x * q.y - p.y * q.x;
+  }
+  return (cross > 0.0f ? 0.5f : -0.5f) * twice;
+}
 
 struct WedgeRing {
   uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
@@ -139,7 +167,7 @@ class WedgesTechnique final : public ShadowTechnique {
         hi.push_back(r.uUpper);
         near.push_back(side.plane.extent / r.zMin);
       }
-      // A ring's region of influence: its hard shadow (its box) and its edges' penumbrae (ssv.h).
+      // A ring's region of influence: its hard shadow (its box) and its edges' penumbrae (stages.h).
       side.grid.buildInfluence(lower, upper, grid_, lo, hi, near, receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, grid_), {});
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {

@@ -12,7 +12,7 @@
 // Every number is printed; the assertions are the target. Measured (128 x 128), RMSE8 / umbra leaks,
 // hard - ssv - wedges: teapots 18.76/37 - 4.58/0 - 5.68/0, spider 23.52/2 - 5.79/0 - 5.42/0, engine
 // 26.45/60 - 8.75/0 - 17.22/0, sphereWithHole 38.81/66 - 7.66/0 - 16.34/5, Wuson 18.00/15 -
-// 4.72/0 - 8.53/0. wedges' 5 on sphereWithHole are terminator pixels whose shading normal (the
+// 2.62/0 - 8.53/0. wedges' 5 on sphereWithHole are terminator pixels whose shading normal (the
 // file's facet normal) faces the light's centre while their triangle does not: the reference's
 // rays start on the centre's side of the triangle, inside the sphere, and find V = 0 where the
 // light above the triangle's plane is in fact unblocked.

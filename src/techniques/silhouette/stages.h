@@ -1,7 +1,7 @@
-// Shared stages of the silhouette-based techniques `ssv` (Rouf 2007) and `wedges` (Assarsson &
-// Akenine-Moeller 2003): the light's plane as a 2D polygon, the occluders' topologies, the central
-// projection of occluder points from a receiver onto the light's plane, convex clipping, and the
-// binning grid.
+// The silhouette family's shared stages (stages.cpp), used by `ssv` (ssv.cpp, Rouf 2007) and
+// `wedges` (wedges.cpp, Assarsson & Akenine-Moeller 2003): the light's plane as a 2D polygon, the
+// occluders' topologies, the central projection of occluder points from a receiver onto the light's
+// plane, convex clipping, the binning grid, and the ray to the light's centre.
 //
 // Light space here: origin at the light's centre sample, z along Light::lightFrame's axis (towards
 // the scene), x along the polygon's first edge (so a rect light's sides are the x and y axes, which
@@ -101,20 +101,9 @@ inline Vec2 projectFrom(const Vec3& p, const Vec3& q) {
   return Vec2(p.x + (q.x - p.x) * s, p.y + (q.y - p.y) * s);
 }
 
-// Clips segment a-b to z <= zMax; false if nothing is left.
-inline bool clipToDepth(Vec3& a, Vec3& b, float zMax) {
-  const bool ina = a.z <= zMax, inb = b.z <= zMax;
-  if (!ina && !inb) return false;
-  if (ina && inb) return true;
-  const float s = (zMax - a.z) / (b.z - a.z);
-  const Vec3 c = a + (b - a) * s;
-  (ina ? b : a) = Vec3(c.x, c.y, zMax);
-  return true;
-}
-
-// Area of the convex polygon `poly` (counter-clockwise) clipped to the triangle (0, a, b),
-// signed by the triangle's orientation: exact for any convex light.
-float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a, const Vec2& b);
+// Clips the convex polygon in[0, count) to the half-plane dot(n, x) <= d (Sutherland-Hodgman) into
+// `out` (room for count + 1 points); returns the number of points left.
+int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d);
 
 // A uniform grid over a rectangle of u-space whose cells list the items whose boxes overlap them,
 // in item order.
@@ -122,7 +111,7 @@ class UGrid {
  public:
   void build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
              const std::vector<Vec2>& itemUpper);
-  // Regions of influence (ssv.h's bound, per cell): an item at least `itemNear` = R / z_item deep
+  // Regions of influence (the bound at the top of this file, per cell): an item at least `itemNear` = R / z_item deep
   // (z_item its smallest depth) can change the light's visibility only from receivers deeper than
   // it, and there within R (1/z_item - 1/z_p) of its box; a cell lists it when some receiver of
   // the cell can be such a receiver: cellFar[c] = R / (the deepest receiver in cell c), +infinity

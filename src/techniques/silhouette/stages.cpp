@@ -1,0 +1,243 @@
+// The silhouette family's shared stages (stages.h): the light's plane, the occluders, convex
+// clipping, the light-space binning grid and the centre ray.
+#include "techniques/silhouette/stages.h"
+
+#include <algorithm>
+#include <optional>
+
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "rt/shadow_ray.h"
+
+namespace penumbra {
+namespace silhouette {
+
+LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back) {
+  if (light.shape() != LightShape::Rect && light.shape() != LightShape::Polygon)
+    fail("{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, hexagon, ...)",
+         technique, toString(light.shape()), technique);
+  if (!light.convex())
+    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique, technique);
+  const std::vector<Vec3>& ws = light.vertices();
+  if (ws.size() > static_cast<size_t>(kMaxLightVertices))
+    fail("{}: the polygon light has {} vertices; at most {} are supported", technique, ws.size(), kMaxLightVertices);
+  LightPlane plane;
+  plane.wsOrigin = light.center();
+  const Vec3 z = back ? -light.lightFrame(sceneBounds).z : light.lightFrame(sceneBounds).z;
+  Vec3 x = ws[1] - ws[0];
+  x = glm::normalize(x - z * glm::dot(x, z));
+  plane.lsFrame.z = z;
+  plane.lsFrame.x = x;
+  plane.lsFrame.y = glm::cross(z, x);
+  for (const Vec3& v : ws) {
+    const Vec3 l = plane.lsFromWs(v);
+    plane.vertices.push_back(Vec2(l.x, l.y));
+  }
+  float twiceArea = 0.0f;
+  for (size_t i = 0; i < plane.vertices.size(); ++i) {
+    const Vec2 &a = plane.vertices[i], &b = plane.vertices[(i + 1) % plane.vertices.size()];
+    twiceArea += a.x * b.y - a.y * b.x;
+  }
+  if (twiceArea < 0.0f) std::reverse(plane.vertices.begin(), plane.vertices.end());
+  plane.area = 0.5f * std::abs(twiceArea);
+  plane.lower = plane.upper = plane.vertices[0];
+  for (const Vec2& v : plane.vertices) {
+    plane.extent = std::max(plane.extent, glm::length(v));
+    plane.lower = glm::min(plane.lower, v);
+    plane.upper = glm::max(plane.upper, v);
+  }
+  return plane;
+}
+
+std::vector<Occluder> makeOccluders(const Scene& scene) {
+  std::vector<Occluder> occluders;
+  for (const Object& object : scene.objects) {
+    Occluder o;
+    o.objectId = object.id;
+    o.name = object.name;
+    o.topology = occluderTopology(object.mesh);
+    if (o.topology.triangles.empty()) continue;
+    o.sheet = o.topology.twoSidedSheet;
+    occluders.push_back(std::move(o));
+  }
+  return occluders;
+}
+
+LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
+  LightSpaceGeometry g;
+  g.positions.reserve(o.topology.positions.size());
+  g.normals.reserve(o.topology.faceNormals.size());
+  for (const Vec3& p : o.topology.positions) g.positions.push_back(plane.lsFromWs(p));
+  for (const Vec3& n : o.topology.faceNormals) g.normals.push_back(plane.lsFrame.toLocal(n));
+  return g;
+}
+
+// Clips a convex polygon to the half-plane dot(n, x) <= d (Sutherland-Hodgman).
+int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d) {
+  int m = 0;
+  for (int i = 0; i < count; ++i) {
+    const Vec2 &a = in[i], &b = in[(i + 1) % count];
+    const float da = glm::dot(n, a) - d, db = glm::dot(n, b) - d;
+    if (da <= 0.0f) out[m++] = a;
+    if ((da < 0.0f) != (db < 0.0f) && da != 0.0f && db != 0.0f) out[m++] = a + (b - a) * (da / (da - db));
+  }
+  return m;
+}
+
+namespace {
+// The cell of u in a grid of res x res cells over lower + [0, res / scale]: -1 outside.
+int cellOf(const Vec2& lower, const Vec2& scale, int res, const Vec2& u) {
+  const Vec2 g = (u - lower) * scale;
+  if (!(g.x >= 0.0f && g.y >= 0.0f && g.x <= res && g.y <= res) || res == 0) return -1;
+  const int x = std::min(res - 1, static_cast<int>(g.x)), y = std::min(res - 1, static_cast<int>(g.y));
+  return y * res + x;
+}
+
+Vec2 gridScale(const Vec2& lower, const Vec2& upper, int res) {
+  return Vec2(static_cast<float>(res)) / glm::max(upper - lower, Vec2(1e-20f));
+}
+}  // namespace
+
+void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                  const std::vector<Vec2>& itemUpper) {
+  res_ = resolution;
+  lower_ = lower;
+  scale_ = gridScale(lower, upper, res_);
+  start_.assign(size_t(res_) * res_ + 1, 0);
+  auto range = [&](size_t i, int& x0, int& y0, int& x1, int& y1) {
+    const Vec2 lo = (itemLower[i] - lower_) * scale_, hi = (itemUpper[i] - lower_) * scale_;
+    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return false;
+    x0 = static_cast<int>(std::max(lo.x, 0.0f));  // clamped before the conversion: lo can be far below 0
+    y0 = static_cast<int>(std::max(lo.y, 0.0f));
+    x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
+    y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
+    return true;
+  };
+  int x0, y0, x1, y1;
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    if (range(i, x0, y0, x1, y1))
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) ++start_[size_t(y) * res_ + x + 1];
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  items_.resize(start_.back());
+  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    if (range(i, x0, y0, x1, y1))
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) items_[fill[size_t(y) * res_ + x]++] = static_cast<uint32_t>(i);
+}
+
+void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
+                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
+                           const std::vector<uint32_t>& keys) {
+  res_ = resolution;
+  lower_ = lower;
+  scale_ = gridScale(lower, upper, res_);
+  const size_t cells = size_t(res_) * res_;
+  start_.assign(cells + 1, 0);
+  items_.clear();
+  float nearestFar = kInfinity;
+  for (const float f : cellFar) nearestFar = std::min(nearestFar, f);
+  if (!(nearestFar < kInfinity)) return;  // no receivers
+  const Vec2 cellSize = Vec2(1.0f) / scale_;
+  // A cell's rectangle, padded by a little of its size so float rounding of cellOf cannot put a
+  // receiver just outside the rectangle of its own cell.
+  const Vec2 pad = 1e-3f * cellSize;
+  auto visit = [&](size_t i, auto&& add) {
+    const float growMost = itemNear[i] - nearestFar;
+    if (!(growMost >= 0.0f)) return;
+    const Vec2 lo = (itemLower[i] - growMost - lower_) * scale_, hi = (itemUpper[i] + growMost - lower_) * scale_;
+    if (!(hi.x >= 0.0f && hi.y >= 0.0f && lo.x < res_ && lo.y < res_)) return;
+    const int x0 = static_cast<int>(std::max(lo.x, 0.0f)), y0 = static_cast<int>(std::max(lo.y, 0.0f));
+    const int x1 = std::min(res_ - 1, static_cast<int>(std::min(hi.x, float(res_ - 1))));
+    const int y1 = std::min(res_ - 1, static_cast<int>(std::min(hi.y, float(res_ - 1))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const size_t c = size_t(y) * res_ + x;
+        const float grow = itemNear[i] - cellFar[c];
+        if (!(grow >= 0.0f)) continue;
+        const Vec2 cellLo = lower_ + Vec2(float(x), float(y)) * cellSize - pad, cellHi = cellLo + cellSize + 2.0f * pad;
+        const Vec2 gap = glm::max(Vec2(0.0f), glm::max(itemLower[i] - cellHi, cellLo - itemUpper[i]));
+        if (gap.x <= grow && gap.y <= grow) add(c);
+      }
+  };
+  constexpr uint32_t kNone = 0xffffffffu;
+  std::vector<uint32_t> last(cells, kNone);
+  auto keyOf = [&](size_t i) { return keys.empty() ? static_cast<uint32_t>(i) : keys[i]; };
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      ++start_[c + 1];
+    });
+  for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+  items_.resize(start_.back());
+  std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
+  std::fill(last.begin(), last.end(), kNone);
+  for (size_t i = 0; i < itemLower.size(); ++i)
+    visit(i, [&](size_t c) {
+      if (last[c] == keyOf(i)) return;
+      last[c] = keyOf(i);
+      items_[fill[c]++] = keyOf(i);
+    });
+}
+
+int UGrid::cellIndex(const Vec2& u) const { return cellOf(lower_, scale_, res_, u); }
+
+std::pair<const uint32_t*, const uint32_t*> UGrid::cell(const Vec2& u) const {
+  const int c = cellIndex(u);
+  if (c < 0) return {nullptr, nullptr};
+  return {items_.data() + start_[c], items_.data() + start_[c + 1]};
+}
+
+bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane) {
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x)
+      if (gbuffer.hit(x, y) && !(plane.lsFromWs(gbuffer.wsPosition(x, y)).z > 0.0f)) return true;
+  return false;
+}
+
+bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper) {
+  lower = Vec2(kInfinity);
+  upper = Vec2(-kInfinity);
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x) {
+      if (!gbuffer.hit(x, y)) continue;
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
+      if (!(p.z > zMin)) continue;
+      const Vec2 u(p.x / p.z, p.y / p.z);
+      lower = glm::min(lower, u);
+      upper = glm::max(upper, u);
+    }
+  return lower.x <= upper.x;
+}
+
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
+                                   int resolution) {
+  const Vec2 scale = gridScale(lower, upper, resolution);
+  std::vector<float> deepest(size_t(resolution) * resolution, 0.0f);
+  for (int y = 0; y < gbuffer.height(); ++y)
+    for (int x = 0; x < gbuffer.width(); ++x) {
+      if (!gbuffer.hit(x, y)) continue;
+      const Vec3 p = plane.lsFromWs(gbuffer.wsPosition(x, y));
+      if (!(p.z > zMin)) continue;
+      const int c = cellOf(lower, scale, resolution, Vec2(p.x / p.z, p.y / p.z));
+      if (c >= 0) deepest[size_t(c)] = std::max(deepest[size_t(c)], p.z);
+    }
+  std::vector<float> far(deepest.size());
+  for (size_t c = 0; c < far.size(); ++c) far[c] = deepest[c] > 0.0f ? plane.extent / deepest[c] : kInfinity;
+  return far;
+}
+
+int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
+  const Vec3 wsP = gbuffer.wsPosition(x, y);
+  const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+  const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+  const std::optional<RayHit> hit =
+      rays.intersect(rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon));
+  return hit ? hit->objectId : kNoObject;
+}
+
+}  // namespace silhouette
+
+}  // namespace penumbra
