@@ -113,7 +113,8 @@ void brabecFrame(benchmark::State& state, int imageSize, int mapSize) {
 void brabecSpeedups(benchmark::State& state, int imageSize, int mapSize) {
   const BrabecBenchScene& s = crowdedAt(imageSize);
   const std::string map = "map_size=" + std::to_string(mapSize);
-  std::unique_ptr<ShadowTechnique> passes[] = {make("hard", {map}), make("brabec", {map}),
+  std::unique_ptr<ShadowTechnique> passes[] = {make("hard", {map}),
+                                               make("brabec", {map}),
                                                make("brabec", {map, "interpolate=false"}),
                                                make("brabec", {map, "interpolate=false", "accelerate=false"}),
                                                make("brabec", {map, "interpolate_kinks=false"}),

@@ -32,8 +32,12 @@ void parkerOverRaytracedHard(benchmark::State& state, const std::string& sceneNa
   bench::timeAgainstBaseline(state, s, "raytraced_hard", *hard, "parker", *parker);
 }
 
-BENCHMARK_CAPTURE(parkerOverRaytracedHard, spheres1024, std::string("spheres"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(parkerOverRaytracedHard, torus1024, std::string("torus"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(parkerOverRaytracedHard, spheres1024, std::string("spheres"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(parkerOverRaytracedHard, torus1024, std::string("torus"))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Prepare against the triangle count, on meshes of 10k, 40k and 160k triangles over a 20 x 20
 // ground under a sphere light of radius 0.5 at height 6: `sphere`, one smooth closed mesh (a UV
@@ -109,8 +113,18 @@ void parkerPrepare(benchmark::State& state, bool parts) {
   state.counters["outer_ms_per_1k_triangles"] = outerMs / n / (static_cast<double>(triangles) / 1000.0);
 }
 
-BENCHMARK_CAPTURE(parkerPrepare, sphere, false)->Arg(10000)->Arg(40000)->Arg(160000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(parkerPrepare, parts, true)->Arg(10000)->Arg(40000)->Arg(160000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(parkerPrepare, sphere, false)
+    ->Arg(10000)
+    ->Arg(40000)
+    ->Arg(160000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(parkerPrepare, parts, true)
+    ->Arg(10000)
+    ->Arg(40000)
+    ->Arg(160000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace penumbra

@@ -39,7 +39,10 @@ void lawlorTable(benchmark::State& state) {
     const LawlorTable table = runLawlorTable(scene);
     for (const LawlorRow& row : table.rows)
       for (size_t i = 0; i < table.options.mapSizes.size(); ++i)
-        state.counters[row.spec.technique + (!row.spec.half ? "" : *row.spec.half == PenumbraHalf::Outer ? "_outer" : "_inner") +
+        state.counters[row.spec.technique +
+                       (!row.spec.half                          ? ""
+                        : *row.spec.half == PenumbraHalf::Outer ? "_outer"
+                                                                : "_inner") +
                        "_" + std::to_string(table.options.mapSizes[i])] = row.rmse8[i];
     if (const char* out = std::getenv("PENUMBRA_LAWLOR_OUT")) writeLawlorTable(table, out);
   }

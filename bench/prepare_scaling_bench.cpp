@@ -91,9 +91,14 @@ void prepareScaling(benchmark::State& state, const std::string& technique) {
   state.counters["prepare_us_per_triangle"] = steadyMs / n * perTriangle;
 }
 
-#define PENUMBRA_PREPARE_SCALING(name)                                          \
-  BENCHMARK_CAPTURE(prepareScaling, name, std::string(#name))                   \
-      ->Arg(1)->Arg(4)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime()
+#define PENUMBRA_PREPARE_SCALING(name)                        \
+  BENCHMARK_CAPTURE(prepareScaling, name, std::string(#name)) \
+      ->Arg(1)                                                \
+      ->Arg(4)                                                \
+      ->Arg(16)                                               \
+      ->Arg(64)                                               \
+      ->Unit(benchmark::kMillisecond)                         \
+      ->UseRealTime()
 
 PENUMBRA_PREPARE_SCALING(hard);
 PENUMBRA_PREPARE_SCALING(pcss);

@@ -71,8 +71,10 @@ void gbufferFirstFrameBench(benchmark::State& state, const Scene& scene) {
 
 void lightMapBench(benchmark::State& state, const Scene& scene) {
   const int size = static_cast<int>(state.range(0));
-  const Light light = scene.lights.empty() ? Light::sphere(scene.bounds().center() + Vec3(0.0f, 2.0f * scene.bounds().radius(), 0.0f), 0.5f)
-                                           : scene.lights.front();
+  const Light light =
+      scene.lights.empty()
+          ? Light::sphere(scene.bounds().center() + Vec3(0.0f, 2.0f * scene.bounds().radius(), 0.0f), 0.5f)
+          : scene.lights.front();
   LightMap m = renderLightMap(scene, light, size);
   for (auto _ : state) {
     renderLightMap(scene, light, size, m);
@@ -83,7 +85,9 @@ void lightMapBench(benchmark::State& state, const Scene& scene) {
 
 void BM_GBuffer_Tessellated100k(benchmark::State& state) { gbufferBench(state, tessellated100k()); }
 void BM_GBuffer_Crowded(benchmark::State& state) { gbufferBench(state, crowded()); }
-void BM_GBuffer_Tessellated100k_FirstFrame(benchmark::State& state) { gbufferFirstFrameBench(state, tessellated100k()); }
+void BM_GBuffer_Tessellated100k_FirstFrame(benchmark::State& state) {
+  gbufferFirstFrameBench(state, tessellated100k());
+}
 void BM_LightMap_Tessellated100k(benchmark::State& state) { lightMapBench(state, tessellated100k()); }
 void BM_LightMap_Crowded(benchmark::State& state) { lightMapBench(state, crowded()); }
 

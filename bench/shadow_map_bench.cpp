@@ -58,8 +58,8 @@ void visibilityBench(benchmark::State& state, const std::string& name) {
   }
 }
 
-#define PENUMBRA_SM_BENCH(id, name)                                                                              \
-  BENCHMARK_CAPTURE(prepareBench, id, std::string(name))->Unit(benchmark::kMillisecond)->UseRealTime();         \
+#define PENUMBRA_SM_BENCH(id, name)                                                                     \
+  BENCHMARK_CAPTURE(prepareBench, id, std::string(name))->Unit(benchmark::kMillisecond)->UseRealTime(); \
   BENCHMARK_CAPTURE(visibilityBench, id, std::string(name))->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // hard and pcss, prepare + visibility each, alternating within every iteration so that both see the

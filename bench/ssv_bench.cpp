@@ -43,7 +43,8 @@ const BenchScene& benchScene(const std::string& name) {
     Object& o = b.scene.objects.at(1);
     o.name = "torus";
     o.mesh = makeTorus(0.8f, 0.25f, 96, 64);
-    transformMesh(o.mesh, glm::rotate(glm::translate(Mat4(1.0f), Vec3(0.0f, 1.4f, 0.0f)), radians(25.0f), Vec3(1.0f, 0.0f, 0.0f)));
+    transformMesh(o.mesh, glm::rotate(glm::translate(Mat4(1.0f), Vec3(0.0f, 1.4f, 0.0f)), radians(25.0f),
+                                      Vec3(1.0f, 0.0f, 0.0f)));
     b.gbuffer = renderGBuffer(b.scene, 1024, 1024);
     return b;
   }();

@@ -96,7 +96,8 @@ int runBench(const BenchOptions& options) {
 
 Command addBenchCommand(CLI::App& parent) {
   auto options = std::make_shared<BenchOptions>();
-  CLI::App* app = parent.add_subcommand("bench", "time techniques per pass (median over repeats) relative to a baseline");
+  CLI::App* app =
+      parent.add_subcommand("bench", "time techniques per pass (median over repeats) relative to a baseline");
   app->add_option("--techniques,-t", options->techniques,
                   "comma-separated technique names (default: every registered technique)")
       ->delimiter(',');
@@ -107,8 +108,9 @@ Command addBenchCommand(CLI::App& parent) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   app->add_option("--json", options->jsonPath, "also write the table as JSON to this file");
-  addFrameOptions(*app, options->frame,
-                  "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
+  addFrameOptions(
+      *app, options->frame,
+      "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
   return {app, [options] { return runBench(*options); }};
 }
 

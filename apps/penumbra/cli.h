@@ -47,11 +47,11 @@ struct FrameOptions {
   std::optional<int> width, height;
   int lightIndex = 0;
   std::optional<int64_t> spp, seed;
-  std::vector<std::string> params;  //!< "key=value" (render) or "technique.key=value" (compare, bench)
-  int threads = 0;                  //!< 0: oneTBB's default (every core)
-  std::string name;                 //!< stem of the output files; empty: the scene's name (made safe either way)
-  bool force = false;               //!< --force: go on past the memory and time checks (checkResources)
-  std::optional<double> maxMeshMiB; //!< --max-mesh-size: the mesh file size limit, MiB (default: kDefaultMaxMeshBytes)
+  std::vector<std::string> params;   //!< "key=value" (render) or "technique.key=value" (compare, bench)
+  int threads = 0;                   //!< 0: oneTBB's default (every core)
+  std::string name;                  //!< stem of the output files; empty: the scene's name (made safe either way)
+  bool force = false;                //!< --force: go on past the memory and time checks (checkResources)
+  std::optional<double> maxMeshMiB;  //!< --max-mesh-size: the mesh file size limit, MiB (default: kDefaultMaxMeshBytes)
 };
 // Adds --scene, --width, --height, --light, --spp, --seed, --threads (and --param) to a subcommand.
 void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp);

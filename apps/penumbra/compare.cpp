@@ -34,12 +34,12 @@
 #include "penumbra/image_io.h"
 #include "penumbra/metrics.h"
 #include "penumbra/motion.h"
-#include "penumbra/temporal_metrics.h"
 #include "penumbra/raster.h"
 #include "penumbra/report.h"
 #include "penumbra/report_figures.h"
 #include "penumbra/scene_io.h"
 #include "penumbra/shade.h"
+#include "penumbra/temporal_metrics.h"
 
 namespace penumbra::cli {
 
@@ -62,7 +62,7 @@ struct CompareOptions {
   bool noCache = false;
   // A sequence (include/penumbra/motion.h): --motion-path replaces the scene file's motion, --frames
   // either's frame count.
-  std::string motionPath;           //!< "x,y,z;x,y,z;...": key points
+  std::string motionPath;             //!< "x,y,z;x,y,z;...": key points
   std::string motionMoves = "light";  //!< what --motion-path moves: "light" (the compared --light) or "camera"
   std::optional<int> frames;
 };
@@ -97,15 +97,18 @@ std::string shellQuote(const std::string& s) {
 // page is a copy of it).
 std::string reproduceCommand(const CompareOptions& options, const Setup& setup, const std::vector<std::string>& names,
                              const std::string& baseline) {
-  std::vector<std::string> args = {"penumbra", "compare", "--scene", options.frame.scene, "--width",
-                                   std::to_string(setup.width), "--height", std::to_string(setup.height)};
+  std::vector<std::string> args = {"penumbra", "compare",
+                                   "--scene",  options.frame.scene,
+                                   "--width",  std::to_string(setup.width),
+                                   "--height", std::to_string(setup.height)};
   if (setup.lightIndex != 0) args.insert(args.end(), {"--light", std::to_string(setup.lightIndex)});
   if (options.frame.spp) args.insert(args.end(), {"--spp", std::to_string(*options.frame.spp)});
   if (options.frame.seed) args.insert(args.end(), {"--seed", std::to_string(*options.frame.seed)});
   args.insert(args.end(), {"--techniques", fmt::format("{}", fmt::join(names, ","))});
   if (!options.baseline.empty()) args.insert(args.end(), {"--baseline", baseline});
   for (const std::string& p : options.frame.params) args.insert(args.end(), {"--param", p});
-  if (!options.mapSizes.empty()) args.insert(args.end(), {"--map-sizes", fmt::format("{}", fmt::join(options.mapSizes, ","))});
+  if (!options.mapSizes.empty())
+    args.insert(args.end(), {"--map-sizes", fmt::format("{}", fmt::join(options.mapSizes, ","))});
   if (options.profileRow) args.insert(args.end(), {"--profile-row", std::to_string(*options.profileRow)});
   if (!options.motionPath.empty())
     args.insert(args.end(), {"--motion-moves", options.motionMoves, "--motion-path", options.motionPath});
@@ -130,10 +133,12 @@ class StagedReport {
     const fs::path finalCanonical = fs::weakly_canonical(final_);
     for (const std::string& input : setup.scene.inputFiles) {
       const fs::path in = fs::weakly_canonical(input);
-      if (std::mismatch(finalCanonical.begin(), finalCanonical.end(), in.begin(), in.end()).first == finalCanonical.end())
-        fail("refusing to replace '{}': it holds the input '{}', and a new report replaces the whole folder; copy the "
-             "input elsewhere or choose another --out",
-             final_, input);
+      if (std::mismatch(finalCanonical.begin(), finalCanonical.end(), in.begin(), in.end()).first ==
+          finalCanonical.end())
+        fail(
+            "refusing to replace '{}': it holds the input '{}', and a new report replaces the whole folder; copy the "
+            "input elsewhere or choose another --out",
+            final_, input);
     }
     std::string pattern = (fs::path(outDir) / ".report-partial-XXXXXX").string();
     if (!::mkdtemp(pattern.data()))
@@ -179,9 +184,10 @@ std::vector<std::string> comparedTechniques(const CompareOptions& options, const
   const bool referenceRow = std::find(names.begin(), names.end(), kReference) != names.end();
   for (const std::string& kv : options.frame.params)
     if (kv.rfind(std::string(kReference) + ".", 0) == 0 && !referenceRow)
-      fail("command line: parameter '{}' is for a `reference` row, but reference is not among --techniques; the "
-           "truth's samples are set by --spp (and --seed)",
-           kv);
+      fail(
+          "command line: parameter '{}' is for a `reference` row, but reference is not among --techniques; the "
+          "truth's samples are set by --spp (and --seed)",
+          kv);
   checkPrefixedParams(options.frame.params, names);
   return names;
 }
@@ -190,9 +196,9 @@ std::vector<std::string> comparedTechniques(const CompareOptions& options, const
 struct RunPlan {
   ParamSet truthGiven;
   Params truthParams;
-  std::vector<ParamSet> given;                   //!< per technique
+  std::vector<ParamSet> given;                    //!< per technique
   std::vector<std::vector<ParamSet>> sweepGiven;  //!< per technique, per --map-sizes entry (map_size techniques)
-  std::vector<PlannedRun> planned;               //!< what the memory and time check counts
+  std::vector<PlannedRun> planned;                //!< what the memory and time check counts
 };
 
 RunPlan planRuns(const CompareOptions& options, const Setup& setup, const std::vector<std::string>& names,
@@ -387,7 +393,8 @@ void sweepMapSizes(const CompareFrame& frame, const TechniqueInfo& info, const P
 
 // The page, its JSON and Markdown, and a copy of the scene into the staged folder.
 void writeReportFiles(const Setup& setup, const std::string& reportDir, Report& report) {
-  report.files = {{"every number of this page", "compare.json"}, {"Markdown tables", "compare.md"},
+  report.files = {{"every number of this page", "compare.json"},
+                  {"Markdown tables", "compare.md"},
                   {"the scene, meshes inline", "scene.json"}};
   const auto path = [&](const std::string& name) { return outputPath(setup, reportDir, name); };
   writeTextFile(path("scene.json"), sceneToJson(setup.scene));
@@ -402,9 +409,12 @@ std::optional<Motion> runMotion(const CompareOptions& options, const Setup& setu
   std::optional<Motion> motion = setup.scene.motion;
   if (!options.motionPath.empty()) {
     motion.emplace();
-    if (options.motionMoves == "camera") motion->target = MotionTarget::Camera;
-    else if (options.motionMoves == "light") motion->target = MotionTarget::Light;
-    else fail("--motion-moves '{}': expected light or camera", options.motionMoves);
+    if (options.motionMoves == "camera")
+      motion->target = MotionTarget::Camera;
+    else if (options.motionMoves == "light")
+      motion->target = MotionTarget::Light;
+    else
+      fail("--motion-moves '{}': expected light or camera", options.motionMoves);
     motion->lightIndex = setup.lightIndex;
     size_t start = 0;
     for (int key = 0; start <= options.motionPath.size(); ++key) {
@@ -434,7 +444,8 @@ std::optional<Motion> runMotion(const CompareOptions& options, const Setup& setu
 
 std::string describeMotion(const Motion& motion) {
   std::string path;
-  for (const Vec3& p : motion.path) path += fmt::format("{}({:g}, {:g}, {:g})", path.empty() ? "" : " -> ", p.x, p.y, p.z);
+  for (const Vec3& p : motion.path)
+    path += fmt::format("{}({:g}, {:g}, {:g})", path.empty() ? "" : " -> ", p.x, p.y, p.z);
   return motion.target == MotionTarget::Light ? fmt::format("light {} along {}", motion.lightIndex, path)
                                               : fmt::format("the camera along {}", path);
 }
@@ -478,7 +489,8 @@ PassTimings medianOverFrames(const std::vector<PassTimings>& frames) {
 // sequence with its reason, as in a still compare.
 int runCompareSequence(const CompareOptions& options, const Setup& setup, const Motion& motion,
                        const std::vector<std::string>& names, const std::string& baseline) {
-  if (!options.mapSizes.empty()) fail("--map-sizes is for a still scene; this one has a motion (--frames, --motion-path)");
+  if (!options.mapSizes.empty())
+    fail("--map-sizes is for a still scene; this one has a motion (--frames, --motion-path)");
   RunPlan plan = planRuns(options, setup, names, {});
   // The noise floor's truth: the same reference with the next seed.
   RunPlan floorPlan = plan;
@@ -501,8 +513,9 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
              setup.height, setup.lightIndex, describeLight(setupLight(setup)), motion.frames, describeMotion(motion));
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"frames", fmt::format("{}", motion.frames)},
-                     {"timings", "median over the frames of one technique instance (the first frame builds what "
-                                 "later ones reuse)"},
+                     {"timings",
+                      "median over the frames of one technique instance (the first frame builds what "
+                      "later ones reuse)"},
                      {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
   if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
   if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
@@ -528,8 +541,8 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
     fmt::print("\nframe {} of {}: {}\n", k + 1, motion.frames, describeLight(setupLight(frameSetup)));
     const GBuffer gbuffer = renderGBuffer(frameSetup.scene, setup.width, setup.height);
     const Image<uint8_t> mask = errorMask(gbuffer, setupLight(frameSetup));
-    const CompareFrame frame{options, frameSetup, setupLight(frameSetup), gbuffer, mask, staged.dir(),
-                             frameSetup.stem + "_"};
+    const CompareFrame frame{options, frameSetup,   setupLight(frameSetup), gbuffer,
+                             mask,    staged.dir(), frameSetup.stem + "_"};
     TruthSource source, floorSource;
     lookUpTruth(options, frameSetup, plan.truthParams, source);
     lookUpTruth(options, frameSetup, floorPlan.truthParams, floorSource);
@@ -640,7 +653,8 @@ int runCompare(const CompareOptions& options) {
     const TechniqueInfo& info = findTechnique(names[i]);
     const Params params = resolveParams(info.name, info.params, plan.given[i]);
     Image<float> v;
-    std::optional<ReportRow> row = techniqueRow(frame, info, params, plan.given[i], truth, vTruth, plan.truthParams, notRun, v);
+    std::optional<ReportRow> row =
+        techniqueRow(frame, info, params, plan.given[i], truth, vTruth, plan.truthParams, notRun, v);
     if (!row) continue;
     row->error = compareVisibility(v, vTruth, mask);
     row->profile = rowOf(v, profile.row);
@@ -652,11 +666,11 @@ int runCompare(const CompareOptions& options) {
 
   writeReportFiles(setup, staged.dir(), report);
   staged.commit();
-  fmt::print("G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
-             "it)\n",
-             gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report),
-             (fs::path(staged.finalDir()) / "index.html").string(), "compare.json",
-             "compare.md");
+  fmt::print(
+      "G-buffer {:.2f} ms; error mask: {} pixels; scan line: row {}\n\n{}\nwrote {} ({}, {} and images beside "
+      "it)\n",
+      gbufferMs, report.truth->error->maskPixels, profile.row, reportToText(report),
+      (fs::path(staged.finalDir()) / "index.html").string(), "compare.json", "compare.md");
   return notRun.exitCode("report");
 }
 
@@ -682,13 +696,15 @@ Command addCompareCommand(CLI::App& parent) {
                   "also runs at each, for the error-against-map-size plot and table")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
-  app->add_option("--profile-row", options->profileRow,
-                  "image row of the scan-line profile (default: the row with the most penumbra pixels in the reference)");
+  app->add_option(
+      "--profile-row", options->profileRow,
+      "image row of the scan-line profile (default: the row with the most penumbra pixels in the reference)");
   app->add_option("--error-range", options->errorRange,
                   "signed error maps span V - V_ref in [-R, R] (V units; larger errors saturate)")
       ->check(CLI::Range(1e-6, 1.0))
       ->capture_default_str();
-  app->add_option("--out,-o", options->outDir, "output directory: the report goes to DIR/report, the cache to DIR/cache")
+  app->add_option("--out,-o", options->outDir,
+                  "output directory: the report goes to DIR/report, the cache to DIR/cache")
       ->capture_default_str();
   app->add_option("--cache-dir", options->cacheDir, "reference cache directory (default: DIR/cache)");
   app->add_flag("--no-cache", options->noCache, "render the truth even when it is cached, and do not store it");
@@ -696,7 +712,8 @@ Command addCompareCommand(CLI::App& parent) {
                   "a sequence: key points 'x,y,z;x,y,z;...' (at least 2) that the light (its centre; a directional "
                   "light: its direction) or the camera moves along, at constant speed; replaces the scene file's "
                   "motion");
-  app->add_option("--motion-moves", options->motionMoves, "what --motion-path moves: light (the compared --light) or camera")
+  app->add_option("--motion-moves", options->motionMoves,
+                  "what --motion-path moves: light (the compared --light) or camera")
       ->check(CLI::IsMember({"light", "camera"}))
       ->capture_default_str();
   app->add_option("--frames", options->frames, "frames of the sequence (default: the scene file's motion's, else 12)")

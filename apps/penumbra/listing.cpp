@@ -23,9 +23,12 @@ int runScenes() {
 std::string describeSpec(const ParamSpec& spec) {
   std::string s(toString(spec.type));
   s += spec.autoDefault ? ", default auto" : fmt::format(", default {}", formatParamValue(spec.defaultValue));
-  if (spec.min && spec.max) s += fmt::format(", range [{}, {}]", *spec.min, *spec.max);
-  else if (spec.min) s += fmt::format(", >= {}", *spec.min);
-  else if (spec.max) s += fmt::format(", <= {}", *spec.max);
+  if (spec.min && spec.max)
+    s += fmt::format(", range [{}, {}]", *spec.min, *spec.max);
+  else if (spec.min)
+    s += fmt::format(", >= {}", *spec.min);
+  else if (spec.max)
+    s += fmt::format(", <= {}", *spec.max);
   if (!spec.choices.empty()) s += fmt::format(", one of {}", fmt::join(spec.choices, "|"));
   if (!spec.unit.empty()) s += ", " + spec.unit;
   return s;
@@ -35,7 +38,8 @@ int runTechniques() {
   for (const TechniqueInfo& info : techniqueRegistry()) {
     fmt::print("{}  {}\n  source: {}\n  lights: {}\n", info.name, info.summary, info.source, info.lights);
     if (info.params.empty()) fmt::print("  parameters: none\n");
-    for (const ParamSpec& spec : info.params) fmt::print("  --param {} ({}): {}\n", spec.name, describeSpec(spec), spec.help);
+    for (const ParamSpec& spec : info.params)
+      fmt::print("  --param {} ({}): {}\n", spec.name, describeSpec(spec), spec.help);
     fmt::print("\n");
   }
   fmt::print("Parameters marked \"auto\" are derived from the physical light; give a value to override.\n");

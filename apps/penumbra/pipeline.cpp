@@ -43,7 +43,8 @@ void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& pa
   app.add_option("--seed", options.seed, "random seed, for techniques that have a `seed` parameter")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--param,-p", options.params, paramHelp);
-  app.add_option("--threads", options.threads, "worker threads (0: every core)")->check(CLI::NonNegativeNumber)
+  app.add_option("--threads", options.threads, "worker threads (0: every core)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_flag("--force", options.force,
                "go on past the up-front checks: a run estimated to need more memory than the machine has, or more "
@@ -77,8 +78,7 @@ Setup loadSetup(const FrameOptions& options) {
     }
     resolveParams(info->name, info->params, given);
   }
-  if (scene.lights.empty())
-    fail("scene '{}' ({}) has no light; add one to \"lights\"", scene.name, scene.source);
+  if (scene.lights.empty()) fail("scene '{}' ({}) has no light; add one to \"lights\"", scene.name, scene.source);
   const int count = static_cast<int>(scene.lights.size());
   if (options.lightIndex < 0 || options.lightIndex >= count)
     fail("--light {} is out of range: scene '{}' has {} light{} (valid: {})", options.lightIndex, scene.name, count,
@@ -167,9 +167,10 @@ void checkResources(const Setup& setup, const std::vector<PlannedRun>& runs, int
     const ResourceEstimate e = run.info->estimate(run.params, setup.width, setup.height);
     const double bytes = frameBytes + e.bytes;
     if (bytes > memory)
-      problems.push_back(fmt::format("{} needs about {} of memory ({}{} x {} pixels), more than the {} this machine has",
-                                     run.info->name, formatBytes(bytes), e.drivers.empty() ? "" : e.drivers + ", ",
-                                     setup.width, setup.height, formatBytes(memory)));
+      problems.push_back(
+          fmt::format("{} needs about {} of memory ({}{} x {} pixels), more than the {} this machine has",
+                      run.info->name, formatBytes(bytes), e.drivers.empty() ? "" : e.drivers + ", ", setup.width,
+                      setup.height, formatBytes(memory)));
     const double work = std::max(e.rays / kRayBudget, e.texels / kTexelBudget) * run.repeat;
     rays += e.rays * run.repeat;
     texels += e.texels * run.repeat;
@@ -180,9 +181,10 @@ void checkResources(const Setup& setup, const std::vector<PlannedRun>& runs, int
   }
   // Over the time budget: the run's total, naming the heaviest run and what sets it.
   const auto overBudget = [&](const char* verb, double amount, const char* noun, double budget) {
-    problems.push_back(fmt::format("the run would {} about {:.2g} {}, over the time budget of {:.0e} (about a quarter of "
-                                   "an hour on 2 cores); the most by {}",
-                                   verb, amount, noun, budget, heaviest));
+    problems.push_back(
+        fmt::format("the run would {} about {:.2g} {}, over the time budget of {:.0e} (about a quarter of "
+                    "an hour on 2 cores); the most by {}",
+                    verb, amount, noun, budget, heaviest));
   };
   if (rays > kRayBudget) overBudget("trace", rays, "shadow rays", kRayBudget);
   if (texels > kTexelBudget) overBudget("render", texels, "light-map texels", kTexelBudget);
@@ -271,7 +273,8 @@ void checkWritableFolderOf(const std::string& path) {
 }
 
 std::string outputPath(const Setup& setup, const std::string& dir, const std::string& file) {
-  if (file.empty() || file.find('/') != std::string::npos || file == "." || file == ".." || file.find('\0') != std::string::npos)
+  if (file.empty() || file.find('/') != std::string::npos || file == "." || file == ".." ||
+      file.find('\0') != std::string::npos)
     fail("internal: output file name '{}' is not one file name", file);
   const std::string path = (fs::path(dir) / file).string();
   refuseInputOverwrite(setup, path);
@@ -299,9 +302,10 @@ OutputLock::OutputLock(const std::string& dir) {
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     ::close(fd_);
     fd_ = -1;
-    fail("the output folder '{}' is in use by another penumbra run (it holds {}); wait for it to finish or choose "
-         "another --out",
-         dir, path);
+    fail(
+        "the output folder '{}' is in use by another penumbra run (it holds {}); wait for it to finish or choose "
+        "another --out",
+        dir, path);
   }
 }
 
@@ -368,8 +372,7 @@ struct ThreadLimit::Impl {
 };
 
 ThreadLimit::ThreadLimit(int threads) {
-  if (threads > 0)
-    impl_ = std::make_unique<Impl>(static_cast<size_t>(threads));
+  if (threads > 0) impl_ = std::make_unique<Impl>(static_cast<size_t>(threads));
 }
 
 ThreadLimit::~ThreadLimit() = default;

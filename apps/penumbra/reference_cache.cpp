@@ -60,7 +60,8 @@ nlohmann::json keyJson(const Setup& setup, const Params& params, uint64_t sceneH
 
 // FNV-1a over the pixels' bytes: any edited value changes it.
 std::string pixelChecksum(const Image<float>& v) {
-  return fmt::format("{:016x}", fnv1a(std::string_view(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float))));
+  return fmt::format("{:016x}",
+                     fnv1a(std::string_view(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float))));
 }
 
 constexpr const char* kKeyAttribute = "penumbra.cache_key";
@@ -77,7 +78,8 @@ std::optional<std::string> createCacheDir(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
-    return fmt::format("cannot create the reference cache directory '{}': {}", dir, ec ? ec.message() : "a file of that name exists");
+    return fmt::format("cannot create the reference cache directory '{}': {}", dir,
+                       ec ? ec.message() : "a file of that name exists");
   return std::nullopt;
 }
 
@@ -117,7 +119,8 @@ std::optional<CachedTruth> ReferenceCache::load(std::string& why) const {
       why = "its image does not match its checksum (edited or damaged)";
       return std::nullopt;
     }
-    for (const auto& pass : meta.at("passes")) truth.timings.add(pass.at("pass").get<std::string>(), pass.at("ms").get<double>());
+    for (const auto& pass : meta.at("passes"))
+      truth.timings.add(pass.at("pass").get<std::string>(), pass.at("ms").get<double>());
     for (const auto& [k, v] : meta.at("stats").items())
       truth.stats.emplace_back(k, v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN());
     return truth;
@@ -139,7 +142,8 @@ std::optional<std::string> ReferenceCache::whyUnwritable() const {
 
 void ReferenceCache::store(const Image<float>& v, const PassTimings& timings,
                            const std::vector<std::pair<std::string, double>>& stats) const {
-  if (std::optional<std::string> why = createCacheDir(dir_)) fail("{} (choose another with --cache-dir, or --no-cache)", *why);
+  if (std::optional<std::string> why = createCacheDir(dir_))
+    fail("{} (choose another with --cache-dir, or --no-cache)", *why);
   nlohmann::json meta;
   meta["key"] = key_;
   nlohmann::json passes = nlohmann::json::array();

@@ -13,12 +13,12 @@ namespace penumbra {
 inline constexpr int32_t kNoObject = -1;
 
 struct GBuffer {
-  Image<Vec3> wsPosition;      //!< world-space hit position
-  Image<Vec3> wsNormal;        //!< unit shading normal, facing the camera
+  Image<Vec3> wsPosition;         //!< world-space hit position
+  Image<Vec3> wsNormal;           //!< unit shading normal, facing the camera
   Image<Vec3> wsGeometricNormal;  //!< unit face normal, facing the camera
-  Image<int32_t> objectId;     //!< kNoObject where the pixel sees nothing
-  Image<int32_t> triangleId;   //!< index into the object's mesh triangles; -1 on a miss
-  Image<float> csDepth;        //!< view depth (distance along the view axis); kInfinity on a miss
+  Image<int32_t> objectId;        //!< kNoObject where the pixel sees nothing
+  Image<int32_t> triangleId;      //!< index into the object's mesh triangles; -1 on a miss
+  Image<float> csDepth;           //!< view depth (distance along the view axis); kInfinity on a miss
 
   GBuffer() = default;
   GBuffer(int width, int height)

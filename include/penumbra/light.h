@@ -75,13 +75,13 @@ class Light {
   float distanceToCenter(const Vec3& wsP) const;
 
   // Shape parameters (meaningful for the shapes that have them).
-  float radius() const { return radius_; }          //!< sphere, disk
-  Vec3 normal() const { return normal_; }           //!< disk, rect, polygon: unit plane normal
-  Vec3 u() const { return u_; }                     //!< rect half-edge
-  Vec3 v() const { return v_; }                     //!< rect half-edge
-  Vec3 a() const { return a_; }                     //!< segment end
-  Vec3 b() const { return b_; }                     //!< segment end
-  Vec3 direction() const { return direction_; }     //!< directional: unit, scene -> light
+  float radius() const { return radius_; }                    //!< sphere, disk
+  Vec3 normal() const { return normal_; }                     //!< disk, rect, polygon: unit plane normal
+  Vec3 u() const { return u_; }                               //!< rect half-edge
+  Vec3 v() const { return v_; }                               //!< rect half-edge
+  Vec3 a() const { return a_; }                               //!< segment end
+  Vec3 b() const { return b_; }                               //!< segment end
+  Vec3 direction() const { return direction_; }               //!< directional: unit, scene -> light
   float angularDiameter() const { return angularDiameter_; }  //!< directional, radians
   // Corners of rect and polygon lights, in order (for rect: c-u-v, c+u-v, c+u+v, c-u+v).
   const std::vector<Vec3>& vertices() const { return vertices_; }
@@ -123,12 +123,12 @@ class Light {
     friend class Light;
     const Light* light_ = nullptr;
     Vec3 wsP_{0.0f};
-    bool inside_ = false;    //!< sphere: p inside the light (nothing can occlude)
-    Vec3 toCenter_{0.0f};    //!< sphere: centre - p
-    float d2MinusR2_ = 0.0f; //!< sphere: d^2 - R^2
-    Vec3 axial_{0.0f};       //!< sphere: silhouette-disk centre relative to p
+    bool inside_ = false;      //!< sphere: p inside the light (nothing can occlude)
+    Vec3 toCenter_{0.0f};      //!< sphere: centre - p
+    float d2MinusR2_ = 0.0f;   //!< sphere: d^2 - R^2
+    Vec3 axial_{0.0f};         //!< sphere: silhouette-disk centre relative to p
     float diskRadius_ = 0.0f;  //!< sphere: silhouette-disk radius; disk: radius; directional: tan(diameter/2)
-    Frame frame_;            //!< sphere: around p->centre; disk: around the normal; directional: around direction
+    Frame frame_;              //!< sphere: around p->centre; disk: around the normal; directional: around direction
   };
   Sampler samplerAt(const Vec3& wsP) const;
 

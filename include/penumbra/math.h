@@ -24,9 +24,7 @@ inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
 inline float radians(float degrees) { return degrees * (kPi / 180.0f); }
 inline float degrees(float radians) { return radians * (180.0f / kPi); }
 
-inline bool isFinite(const Vec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
+inline bool isFinite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Axis-aligned bounding box; empty when lower > upper on any axis.
 struct Bounds3 {

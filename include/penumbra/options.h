@@ -62,8 +62,10 @@ namespace detail {
 // 0.009999999776...), so that the schema shows the number the initializer was written with.
 double decimalDouble(float value);
 
-template <class T> struct IsOptional : std::false_type {};
-template <class T> struct IsOptional<std::optional<T>> : std::true_type {};
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
 }  // namespace detail
 
 template <class Options>
@@ -71,7 +73,7 @@ class OptionFields {
  public:
   struct Field {
     ParamSpec spec;
-    std::function<void(Options&, const Params&)> read;  //!< sets the member from resolved Params
+    std::function<void(Options&, const Params&)> read;               //!< sets the member from resolved Params
     std::function<std::optional<ParamValue>(const Options&)> value;  //!< the member's value; empty: "auto"
   };
 

@@ -22,21 +22,21 @@ std::string formatParamValue(const ParamValue& value);
 struct ParamSpec {
   std::string name;
   ParamType type = ParamType::Float;
-  ParamValue defaultValue;      //!< ignored when autoDefault is set
-  std::optional<double> min;    //!< inclusive lower bound (Int, Float)
-  std::optional<double> max;    //!< inclusive upper bound (Int, Float)
+  ParamValue defaultValue;           //!< ignored when autoDefault is set
+  std::optional<double> min;         //!< inclusive lower bound (Int, Float)
+  std::optional<double> max;         //!< inclusive upper bound (Int, Float)
   std::vector<std::string> choices;  //!< allowed values of a String parameter (empty: any)
-  std::string unit;             //!< "texels", "world units", "samples", ...
+  std::string unit;                  //!< "texels", "world units", "samples", ...
   std::string help;
-  bool autoDefault = false;     //!< default is "auto": derived from the physical light by the technique
+  bool autoDefault = false;  //!< default is "auto": derived from the physical light by the technique
 };
 
 // Values given by the user for one technique, before validation.
 class ParamSet {
  public:
   struct Entry {
-    ParamValue value;     //!< as given: a string from the command line, a typed value from JSON
-    std::string source;   //!< "command line", "scene.json: techniques.pcss.kernel", ...
+    ParamValue value;    //!< as given: a string from the command line, a typed value from JSON
+    std::string source;  //!< "command line", "scene.json: techniques.pcss.kernel", ...
   };
   // Later values replace earlier ones (the command line overrides the scene file).
   void set(const std::string& name, ParamValue value, std::string source);

@@ -29,11 +29,11 @@ struct LightMap {
   // Projection of light-space (x, y) to map coordinates, one of:
   //  perspective: s = size/2 * (1 + x / (z tanHalfFov)), t = size/2 * (1 - y / (z tanHalfFov))
   //  orthographic: s = size/2 * (1 + x / halfWidth),    t = size/2 * (1 - y / halfWidth)
-  float tanHalfFov = 1.0f;  //!< perspective
-  float halfWidth = 1.0f;   //!< orthographic, world units
+  float tanHalfFov = 1.0f;          //!< perspective
+  float halfWidth = 1.0f;           //!< orthographic, world units
   float zNear = 0.0f, zFar = 1.0f;  //!< light-space depth range that holds the scene
-  Image<float> lsDepth;     //!< light-space depth z (distance along +z); kInfinity where empty
-  Image<int32_t> objectId;  //!< kNoObject where empty
+  Image<float> lsDepth;             //!< light-space depth z (distance along +z); kInfinity where empty
+  Image<int32_t> objectId;          //!< kNoObject where empty
 
   Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
@@ -49,7 +49,9 @@ struct LightMap {
   // World point at map coordinates (s, t) and light-space depth z (the inverse of project).
   Vec3 unproject(float s, float t, float z) const;
   // Size of one texel in world units at light-space depth z.
-  float texelWorldSize(float z) const { return 2.0f * (orthographic ? halfWidth : z * tanHalfFov) / static_cast<float>(size); }
+  float texelWorldSize(float z) const {
+    return 2.0f * (orthographic ? halfWidth : z * tanHalfFov) / static_cast<float>(size);
+  }
 };
 
 LightMap renderLightMap(const Scene& scene, const Light& light, int size);

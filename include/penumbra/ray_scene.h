@@ -14,10 +14,10 @@
 namespace penumbra {
 
 struct RayHit {
-  float t = kInfinity;        //!< ray parameter of the hit (in units of |direction|)
+  float t = kInfinity;  //!< ray parameter of the hit (in units of |direction|)
   int32_t objectId = kNoObject;
-  int32_t triangleId = -1;    //!< index into the object's mesh triangles
-  Vec2 barycentrics{0.0f};    //!< (b1, b2) of the hit in the triangle (b0 = 1 - b1 - b2)
+  int32_t triangleId = -1;       //!< index into the object's mesh triangles
+  Vec2 barycentrics{0.0f};       //!< (b1, b2) of the hit in the triangle (b0 = 1 - b1 - b2)
   Vec3 wsGeometricNormal{0.0f};  //!< unit face normal, as wound (not flipped towards the ray)
 };
 

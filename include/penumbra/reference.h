@@ -24,8 +24,8 @@ struct ReferenceOptions {
     // 65536 puts the standard error of V under 0.002, half an 8-bit step: more buys nothing.
     f.add(&ReferenceOptions::samplesPerPixel, OptionDecl("spp").range(1, 65536).unit("samples").help(
                                                   "samples per pixel (shadow rays, CMJ-stratified over the light)"));
-    f.add(&ReferenceOptions::seed, OptionDecl("seed").range(0, 4294967295.0).help(
-                                       "random seed; the same seed gives bit-identical output"));
+    f.add(&ReferenceOptions::seed,
+          OptionDecl("seed").range(0, 4294967295.0).help("random seed; the same seed gives bit-identical output"));
   }
 };
 

@@ -30,7 +30,8 @@ struct TechniqueInfo {
   std::string lights;   //!< the light shapes it takes and how it treats them, a concave polygon included
   std::vector<ParamSpec> params;
   std::function<std::unique_ptr<ShadowTechnique>(const Params&)> create;
-  std::function<ResourceEstimate(const Params&, int width, int height)> estimate;  //!< set by the registry for every technique
+  std::function<ResourceEstimate(const Params&, int width, int height)>
+      estimate;  //!< set by the registry for every technique
 
   bool hasParam(const std::string& param) const;
 

@@ -37,19 +37,19 @@ struct SequenceRow {
 
 struct ReportRow {
   std::string technique;
-  std::string label;                 //!< shown name, e.g. "reference (16 spp)"; empty: the technique's name
-  KeyValues params;                  //!< resolved parameters, "auto" where the technique derives it
-  std::optional<ErrorStats> error;   //!< against the reference; absent when not measured (bench)
-  PassTimings timings;               //!< per pass, ms ("prepare", "visibility", ...)
+  std::string label;                      //!< shown name, e.g. "reference (16 spp)"; empty: the technique's name
+  KeyValues params;                       //!< resolved parameters, "auto" where the technique derives it
+  std::optional<ErrorStats> error;        //!< against the reference; absent when not measured (bench)
+  PassTimings timings;                    //!< per pass, ms ("prepare", "visibility", ...)
   std::optional<double> ratioToBaseline;  //!< total ms / the baseline's total ms (fillBaselineRatios)
   std::vector<std::pair<std::string, double>> stats;  //!< ShadowTechnique::stats()
-  KeyValues images;                  //!< kind -> file name, relative to the report's directory
-  std::vector<float> profile;        //!< V along Report::profile's row (empty: none)
+  KeyValues images;                                   //!< kind -> file name, relative to the report's directory
+  std::vector<float> profile;                         //!< V along Report::profile's row (empty: none)
   // Error per shadow-map size, in Report::mapSizes' order. mapSizeVaries false: the technique has
   // no map_size parameter, so one run stands for every size (the same point repeated).
   std::vector<MapSizePoint> mapSizeSweep;
   bool mapSizeVaries = false;
-  bool cached = false;               //!< V was read from the reference cache, not rendered in this run
+  bool cached = false;  //!< V was read from the reference cache, not rendered in this run
   // Set for a sequence: `error` is then the mean over frames (maxima for max err), `timings` the
   // median of each pass over frames, `images` the first frame's.
   std::optional<SequenceRow> sequence;
@@ -60,17 +60,17 @@ struct ReportRow {
 // What moved in a sequence, and the truth's own temporal noise.
 struct SequenceInfo {
   int frames = 0;
-  std::string motion;        //!< e.g. "light 0 along (0.5, 8, -1) -> (0.7, 8, -1)"
-  TemporalStats noiseFloor;  //!< the truth against a truth of another seed, frame by frame
+  std::string motion;           //!< e.g. "light 0 along (0.5, 8, -1) -> (0.7, 8, -1)"
+  TemporalStats noiseFloor;     //!< the truth against a truth of another seed, frame by frame
   std::string noiseFloorSeeds;  //!< e.g. "seeds 1 and 2"
 };
 
 // V along one image row: where the penumbrae of the techniques can be seen side by side.
 struct ScanProfile {
-  int row = 0;                  //!< image row, 0 = top
-  std::string choice;           //!< how the row was chosen ("--profile-row", "most penumbra pixels ...")
-  std::vector<float> reference; //!< the truth's V along the row
-  std::vector<uint8_t> mask;    //!< 1 where the pixel is in the error mask
+  int row = 0;                   //!< image row, 0 = top
+  std::string choice;            //!< how the row was chosen ("--profile-row", "most penumbra pixels ...")
+  std::vector<float> reference;  //!< the truth's V along the row
+  std::vector<uint8_t> mask;     //!< 1 where the pixel is in the error mask
 };
 
 struct Report {
@@ -79,20 +79,20 @@ struct Report {
   std::string scene;        //!< scene name
   std::string sceneSource;  //!< "built-in:torus" or the file path
   int lightIndex = 0;
-  std::string light;        //!< describeLight() of the light used
+  std::string light;  //!< describeLight() of the light used
   int width = 0, height = 0;
-  std::string baseline;     //!< technique the ratios are relative to; empty for none
-  KeyValues settings;       //!< spp, seed, threads, repeat, G-buffer ms, ...
+  std::string baseline;  //!< technique the ratios are relative to; empty for none
+  KeyValues settings;    //!< spp, seed, threads, repeat, G-buffer ms, ...
   std::vector<ReportRow> rows;
 
   // compare only:
   std::optional<ReportRow> truth;  //!< the reference every row's error is measured against
   std::vector<int> mapSizes;       //!< --map-sizes; empty: no sweep
   std::optional<ScanProfile> profile;
-  double errorMapRange = 0.0;      //!< error maps span V - V_ref in [-range, range]; 0: none drawn
-  std::string command;             //!< a command line that reproduces the report
-  KeyValues files;                 //!< other files beside the report: kind -> file name
-  KeyValues skipped;               //!< technique -> why it did not run (e.g. a light shape it does not support)
+  double errorMapRange = 0.0;            //!< error maps span V - V_ref in [-range, range]; 0: none drawn
+  std::string command;                   //!< a command line that reproduces the report
+  KeyValues files;                       //!< other files beside the report: kind -> file name
+  KeyValues skipped;                     //!< technique -> why it did not run (e.g. a light shape it does not support)
   std::optional<SequenceInfo> sequence;  //!< set when the rows are over the frames of a motion
 };
 

@@ -19,7 +19,9 @@ inline uint32_t hash32(uint64_t x) {
   x ^= x >> 31;
   return static_cast<uint32_t>(x);
 }
-inline uint32_t hashCombine(uint64_t a, uint64_t b) { return hash32(a * 0x9e3779b97f4a7c15ull ^ (b + 0x632be59bd9b4e019ull)); }
+inline uint32_t hashCombine(uint64_t a, uint64_t b) {
+  return hash32(a * 0x9e3779b97f4a7c15ull ^ (b + 0x632be59bd9b4e019ull));
+}
 
 // Correlated multi-jittered sampling (Kensler 2013, "Correlated Multi-Jittered Sampling", Pixar
 // TM 13-01, Listings 5 and 6): N = m*n samples stratified on the m x n grid *and* in both 1D
@@ -64,20 +66,45 @@ class CmjSampler {
   static uint32_t permute(uint32_t i, uint32_t l, uint32_t p) {
     if (l <= 1) return 0;
     uint32_t w = l - 1;
-    w |= w >> 1; w |= w >> 2; w |= w >> 4; w |= w >> 8; w |= w >> 16;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
     do {
-      i ^= p; i *= 0xe170893du; i ^= p >> 16; i ^= (i & w) >> 4;
-      i ^= p >> 8; i *= 0x0929eb3fu; i ^= p >> 23; i ^= (i & w) >> 1;
-      i *= 1u | p >> 27; i *= 0x6935fa69u; i ^= (i & w) >> 11;
-      i *= 0x74dcb303u; i ^= (i & w) >> 2; i *= 0x9e501cc3u;
-      i ^= (i & w) >> 2; i *= 0xc860a3dfu; i &= w; i ^= i >> 5;
+      i ^= p;
+      i *= 0xe170893du;
+      i ^= p >> 16;
+      i ^= (i & w) >> 4;
+      i ^= p >> 8;
+      i *= 0x0929eb3fu;
+      i ^= p >> 23;
+      i ^= (i & w) >> 1;
+      i *= 1u | p >> 27;
+      i *= 0x6935fa69u;
+      i ^= (i & w) >> 11;
+      i *= 0x74dcb303u;
+      i ^= (i & w) >> 2;
+      i *= 0x9e501cc3u;
+      i ^= (i & w) >> 2;
+      i *= 0xc860a3dfu;
+      i &= w;
+      i ^= i >> 5;
     } while (i >= l);
     return (i + p) % l;
   }
   // A float in [0, 1) from (i, p) (Kensler, Listing 4).
   static float randomFloat(uint32_t i, uint32_t p) {
-    i ^= p; i ^= i >> 17; i ^= i >> 10; i *= 0xb36534e5u; i ^= i >> 12;
-    i ^= i >> 21; i *= 0x93fc4795u; i ^= 0xdf6e307fu; i ^= i >> 17; i *= 1u | p >> 18;
+    i ^= p;
+    i ^= i >> 17;
+    i ^= i >> 10;
+    i *= 0xb36534e5u;
+    i ^= i >> 12;
+    i ^= i >> 21;
+    i *= 0x93fc4795u;
+    i ^= 0xdf6e307fu;
+    i ^= i >> 17;
+    i *= 1u | p >> 18;
     return static_cast<float>(i) * (1.0f / 4294967808.0f);
   }
 

@@ -24,12 +24,12 @@ namespace penumbra {
 inline constexpr float kPopJump = 0.1f;  //!< e above this (in V): a pop
 
 struct TemporalStats {
-  double flicker = 0.0;        //!< mean e * 255 over the counted pixels of every consecutive pair
-  double popRate = 0.0;        //!< share of counted pixels with e > kPopJump, in [0, 1]
-  double reversedPops = 0.0;   //!< share of pops undone at the next pair, in [0, 1] (0 with no pops)
-  size_t pixels = 0;           //!< counted (pixel, pair) samples
-  size_t pops = 0;             //!< of those, pops
-  size_t framePairs = 0;       //!< consecutive pairs: frames - 1
+  double flicker = 0.0;       //!< mean e * 255 over the counted pixels of every consecutive pair
+  double popRate = 0.0;       //!< share of counted pixels with e > kPopJump, in [0, 1]
+  double reversedPops = 0.0;  //!< share of pops undone at the next pair, in [0, 1] (0 with no pops)
+  size_t pixels = 0;          //!< counted (pixel, pair) samples
+  size_t pops = 0;            //!< of those, pops
+  size_t framePairs = 0;      //!< consecutive pairs: frames - 1
 };
 
 // v[k], reference[k] and masks[k] are frame k's technique V, reference V and error mask (all frames

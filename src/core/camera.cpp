@@ -7,13 +7,15 @@
 namespace penumbra {
 
 void Camera::validate() const {
-  if (!isFinite(position) || !isFinite(lookAt) || !isFinite(up)) fail("camera: position, look_at and up must be finite");
+  if (!isFinite(position) || !isFinite(lookAt) || !isFinite(up))
+    fail("camera: position, look_at and up must be finite");
   const Vec3 forward = lookAt - position;
   if (!(glm::length(forward) > 0.0f)) fail("camera: look_at must differ from position");
   if (!(glm::length(up) > 0.0f)) fail("camera: up must be a non-zero vector");
   if (glm::length(glm::cross(glm::normalize(forward), glm::normalize(up))) < 1e-4f)
     fail("camera: up must not be parallel to the viewing direction (look_at - position)");
-  if (!(fovYDegrees > 0.0f && fovYDegrees < 180.0f)) fail("camera: fov_y must be in (0, 180) degrees (got {})", fovYDegrees);
+  if (!(fovYDegrees > 0.0f && fovYDegrees < 180.0f))
+    fail("camera: fov_y must be in (0, 180) degrees (got {})", fovYDegrees);
 }
 
 Mat4 Camera::cameraFromWs() const { return glm::lookAt(position, lookAt, up); }

@@ -11,12 +11,18 @@ namespace penumbra {
 
 std::string_view toString(LightShape shape) {
   switch (shape) {
-    case LightShape::Sphere: return "sphere";
-    case LightShape::Disk: return "disk";
-    case LightShape::Rect: return "rect";
-    case LightShape::Segment: return "segment";
-    case LightShape::Polygon: return "polygon";
-    case LightShape::Directional: return "directional";
+    case LightShape::Sphere:
+      return "sphere";
+    case LightShape::Disk:
+      return "disk";
+    case LightShape::Rect:
+      return "rect";
+    case LightShape::Segment:
+      return "segment";
+    case LightShape::Polygon:
+      return "polygon";
+    case LightShape::Directional:
+      return "directional";
   }
   return "unknown";
 }
@@ -160,11 +166,13 @@ Light Light::polygon(const std::vector<Vec3>& vertices) {
   }
   for (size_t i = 0; i < vertices.size(); ++i) {
     const double off = std::abs(glm::dot(DVec3(vertices[i]) - DVec3(centroid), n));
-    if (off > 1e-3 * size) fail("light: polygon is not planar (vertex {} is {} off its plane); expected all vertices in one plane", i, off);
+    if (off > 1e-3 * size)
+      fail("light: polygon is not planar (vertex {} is {} off its plane); expected all vertices in one plane", i, off);
   }
   const std::vector<polygon2d::DVec2> flat = inPlane(vertices, n);
   if (const std::string problem = polygon2d::simplePolygonProblem(flat, lengthTolerance); !problem.empty())
-    fail("light: polygon {}; expected a simple polygon (no edge crossing or touching another, each vertex once)", problem);
+    fail("light: polygon {}; expected a simple polygon (no edge crossing or touching another, each vertex once)",
+         problem);
   if (!hasArea) fail("light: polygon has zero area");
   Light l;
   l.shape_ = LightShape::Polygon;
@@ -232,16 +240,21 @@ std::vector<std::vector<Vec3>> Light::convexParts() const {
 
 float Light::area() const {
   switch (shape_) {
-    case LightShape::Disk: return kPi * radius_ * radius_;
-    case LightShape::Rect: return 4.0f * glm::length(glm::cross(u_, v_));
-    case LightShape::Polygon: return 0.5f * glm::length(newellNormal(vertices_));
-    default: return 0.0f;
+    case LightShape::Disk:
+      return kPi * radius_ * radius_;
+    case LightShape::Rect:
+      return 4.0f * glm::length(glm::cross(u_, v_));
+    case LightShape::Polygon:
+      return 0.5f * glm::length(newellNormal(vertices_));
+    default:
+      return 0.0f;
   }
 }
 
 Light Light::directional(const Vec3& wsToLight, float angularDiameterRadians, LightProfile profile) {
   if (!(angularDiameterRadians > 0.0f) || !(angularDiameterRadians < kPi) || !std::isfinite(angularDiameterRadians))
-    fail("light: directional angular_diameter must be in (0, 180) degrees (got {} degrees)", degrees(angularDiameterRadians));
+    fail("light: directional angular_diameter must be in (0, 180) degrees (got {} degrees)",
+         degrees(angularDiameterRadians));
   Light l;
   l.shape_ = LightShape::Directional;
   l.direction_ = unitOrFail(wsToLight, "directional direction");
@@ -251,7 +264,8 @@ Light Light::directional(const Vec3& wsToLight, float angularDiameterRadians, Li
 }
 
 void Light::setIntensity(float intensity) {
-  if (!(intensity >= 0.0f) || !std::isfinite(intensity)) fail("light: intensity must be finite and >= 0 (got {})", intensity);
+  if (!(intensity >= 0.0f) || !std::isfinite(intensity))
+    fail("light: intensity must be finite and >= 0 (got {})", intensity);
   intensity_ = intensity;
 }
 
@@ -269,15 +283,19 @@ float Light::distanceToCenter(const Vec3& wsP) const {
 float Light::extent() const {
   switch (shape_) {
     case LightShape::Sphere:
-    case LightShape::Disk: return radius_;
-    case LightShape::Rect: return glm::length(u_ + v_);
-    case LightShape::Segment: return 0.5f * glm::length(b_ - a_);
+    case LightShape::Disk:
+      return radius_;
+    case LightShape::Rect:
+      return glm::length(u_ + v_);
+    case LightShape::Segment:
+      return 0.5f * glm::length(b_ - a_);
     case LightShape::Polygon: {
       float r = 0.0f;
       for (const Vec3& p : vertices_) r = std::max(r, glm::length(p - center_));
       return r;
     }
-    case LightShape::Directional: return std::tan(0.5f * angularDiameter_);
+    case LightShape::Directional:
+      return std::tan(0.5f * angularDiameter_);
   }
   return 0.0f;
 }
@@ -316,8 +334,12 @@ LightSample Light::sample(const Vec3& wsP, const Vec2& u) const {
       x = center_ + q.x * f.x + q.y * f.y;
       break;
     }
-    case LightShape::Rect: x = center_ + (2.0f * u.x - 1.0f) * u_ + (2.0f * u.y - 1.0f) * v_; break;
-    case LightShape::Segment: x = a_ + u.x * (b_ - a_); break;
+    case LightShape::Rect:
+      x = center_ + (2.0f * u.x - 1.0f) * u_ + (2.0f * u.y - 1.0f) * v_;
+      break;
+    case LightShape::Segment:
+      x = a_ + u.x * (b_ - a_);
+      break;
     case LightShape::Polygon: {
       // Pick a triangle by area with u.x, reuse the remainder of u.x inside it: stratified u stays
       // stratified within each triangle.
@@ -378,7 +400,8 @@ Light::Sampler Light::samplerAt(const Vec3& wsP) const {
       s.frame_ = Frame::fromZ(direction_);
       s.diskRadius_ = std::tan(0.5f * angularDiameter_);
       break;
-    default: break;  // rect, segment, polygon: nothing depends on p before the sample point
+    default:
+      break;  // rect, segment, polygon: nothing depends on p before the sample point
   }
   return s;
 }
@@ -434,7 +457,8 @@ void Light::Sampler::sample(const Vec2* u, int count, LightSample* out) const {
 
 float Light::irradiance(const Vec3& wsP, const Vec3& wsN) const {
   switch (shape_) {
-    case LightShape::Directional: return intensity_ * std::max(0.0f, glm::dot(wsN, direction_));
+    case LightShape::Directional:
+      return intensity_ * std::max(0.0f, glm::dot(wsN, direction_));
     case LightShape::Sphere: {
       // Exact for a sphere wholly above p's horizon: E = pi L sin^2(alpha) cos(theta).
       const float d = glm::length(center_ - wsP);
@@ -442,14 +466,19 @@ float Light::irradiance(const Vec3& wsP, const Vec3& wsN) const {
       const float s = radius_ / d;
       return intensity_ * kPi * s * s * std::max(0.0f, glm::dot(wsN, (center_ - wsP) / d));
     }
-    default: break;
+    default:
+      break;
   }
   // Planar and linear lights: a fixed 8x8 stratified quadrature of the area (or length) integral.
   const CmjSampler sampler(64);
   float measure;
   switch (shape_) {
-    case LightShape::Segment: measure = glm::length(b_ - a_); break;
-    default: measure = area(); break;
+    case LightShape::Segment:
+      measure = glm::length(b_ - a_);
+      break;
+    default:
+      measure = area();
+      break;
   }
   float sum = 0.0f;
   for (uint32_t i = 0; i < sampler.count(); ++i) {
@@ -466,10 +495,14 @@ Frame Light::lightFrame(const Bounds3& sceneBounds) const {
   const Vec3 target = sceneBounds.empty() ? center_ - Vec3(0.0f, 1.0f, 0.0f) : sceneBounds.center();
   Vec3 z;
   switch (shape_) {
-    case LightShape::Directional: z = -direction_; break;
+    case LightShape::Directional:
+      z = -direction_;
+      break;
     case LightShape::Disk:
     case LightShape::Rect:
-    case LightShape::Polygon: z = glm::dot(normal_, target - center_) >= 0.0f ? normal_ : -normal_; break;
+    case LightShape::Polygon:
+      z = glm::dot(normal_, target - center_) >= 0.0f ? normal_ : -normal_;
+      break;
     default: {
       const Vec3 d = target - center_;
       z = glm::length(d) > 0.0f ? glm::normalize(d) : Vec3(0.0f, -1.0f, 0.0f);

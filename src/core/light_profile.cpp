@@ -20,9 +20,12 @@ double limbDarkenedSegment(double t, double u) {
 
 std::string_view toString(VisibilityProfile profile) {
   switch (profile) {
-    case VisibilityProfile::Linear: return "linear";
-    case VisibilityProfile::UniformDisk: return "uniform disk";
-    case VisibilityProfile::LimbDarkenedDisk: return "limb-darkened disk";
+    case VisibilityProfile::Linear:
+      return "linear";
+    case VisibilityProfile::UniformDisk:
+      return "uniform disk";
+    case VisibilityProfile::LimbDarkenedDisk:
+      return "limb-darkened disk";
   }
   return "unknown";
 }
@@ -52,13 +55,16 @@ VisibilityToIllumination::VisibilityToIllumination(VisibilityProfile profile) : 
 VisibilityToIllumination VisibilityToIllumination::forLight(const Light& light) {
   switch (light.shape()) {
     case LightShape::Sphere:
-    case LightShape::Disk: return VisibilityToIllumination(VisibilityProfile::UniformDisk);
+    case LightShape::Disk:
+      return VisibilityToIllumination(VisibilityProfile::UniformDisk);
     case LightShape::Directional:
-      return VisibilityToIllumination(light.profile() == LightProfile::LimbDarkened ? VisibilityProfile::LimbDarkenedDisk
-                                                                                    : VisibilityProfile::UniformDisk);
+      return VisibilityToIllumination(light.profile() == LightProfile::LimbDarkened
+                                          ? VisibilityProfile::LimbDarkenedDisk
+                                          : VisibilityProfile::UniformDisk);
     case LightShape::Rect:
     case LightShape::Polygon:
-    case LightShape::Segment: return VisibilityToIllumination(VisibilityProfile::Linear);
+    case LightShape::Segment:
+      return VisibilityToIllumination(VisibilityProfile::Linear);
   }
   return VisibilityToIllumination(VisibilityProfile::Linear);
 }

@@ -25,9 +25,10 @@ void Motion::validate(const Scene& scene, const std::string& where) const {
     if (scene.lights[static_cast<size_t>(lightIndex)].isDirectional())
       for (int k = 0; k < frames; ++k)
         if (!(glm::length(pointAt(k)) > 1e-6f))
-          fail("{}: the light is directional, so the keys are directions towards it, and frame {} "
-               "passes through the origin (no direction)",
-               where, k);
+          fail(
+              "{}: the light is directional, so the keys are directions towards it, and frame {} "
+              "passes through the origin (no direction)",
+              where, k);
   } else {
     // Every frame's camera must be a valid camera (not on its look_at point, up not along the view).
     for (int k = 0; k < frames; ++k) {
@@ -64,10 +65,14 @@ Light lightMovedTo(const Light& light, const Vec3& center) {
   const Vec3 offset = center - light.center();
   Light moved = [&] {
     switch (light.shape()) {
-      case LightShape::Sphere: return Light::sphere(center, light.radius());
-      case LightShape::Disk: return Light::disk(center, light.normal(), light.radius());
-      case LightShape::Rect: return Light::rect(center, light.u(), light.v());
-      case LightShape::Segment: return Light::segment(light.a() + offset, light.b() + offset);
+      case LightShape::Sphere:
+        return Light::sphere(center, light.radius());
+      case LightShape::Disk:
+        return Light::disk(center, light.normal(), light.radius());
+      case LightShape::Rect:
+        return Light::rect(center, light.u(), light.v());
+      case LightShape::Segment:
+        return Light::segment(light.a() + offset, light.b() + offset);
       case LightShape::Polygon: {
         std::vector<Vec3> vertices = light.vertices();
         for (Vec3& v : vertices) v += offset;

@@ -25,9 +25,10 @@ void replaceFile(const std::string& path, const std::function<void(const std::st
     // (rename does not follow it), so its target's permissions do not matter.
     // By its mode bits rather than access(), which says yes to root for any file.
     if (S_ISREG(existing.st_mode) && (existing.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)) == 0)
-      fail("cannot write '{}': the file exists and is read-only; penumbra does not replace it (remove it or choose "
-           "another output folder)",
-           path);
+      fail(
+          "cannot write '{}': the file exists and is read-only; penumbra does not replace it (remove it or choose "
+          "another output folder)",
+          path);
   }
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
   // mkstemp creates the file with O_CREAT | O_EXCL: a new file, never an existing one or a link.
@@ -54,8 +55,8 @@ void replaceFile(const std::string& path, const std::function<void(const std::st
 std::string fileNameSlug(std::string_view name) {
   std::string out;
   for (const char c : name) {
-    const bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
-                      c == '_' || c == '.';
+    const bool keep =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.';
     const char k = keep ? c : '_';
     if (k == '_' && !out.empty() && out.back() == '_') continue;
     if ((k == '.' || k == '-') && out.empty()) continue;

@@ -1,7 +1,7 @@
 #include "penumbra/params.h"
 
-#include <charconv>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 
 #include <fmt/ranges.h>
@@ -12,10 +12,14 @@ namespace penumbra {
 
 std::string_view toString(ParamType type) {
   switch (type) {
-    case ParamType::Int: return "int";
-    case ParamType::Float: return "float";
-    case ParamType::Bool: return "bool";
-    case ParamType::String: return "string";
+    case ParamType::Int:
+      return "int";
+    case ParamType::Float:
+      return "float";
+    case ParamType::Bool:
+      return "bool";
+    case ParamType::String:
+      return "string";
   }
   return "?";
 }
@@ -24,9 +28,12 @@ std::string formatParamValue(const ParamValue& value) {
   return std::visit(
       [](const auto& v) -> std::string {
         using T = std::decay_t<decltype(v)>;
-        if constexpr (std::is_same_v<T, bool>) return v ? "true" : "false";
-        else if constexpr (std::is_same_v<T, std::string>) return v;
-        else return fmt::format("{}", v);
+        if constexpr (std::is_same_v<T, bool>)
+          return v ? "true" : "false";
+        else if constexpr (std::is_same_v<T, std::string>)
+          return v;
+        else
+          return fmt::format("{}", v);
       },
       value);
 }
@@ -54,9 +61,12 @@ std::optional<double> parseNumber(const std::string& s) {
 
 std::string describeExpected(const ParamSpec& spec) {
   std::string s(toString(spec.type));
-  if (spec.min && spec.max) s += fmt::format(" in [{}, {}]", *spec.min, *spec.max);
-  else if (spec.min) s += fmt::format(" >= {}", *spec.min);
-  else if (spec.max) s += fmt::format(" <= {}", *spec.max);
+  if (spec.min && spec.max)
+    s += fmt::format(" in [{}, {}]", *spec.min, *spec.max);
+  else if (spec.min)
+    s += fmt::format(" >= {}", *spec.min);
+  else if (spec.max)
+    s += fmt::format(" <= {}", *spec.max);
   if (!spec.choices.empty()) s += fmt::format(" (one of {})", fmt::join(spec.choices, ", "));
   if (spec.autoDefault) s += " or \"auto\"";
   return s;
@@ -89,7 +99,8 @@ std::optional<ParamValue> convert(const ParamSpec& spec, const ParamValue& given
         return *n;
       }
       if (auto* i = std::get_if<int64_t>(&given)) return static_cast<double>(*i);
-      if (auto* f = std::get_if<double>(&given)) return std::isfinite(*f) ? std::optional<ParamValue>(*f) : std::nullopt;
+      if (auto* f = std::get_if<double>(&given))
+        return std::isfinite(*f) ? std::optional<ParamValue>(*f) : std::nullopt;
       return std::nullopt;
     }
     case ParamType::Bool: {
@@ -136,15 +147,16 @@ Params resolveParams(const std::string& technique, const std::vector<ParamSpec>&
     std::optional<ParamValue> value = convert(spec, entry.value);
     bool ok = value.has_value();
     if (ok && (spec.type == ParamType::Int || spec.type == ParamType::Float)) {
-      const double d = spec.type == ParamType::Int ? static_cast<double>(std::get<int64_t>(*value)) : std::get<double>(*value);
+      const double d =
+          spec.type == ParamType::Int ? static_cast<double>(std::get<int64_t>(*value)) : std::get<double>(*value);
       if ((spec.min && d < *spec.min) || (spec.max && d > *spec.max)) ok = false;
     }
     if (ok && spec.type == ParamType::String && !spec.choices.empty()) {
       ok = std::find(spec.choices.begin(), spec.choices.end(), std::get<std::string>(*value)) != spec.choices.end();
     }
     if (!ok)
-      fail("{}: {}.{} = {} is not valid: expected {}", entry.source, technique, spec.name, formatParamValue(entry.value),
-           describeExpected(spec));
+      fail("{}: {}.{} = {} is not valid: expected {}", entry.source, technique, spec.name,
+           formatParamValue(entry.value), describeExpected(spec));
     params.set(spec.name, std::move(value));
   }
   return params;

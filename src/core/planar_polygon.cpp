@@ -266,7 +266,7 @@ std::vector<std::vector<uint32_t>> hertelMehlhorn(const std::vector<DVec2>& p, d
     const std::vector<uint32_t>& Q = pieces[qi];
     std::vector<uint32_t> merged;
     for (size_t k = 1; k <= P.size(); ++k) merged.push_back(P[(pa + k) % P.size()]);  // b ... a
-    for (size_t k = 2; k < Q.size(); ++k) merged.push_back(Q[(qb + k) % Q.size()]);  // after a ... before b
+    for (size_t k = 2; k < Q.size(); ++k) merged.push_back(Q[(qb + k) % Q.size()]);   // after a ... before b
     const size_t m = merged.size();
     const auto corner = [&](size_t k) {
       return orient(p[merged[(k + m - 1) % m]], p[merged[k]], p[merged[(k + 1) % m]]) >= -turnTolerance;
@@ -284,7 +284,8 @@ ConvexPartition convexPartition(const std::vector<DVec2>& p, double turnToleranc
   const size_t n = p.size();
   ConvexPartition out;
   if (isConvex(p, turnTolerance) || n > kOptimalPartitionMaxVertices) {
-    out.pieces = n > kOptimalPartitionMaxVertices ? hertelMehlhorn(p, turnTolerance) : optimalConvexPartition(p, turnTolerance);
+    out.pieces =
+        n > kOptimalPartitionMaxVertices ? hertelMehlhorn(p, turnTolerance) : optimalConvexPartition(p, turnTolerance);
     return out;
   }
   double size = 0.0;

@@ -66,7 +66,7 @@ Mesh makeBox(const Vec3& size) {
   addQuad(m, 2, 6, 7, 3);  // +y
   addQuad(m, 0, 2, 3, 1);  // -z
   addQuad(m, 4, 5, 7, 6);  // +z
-  return m;  // flat: no vertex normals
+  return m;                // flat: no vertex normals
 }
 
 Mesh makeSphere(float radius, int segments, int rings) {
@@ -121,7 +121,8 @@ Mesh makeTorus(float majorRadius, float minorRadius, int majorSegments, int mino
     return static_cast<uint32_t>((i % majorSegments) * minorSegments + (j % minorSegments));
   };
   for (int i = 0; i < majorSegments; ++i)
-    for (int j = 0; j < minorSegments; ++j) addQuad(m, index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
+    for (int j = 0; j < minorSegments; ++j)
+      addQuad(m, index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
   return m;
 }
 
@@ -159,7 +160,8 @@ Mesh makeCylinder(float radius, float height, int segments) {
   const auto index = [&](int ring, int s) { return static_cast<uint32_t>(ring * segments + (s % segments)); };
   for (int s = 0; s < segments; ++s) {
     m.triangles.emplace_back(bottom, index(0, s + 1), index(0, s));  // seen from -y: counter-clockwise
-    for (int ring = 0; ring < 5; ++ring) addQuad(m, index(ring, s), index(ring, s + 1), index(ring + 1, s + 1), index(ring + 1, s));
+    for (int ring = 0; ring < 5; ++ring)
+      addQuad(m, index(ring, s), index(ring, s + 1), index(ring + 1, s + 1), index(ring + 1, s));
     m.triangles.emplace_back(top, index(5, s), index(5, s + 1));
   }
   return m;
@@ -178,7 +180,10 @@ void transformMesh(Mesh& mesh, const Mat4& wsFromObject) {
   const Mat3 linear(wsFromObject);
   const float det = glm::determinant(linear);
   if (!std::isfinite(det) || det == 0.0f)
-    fail("transform is singular or overflows (determinant {}); expected non-zero scale factors whose product is within float range", det);
+    fail(
+        "transform is singular or overflows (determinant {}); expected non-zero scale factors whose product is within "
+        "float range",
+        det);
   for (Vec3& p : mesh.positions) p = Vec3(wsFromObject * Vec4(p, 1.0f));
   const Mat3 normalFromObject = glm::transpose(glm::inverse(linear));
   for (Vec3& n : mesh.normals) {

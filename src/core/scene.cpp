@@ -9,8 +9,10 @@ void checkImageSize(int width, int height, const std::string& where) {
     fail("{}: image size {} x {} must be within 1..{} pixels per side", where, width, height, kMaxImageSide);
   const int64_t pixels = int64_t{width} * height;
   if (pixels > kMaxImagePixels)
-    fail("{}: image size {} x {} is {} pixels, over the limit of {} pixels (8192 x 8192: the G-buffer alone takes "
-         "48 bytes per pixel); render a smaller image", where, width, height, pixels, kMaxImagePixels);
+    fail(
+        "{}: image size {} x {} is {} pixels, over the limit of {} pixels (8192 x 8192: the G-buffer alone takes "
+        "48 bytes per pixel); render a smaller image",
+        where, width, height, pixels, kMaxImagePixels);
 }
 
 Bounds3 Mesh::bounds() const {

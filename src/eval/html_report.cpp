@@ -26,12 +26,23 @@ std::string esc(std::string_view s) {
   out.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -47,9 +58,9 @@ std::string hex(const Srgb8& c) { return fmt::format("#{:02x}{:02x}{:02x}", c[0]
 
 // Okabe & Ito's colour-blind-safe palette, then Tableau's, for the techniques; the truth is black.
 std::string techniqueColor(size_t index) {
-  static const char* palette[] = {"#0072b2", "#e69f00", "#009e73", "#cc79a7", "#d55e00", "#56b4e9", "#f0e442",
-                                  "#7f7f7f", "#8c564b", "#9467bd", "#bcbd22", "#17becf", "#e377c2", "#2ca02c",
-                                  "#ff7f0e", "#1f77b4"};
+  static const char* palette[] = {"#0072b2", "#e69f00", "#009e73", "#cc79a7", "#d55e00", "#56b4e9",
+                                  "#f0e442", "#7f7f7f", "#8c564b", "#9467bd", "#bcbd22", "#17becf",
+                                  "#e377c2", "#2ca02c", "#ff7f0e", "#1f77b4"};
   return palette[index % std::size(palette)];
 }
 constexpr const char* kTruthColor = "#000000";
@@ -129,23 +140,25 @@ struct Plot {
                      kWidth - kLeft - kRight, kHeight - kTop - kBottom);
     for (size_t i = 0; i < xTicks.size(); ++i) {
       const double px = x(xTicks[i]);
-      s += fmt::format("<line class=\"grid\" x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\"/>"
-                       "<text class=\"tick\" x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
-                       coord(px), coord(kTop), coord(kHeight - kBottom), coord(kHeight - kBottom + 16),
-                       esc(i < xTickLabels.size() ? xTickLabels[i] : tickLabel(xTicks[i])));
+      s += fmt::format(
+          "<line class=\"grid\" x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\"/>"
+          "<text class=\"tick\" x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
+          coord(px), coord(kTop), coord(kHeight - kBottom), coord(kHeight - kBottom + 16),
+          esc(i < xTickLabels.size() ? xTickLabels[i] : tickLabel(xTicks[i])));
     }
     for (double t : yTicks) {
       const double py = y(t);
-      s += fmt::format("<line class=\"grid\" x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\"/>"
-                       "<text class=\"tick\" x=\"{3}\" y=\"{4}\" text-anchor=\"end\">{5}</text>\n",
-                       coord(kLeft), coord(kWidth - kRight), coord(py), coord(kLeft - 6), coord(py + 4),
-                       esc(tickLabel(t)));
+      s += fmt::format(
+          "<line class=\"grid\" x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\"/>"
+          "<text class=\"tick\" x=\"{3}\" y=\"{4}\" text-anchor=\"end\">{5}</text>\n",
+          coord(kLeft), coord(kWidth - kRight), coord(py), coord(kLeft - 6), coord(py + 4), esc(tickLabel(t)));
     }
     s += fmt::format("<text class=\"axis-label\" x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
                      coord(0.5 * (kLeft + kWidth - kRight)), coord(kHeight - 12), esc(xLabel));
-    s += fmt::format("<text class=\"axis-label\" transform=\"translate(16 {}) rotate(-90)\" text-anchor=\"middle\">{}"
-                     "</text>\n",
-                     coord(0.5 * (kTop + kHeight - kBottom)), esc(yLabel));
+    s += fmt::format(
+        "<text class=\"axis-label\" transform=\"translate(16 {}) rotate(-90)\" text-anchor=\"middle\">{}"
+        "</text>\n",
+        coord(0.5 * (kTop + kHeight - kBottom)), esc(yLabel));
     return s + body + "</svg>\n";
   }
 };
@@ -181,9 +194,8 @@ std::string errorTimePlot(const Report& report) {
   Plot plot({lo, hi, true}, {0.0, maxOr(yTicks, 1.0), false});
 
   std::vector<Point> sorted = points;
-  std::sort(sorted.begin(), sorted.end(), [](const Point& a, const Point& b) {
-    return a.ms != b.ms ? a.ms < b.ms : a.rmse8 < b.rmse8;
-  });
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Point& a, const Point& b) { return a.ms != b.ms ? a.ms < b.ms : a.rmse8 < b.rmse8; });
   std::string front;
   double best = std::numeric_limits<double>::infinity();
   for (const Point& p : sorted)
@@ -226,15 +238,17 @@ std::string mapSizePlot(const Report& report) {
       const double px = plot.x(p.mapSize), py = plot.y(p.error.rmse8);
       line += fmt::format("{},{} ", coord(px), coord(py));
       if (row.mapSizeVaries)
-        marks += fmt::format("<circle class=\"point\" data-technique=\"{}\" data-map-size=\"{}\" data-rmse8=\"{}\" "
-                             "cx=\"{}\" cy=\"{}\" r=\"4\" fill=\"{}\"><title>{}: RMSE8 {} at {}&#178;</title></circle>",
-                             esc(row.shownName()), p.mapSize, exact(p.error.rmse8), coord(px), coord(py),
-                             techniqueColor(i), esc(row.shownName()), fixed(p.error.rmse8, 2), p.mapSize);
+        marks += fmt::format(
+            "<circle class=\"point\" data-technique=\"{}\" data-map-size=\"{}\" data-rmse8=\"{}\" "
+            "cx=\"{}\" cy=\"{}\" r=\"4\" fill=\"{}\"><title>{}: RMSE8 {} at {}&#178;</title></circle>",
+            esc(row.shownName()), p.mapSize, exact(p.error.rmse8), coord(px), coord(py), techniqueColor(i),
+            esc(row.shownName()), fixed(p.error.rmse8, 2), p.mapSize);
     }
-    plot.body += fmt::format("<g class=\"series\" data-series=\"{}\"><polyline class=\"{}\" stroke=\"{}\" points=\"{}\">"
-                             "<title>{}</title></polyline>{}</g>\n",
-                             i, row.mapSizeVaries ? "line" : "line flat", techniqueColor(i), line,
-                             esc(row.shownName() + (row.mapSizeVaries ? "" : " (no shadow map: one run)")), marks);
+    plot.body += fmt::format(
+        "<g class=\"series\" data-series=\"{}\"><polyline class=\"{}\" stroke=\"{}\" points=\"{}\">"
+        "<title>{}</title></polyline>{}</g>\n",
+        i, row.mapSizeVaries ? "line" : "line flat", techniqueColor(i), line,
+        esc(row.shownName() + (row.mapSizeVaries ? "" : " (no shadow map: one run)")), marks);
   }
   std::vector<double> ticks(report.mapSizes.begin(), report.mapSizes.end());
   return plot.frame("plot-map-size", "RMSE8 against shadow-map size", "shadow-map size, texels per side (log scale)",
@@ -299,15 +313,16 @@ std::string profilePlot(const Report& report) {
   for (size_t i = 0; i < report.rows.size(); ++i) {
     const ReportRow& row = report.rows[i];
     if (row.profile.size() != profile.reference.size()) continue;
-    plot.body += fmt::format("<g class=\"series\" data-series=\"{}\"><polyline class=\"line\" data-technique=\"{}\" "
-                             "stroke=\"{}\" points=\"{}\"><title>{}</title></polyline></g>\n",
-                             i, esc(row.shownName()), techniqueColor(i), profilePolyline(plot, row.profile, range),
-                             esc(row.shownName()));
+    plot.body += fmt::format(
+        "<g class=\"series\" data-series=\"{}\"><polyline class=\"line\" data-technique=\"{}\" "
+        "stroke=\"{}\" points=\"{}\"><title>{}</title></polyline></g>\n",
+        i, esc(row.shownName()), techniqueColor(i), profilePolyline(plot, row.profile, range), esc(row.shownName()));
   }
-  plot.body += fmt::format("<g class=\"series\" data-series=\"truth\"><polyline class=\"line truth\" "
-                           "data-technique=\"truth\" stroke=\"{}\" points=\"{}\"><title>reference (truth)</title>"
-                           "</polyline></g>\n",
-                           kTruthColor, profilePolyline(plot, profile.reference, range));
+  plot.body += fmt::format(
+      "<g class=\"series\" data-series=\"truth\"><polyline class=\"line truth\" "
+      "data-technique=\"truth\" stroke=\"{}\" points=\"{}\"><title>reference (truth)</title>"
+      "</polyline></g>\n",
+      kTruthColor, profilePolyline(plot, profile.reference, range));
   return plot.frame("plot-profile", fmt::format("V along image row {}", profile.row),
                     fmt::format("image column, row {} (columns {} to {} of {})", profile.row, range.first,
                                 range.last - 1, profile.reference.size()),
@@ -316,21 +331,24 @@ std::string profilePlot(const Report& report) {
 
 std::string errorLegend(double range) {
   constexpr double kW = 360, kH = 46, kBar = 14, kPad = 20;
-  std::string s = fmt::format("<svg id=\"error-legend\" class=\"legend-bar\" viewBox=\"0 0 {} {}\" "
-                              "xmlns=\"http://www.w3.org/2000/svg\" role=\"img\" aria-label=\"signed error colour map\">"
-                              "<defs><linearGradient id=\"diverging\" x1=\"0\" x2=\"1\" y1=\"0\" y2=\"0\">",
-                              kW, kH);
+  std::string s = fmt::format(
+      "<svg id=\"error-legend\" class=\"legend-bar\" viewBox=\"0 0 {} {}\" "
+      "xmlns=\"http://www.w3.org/2000/svg\" role=\"img\" aria-label=\"signed error colour map\">"
+      "<defs><linearGradient id=\"diverging\" x1=\"0\" x2=\"1\" y1=\"0\" y2=\"0\">",
+      kW, kH);
   for (const auto& [t, c] : divergingStops())
     s += fmt::format("<stop offset=\"{:g}\" stop-color=\"{}\"/>", 0.5 * (t + 1.0), hex(c));
-  s += fmt::format("</linearGradient></defs><rect x=\"{}\" y=\"4\" width=\"{}\" height=\"{}\" fill=\"url(#diverging)\" "
-                   "stroke=\"#888\" stroke-width=\"0.5\"/>",
-                   kPad, kW - 2 * kPad, kBar);
+  s += fmt::format(
+      "</linearGradient></defs><rect x=\"{}\" y=\"4\" width=\"{}\" height=\"{}\" fill=\"url(#diverging)\" "
+      "stroke=\"#888\" stroke-width=\"0.5\"/>",
+      kPad, kW - 2 * kPad, kBar);
   for (double t : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
     const double px = kPad + 0.5 * (t + 1.0) * (kW - 2 * kPad);
     const double value = t * range;
-    s += fmt::format("<line x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#333\"/><text class=\"tick\" "
-                     "x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>",
-                     coord(px), 4 + kBar, 8 + kBar, 22 + kBar, value == 0.0 ? "0" : fmt::format("{:+g}", value));
+    s += fmt::format(
+        "<line x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#333\"/><text class=\"tick\" "
+        "x=\"{0}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>",
+        coord(px), 4 + kBar, 8 + kBar, 22 + kBar, value == 0.0 ? "0" : fmt::format("{:+g}", value));
   }
   return s + "</svg>";
 }
@@ -435,9 +453,10 @@ std::string imageFigure(const std::string& file, const std::string& caption, con
                        100.0 * (report.profile->row + 0.5) / report.height);
   // Small images are shown enlarged: square pixels then show what was computed, not a blur of it.
   const bool small = report.width <= 256 && report.height <= 256;
-  return fmt::format("<figure class=\"image\"><div class=\"frame\"><img src=\"{}\" alt=\"{}\" width=\"{}\" "
-                     "height=\"{}\"{}>{}</div><figcaption>{}</figcaption></figure>",
-                     esc(file), esc(alt), report.width, report.height, small ? " class=\"small\"" : "", line, caption);
+  return fmt::format(
+      "<figure class=\"image\"><div class=\"frame\"><img src=\"{}\" alt=\"{}\" width=\"{}\" "
+      "height=\"{}\"{}>{}</div><figcaption>{}</figcaption></figure>",
+      esc(file), esc(alt), report.width, report.height, small ? " class=\"small\"" : "", line, caption);
 }
 
 std::string findImage(const KeyValues& images, const std::string& kind) {
@@ -461,18 +480,19 @@ std::string resultsTable(const Report& report) {
   const std::string ratioHeader = report.baseline.empty() ? "&#215; baseline" : "&#215; " + esc(report.baseline);
   std::string s = "<table id=\"results\"><thead><tr>";
   const std::pair<const char*, std::string> columns[] = {
-      {"text", "technique"},      {"number", "RMSE8"},         {"number", "penumbra RMSE8"}, {"number", "max error"},
-      {"number", "umbra leaks"},  {"number", "speckle"},       {"number", "prepare ms"},     {"number", "visibility ms"},
-      {"number", "total ms"},     {"number", ratioHeader}};
+      {"text", "technique"},     {"number", "RMSE8"},    {"number", "penumbra RMSE8"}, {"number", "max error"},
+      {"number", "umbra leaks"}, {"number", "speckle"},  {"number", "prepare ms"},     {"number", "visibility ms"},
+      {"number", "total ms"},    {"number", ratioHeader}};
   for (const auto& [type, name] : columns)
     s += fmt::format("<th data-type=\"{}\" scope=\"col\"><button type=\"button\">{}</button></th>", type,
                      type == std::string("text") ? esc(name) : name);
   s += "<th scope=\"col\">parameters</th></tr></thead>\n<tbody>\n";
   for (size_t i = 0; i < report.rows.size(); ++i) {
     const ReportRow& row = report.rows[i];
-    s += fmt::format("<tr data-technique=\"{0}\"><td data-value=\"{0}\"><span class=\"swatch\" style=\"background:{1}\">"
-                     "</span><a href=\"#card-{2}\">{0}</a></td>",
-                     esc(row.shownName()), techniqueColor(i), i);
+    s += fmt::format(
+        "<tr data-technique=\"{0}\"><td data-value=\"{0}\"><span class=\"swatch\" style=\"background:{1}\">"
+        "</span><a href=\"#card-{2}\">{0}</a></td>",
+        esc(row.shownName()), techniqueColor(i), i);
     auto err = [&](auto member) -> std::optional<double> {
       if (!row.error) return std::nullopt;
       return static_cast<double>((*row.error).*member);
@@ -489,9 +509,10 @@ std::string resultsTable(const Report& report) {
   if (!report.skipped.empty()) {
     s += "<tbody id=\"not-run\">\n";
     for (const auto& [name, why] : report.skipped)
-      s += fmt::format("<tr data-not-run=\"{0}\"><td>{0}</td><td colspan=\"{1}\" class=\"not-run\">not run here: {2}</td>"
-                       "</tr>\n",
-                       esc(name), std::size(columns), esc(why));
+      s += fmt::format(
+          "<tr data-not-run=\"{0}\"><td>{0}</td><td colspan=\"{1}\" class=\"not-run\">not run here: {2}</td>"
+          "</tr>\n",
+          esc(name), std::size(columns), esc(why));
     s += "</tbody>\n";
   }
   return s + "</table>\n";
@@ -500,31 +521,36 @@ std::string resultsTable(const Report& report) {
 std::string seriesLegend(const Report& report) {
   std::string s = "<div class=\"legend\" id=\"series-legend\">";
   for (size_t i = 0; i < report.rows.size(); ++i)
-    s += fmt::format("<label><input type=\"checkbox\" checked data-series=\"{}\"><span class=\"swatch\" "
-                     "style=\"background:{}\"></span>{}</label>",
-                     i, techniqueColor(i), esc(report.rows[i].shownName()));
+    s += fmt::format(
+        "<label><input type=\"checkbox\" checked data-series=\"{}\"><span class=\"swatch\" "
+        "style=\"background:{}\"></span>{}</label>",
+        i, techniqueColor(i), esc(report.rows[i].shownName()));
   if (report.profile)
-    s += fmt::format("<label><input type=\"checkbox\" checked data-series=\"truth\"><span class=\"swatch\" "
-                     "style=\"background:{}\"></span>reference (truth, profile only)</label>",
-                     kTruthColor);
+    s += fmt::format(
+        "<label><input type=\"checkbox\" checked data-series=\"truth\"><span class=\"swatch\" "
+        "style=\"background:{}\"></span>reference (truth, profile only)</label>",
+        kTruthColor);
   return s + "</div>\n";
 }
 
 }  // namespace
 
 std::string reportToHtml(const Report& report) {
-  std::string h = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-                   "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
+  std::string h =
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
   h += fmt::format("<title>penumbra {}: {}</title>\n<style>{}</style>\n</head>\n<body>\n", esc(report.kind),
                    esc(report.scene), kStyle);
-  h += fmt::format("<header><h1>penumbra {}: <code>{}</code></h1><p class=\"muted\">Every technique's visibility V "
-                   "against the ray-traced reference on the same G-buffer. RMSE8 = sqrt(mean((V &#8722; V<sub>ref</sub>)"
-                   "&#178;)) &#215; 255 over pixels facing the light; penumbra RMSE8 over those where V or V<sub>ref</sub>"
-                   " is in (0.01, 0.99); max error in V; umbra leaks: pixels the reference puts in the umbra "
-                   "(V<sub>ref</sub> &lt; 0.05) that the technique lights (V &gt; 0.5); speckle: pixels whose V is "
-                   "more than 0.25 from the median of its 3&#215;3 block where V<sub>ref</sub>'s is within 0.05 of its "
-                   "own. Times are medians of this run, on this machine; the ratio is to <code>{}</code> measured in the same run.</p></header>\n<main>\n",
-                   esc(report.kind), esc(report.scene), esc(report.baseline.empty() ? "-" : report.baseline));
+  h += fmt::format(
+      "<header><h1>penumbra {}: <code>{}</code></h1><p class=\"muted\">Every technique's visibility V "
+      "against the ray-traced reference on the same G-buffer. RMSE8 = sqrt(mean((V &#8722; V<sub>ref</sub>)"
+      "&#178;)) &#215; 255 over pixels facing the light; penumbra RMSE8 over those where V or V<sub>ref</sub>"
+      " is in (0.01, 0.99); max error in V; umbra leaks: pixels the reference puts in the umbra "
+      "(V<sub>ref</sub> &lt; 0.05) that the technique lights (V &gt; 0.5); speckle: pixels whose V is "
+      "more than 0.25 from the median of its 3&#215;3 block where V<sub>ref</sub>'s is within 0.05 of its "
+      "own. Times are medians of this run, on this machine; the ratio is to <code>{}</code> measured in the same "
+      "run.</p></header>\n<main>\n",
+      esc(report.kind), esc(report.scene), esc(report.baseline.empty() ? "-" : report.baseline));
 
   // Setup: enough to reproduce the report.
   h += "<section id=\"setup\"><h2>Setup</h2><dl class=\"setup\">\n";
@@ -541,8 +567,7 @@ std::string reportToHtml(const Report& report) {
     for (const auto& [k, v] : report.truth->stats) item("truth " + k, esc(fmt::format("{:.6g}", v)));
   if (!report.baseline.empty()) item("time ratios to", fmt::format("<code>{}</code>", esc(report.baseline)));
   for (const auto& [k, v] : report.settings) item(k, esc(v));
-  if (report.profile)
-    item("scan line", fmt::format("row {} ({})", report.profile->row, esc(report.profile->choice)));
+  if (report.profile) item("scan line", fmt::format("row {} ({})", report.profile->row, esc(report.profile->choice)));
   item("penumbra version", esc(report.version));
   if (!report.command.empty()) item("reproduce", fmt::format("<code id=\"command\">{}</code>", esc(report.command)));
   std::string files;
@@ -570,30 +595,34 @@ std::string reportToHtml(const Report& report) {
          "<figcaption class=\"muted\">Dashed horizontal lines: techniques without a shadow map (one run, "
          "the same at every size).</figcaption></figure>\n";
   if (const std::string p = profilePlot(report); !p.empty())
-    h += fmt::format("<figure><h3>Scan-line profile</h3>{}<figcaption class=\"muted\">V along image row {} ({}); the "
-                     "reference (truth) is the thick black line; grey bands are pixels outside the error mask."
-                     "</figcaption></figure>\n",
-                     p, report.profile->row, esc(report.profile->choice));
+    h += fmt::format(
+        "<figure><h3>Scan-line profile</h3>{}<figcaption class=\"muted\">V along image row {} ({}); the "
+        "reference (truth) is the thick black line; grey bands are pixels outside the error mask."
+        "</figcaption></figure>\n",
+        p, report.profile->row, esc(report.profile->choice));
   h += "</div></section>\n";
 
   // Images: the truth first, then each technique beside the truth's shaded image.
   h += "<section id=\"images\"><h2>Images</h2>\n";
   if (report.errorMapRange > 0.0)
-    h += fmt::format("<div class=\"error-legend\"><h3>Signed error V &#8722; V<sub>ref</sub></h3>{}<p class=\"muted\">"
-                     "Blue: darker than the reference (too much shadow); red: brighter (too little); white: equal. "
-                     "Symmetric range &#177;{:g} in V; larger errors saturate. Grey: not measured (outside the error "
-                     "mask).</p></div>\n",
-                     errorLegend(report.errorMapRange), report.errorMapRange);
+    h += fmt::format(
+        "<div class=\"error-legend\"><h3>Signed error V &#8722; V<sub>ref</sub></h3>{}<p class=\"muted\">"
+        "Blue: darker than the reference (too much shadow); red: brighter (too little); white: equal. "
+        "Symmetric range &#177;{:g} in V; larger errors saturate. Grey: not measured (outside the error "
+        "mask).</p></div>\n",
+        errorLegend(report.errorMapRange), report.errorMapRange);
   if (report.profile)
-    h += fmt::format("<p><label><input type=\"checkbox\" id=\"show-scanline\" checked> show the scan line (row {}) on "
-                     "the images</label></p>\n",
-                     report.profile->row);
+    h += fmt::format(
+        "<p><label><input type=\"checkbox\" id=\"show-scanline\" checked> show the scan line (row {}) on "
+        "the images</label></p>\n",
+        report.profile->row);
   h += "<div class=\"cards\">\n";
   const std::string truthShaded = report.truth ? findImage(report.truth->images, "shaded") : std::string();
   if (report.truth) {
-    h += fmt::format("<section class=\"card truth\" id=\"card-truth\"><h3>reference (truth): {}</h3><div "
-                     "class=\"row-images\">",
-                     esc(joinedParams(report.truth->params)));
+    h += fmt::format(
+        "<section class=\"card truth\" id=\"card-truth\"><h3>reference (truth): {}</h3><div "
+        "class=\"row-images\">",
+        esc(joinedParams(report.truth->params)));
     if (!truthShaded.empty()) h += imageFigure(truthShaded, "shaded", "reference shaded", report);
     if (const std::string v = findImage(report.truth->images, "visibility"); !v.empty())
       h += imageFigure(v, "visibility V", "reference visibility", report);
@@ -602,12 +631,13 @@ std::string reportToHtml(const Report& report) {
   for (size_t i = 0; i < report.rows.size(); ++i) {
     const ReportRow& row = report.rows[i];
     if (row.images.empty()) continue;
-    h += fmt::format("<section class=\"card\" id=\"card-{}\"><h3><span class=\"swatch\" style=\"background:{}\"></span>"
-                     "{}{}</h3><div class=\"row-images\">",
-                     i, techniqueColor(i), esc(row.shownName()),
-                     row.error ? fmt::format(" <span class=\"muted\">RMSE8 {}, penumbra RMSE8 {}</span>",
-                                             fixed(row.error->rmse8, 2), fixed(row.error->penumbraRmse8, 2))
-                               : std::string());
+    h += fmt::format(
+        "<section class=\"card\" id=\"card-{}\"><h3><span class=\"swatch\" style=\"background:{}\"></span>"
+        "{}{}</h3><div class=\"row-images\">",
+        i, techniqueColor(i), esc(row.shownName()),
+        row.error ? fmt::format(" <span class=\"muted\">RMSE8 {}, penumbra RMSE8 {}</span>", fixed(row.error->rmse8, 2),
+                                fixed(row.error->penumbraRmse8, 2))
+                  : std::string());
     if (!truthShaded.empty()) h += imageFigure(truthShaded, "reference (truth), shaded", "reference shaded", report);
     const std::pair<const char*, const char*> kinds[] = {
         {"shaded", "shaded"}, {"visibility", "visibility V"}, {"error", "signed error V &#8722; V<sub>ref</sub>"}};

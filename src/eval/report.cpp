@@ -43,12 +43,18 @@ std::string joinParams(const KeyValues& params) {
 std::string markdownText(const std::string& text) {
   std::string out;
   for (char c : text) {
-    if (c == '|') out += "\\|";
-    else if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (c == '\n' || c == '\r' || c == '\0') out += ' ';
-    else out += c;
+    if (c == '|')
+      out += "\\|";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else if (c == '\n' || c == '\r' || c == '\0')
+      out += ' ';
+    else
+      out += c;
   }
   return out;
 }
@@ -70,16 +76,16 @@ std::vector<std::vector<std::string>> tableCells(const Report& report) {
     std::vector<std::string> line = {row.shownName()};
     if (withError) {
       if (row.error)
-        line.insert(line.end(), {number(row.error->rmse8), number(row.error->penumbraRmse8),
-                                 number(row.error->maxAbsError, 3), std::to_string(row.error->umbraLeaks),
-                                 std::to_string(row.error->speckle)});
+        line.insert(line.end(),
+                    {number(row.error->rmse8), number(row.error->penumbraRmse8), number(row.error->maxAbsError, 3),
+                     std::to_string(row.error->umbraLeaks), std::to_string(row.error->speckle)});
       else
         line.insert(line.end(), {"-", "-", "-", "-", "-"});
     }
-    line.insert(line.end(), {number(row.timings.get("prepare")), number(row.timings.get("visibility")),
-                             number(row.timings.total()),
-                             row.ratioToBaseline ? number(*row.ratioToBaseline) : std::string("-"),
-                             joinStats(row.stats), joinParams(row.params)});
+    line.insert(line.end(),
+                {number(row.timings.get("prepare")), number(row.timings.get("visibility")), number(row.timings.total()),
+                 row.ratioToBaseline ? number(*row.ratioToBaseline) : std::string("-"), joinStats(row.stats),
+                 joinParams(row.params)});
     cells.push_back(line);
   }
   // A technique that could not take this scene keeps its row, with the reason where its numbers would be.
@@ -97,12 +103,18 @@ std::vector<std::vector<std::string>> tableCells(const Report& report) {
 std::string describeLight(const Light& light) {
   std::string s(toString(light.shape()));
   switch (light.shape()) {
-    case LightShape::Sphere: s += fmt::format(" center {} radius {:g}", vec(light.center()), light.radius()); break;
+    case LightShape::Sphere:
+      s += fmt::format(" center {} radius {:g}", vec(light.center()), light.radius());
+      break;
     case LightShape::Disk:
       s += fmt::format(" center {} normal {} radius {:g}", vec(light.center()), vec(light.normal()), light.radius());
       break;
-    case LightShape::Rect: s += fmt::format(" center {} u {} v {}", vec(light.center()), vec(light.u()), vec(light.v())); break;
-    case LightShape::Segment: s += fmt::format(" a {} b {}", vec(light.a()), vec(light.b())); break;
+    case LightShape::Rect:
+      s += fmt::format(" center {} u {} v {}", vec(light.center()), vec(light.u()), vec(light.v()));
+      break;
+    case LightShape::Segment:
+      s += fmt::format(" a {} b {}", vec(light.a()), vec(light.b()));
+      break;
     case LightShape::Polygon:
       s += fmt::format(" {} vertices, center {}", light.vertices().size(), vec(light.center()));
       break;
@@ -126,8 +138,10 @@ void fillBaselineRatios(Report& report) {
     if (row.technique == report.baseline) base = &row;
   const double baseMs = base ? base->timings.total() : 0.0;
   for (ReportRow& row : report.rows) {
-    if (baseMs > 0.0) row.ratioToBaseline = row.timings.total() / baseMs;
-    else row.ratioToBaseline.reset();
+    if (baseMs > 0.0)
+      row.ratioToBaseline = row.timings.total() / baseMs;
+    else
+      row.ratioToBaseline.reset();
   }
 }
 
@@ -150,8 +164,8 @@ nlohmann::json profileJson(const std::vector<float>& values) {
 }
 
 nlohmann::json temporalJson(const TemporalStats& t) {
-  return {{"flicker", t.flicker}, {"pop_rate", t.popRate}, {"reversed_pops", t.reversedPops}, {"pixels", t.pixels},
-          {"pops", t.pops}, {"frame_pairs", t.framePairs}};
+  return {{"flicker", t.flicker}, {"pop_rate", t.popRate}, {"reversed_pops", t.reversedPops},
+          {"pixels", t.pixels},   {"pops", t.pops},        {"frame_pairs", t.framePairs}};
 }
 
 // The sequence table: per technique, the mean still-frame error and the temporal error; the truth's
@@ -170,7 +184,8 @@ std::vector<std::vector<std::string>> sequenceCells(const Report& report) {
     for (std::string& cell : temporal(row.sequence->temporal)) line.push_back(std::move(cell));
     cells.push_back(std::move(line));
   }
-  std::vector<std::string> floor = {fmt::format("noise floor (reference, {})", report.sequence->noiseFloorSeeds), "", ""};
+  std::vector<std::string> floor = {fmt::format("noise floor (reference, {})", report.sequence->noiseFloorSeeds), "",
+                                    ""};
   for (std::string& cell : temporal(report.sequence->noiseFloor)) floor.push_back(std::move(cell));
   cells.push_back(std::move(floor));
   return cells;
@@ -244,9 +259,10 @@ std::vector<std::string> reportNotes(const Report& report) {
   for (const ReportRow& row : report.rows)
     for (const auto& [key, value] : row.stats)
       if (key == "analytic_spheres" && value > 0.0)
-        notes.push_back(fmt::format("{} traced {} sphere object{} as true spheres (analytic_spheres); the reference and the "
-                                    "other rows use their tessellated meshes, whose outlines lie just inside the spheres'.",
-                                    row.shownName(), value, value == 1.0 ? "" : "s"));
+        notes.push_back(
+            fmt::format("{} traced {} sphere object{} as true spheres (analytic_spheres); the reference and the "
+                        "other rows use their tessellated meshes, whose outlines lie just inside the spheres'.",
+                        row.shownName(), value, value == 1.0 ? "" : "s"));
   return notes;
 }
 
@@ -280,8 +296,10 @@ std::string textTable(const std::vector<std::vector<std::string>>& cells, size_t
     std::string out;
     for (size_t c = 0; c < line.size(); ++c) {
       const bool left = c == 0 || c + textColumns >= line.size();
-      if (c + 1 == line.size()) out += line[c];
-      else out += left ? fmt::format("{:<{}}  ", line[c], widths[c]) : fmt::format("{:>{}}  ", line[c], widths[c]);
+      if (c + 1 == line.size())
+        out += line[c];
+      else
+        out += left ? fmt::format("{:<{}}  ", line[c], widths[c]) : fmt::format("{:>{}}  ", line[c], widths[c]);
     }
     while (!out.empty() && out.back() == ' ') out.pop_back();
     text += out + "\n";
@@ -342,21 +360,24 @@ std::string reportToMarkdown(const Report& report) {
   md += fmt::format("- scene: {} ({})\n", markdownText(report.scene), markdownText(report.sceneSource));
   md += fmt::format("- light {}: {}\n", report.lightIndex, report.light);
   md += fmt::format("- image: {} x {}\n", report.width, report.height);
-  if (!report.baseline.empty()) md += fmt::format("- time ratios relative to `{}`, measured in the same run\n", report.baseline);
+  if (!report.baseline.empty())
+    md += fmt::format("- time ratios relative to `{}`, measured in the same run\n", report.baseline);
   for (const auto& [k, v] : report.settings) md += fmt::format("- {}: {}\n", k, v);
   if (report.truth)
     md += fmt::format("- truth: `reference` {}{}\n", joinParams(report.truth->params),
                       report.truth->cached ? " (read from the reference cache)" : "");
-  if (report.profile) md += fmt::format("- scan-line profile: row {} ({})\n", report.profile->row, report.profile->choice);
+  if (report.profile)
+    md += fmt::format("- scan-line profile: row {} ({})\n", report.profile->row, report.profile->choice);
   md += fmt::format("- penumbra {}\n", report.version);
   if (!report.command.empty()) md += fmt::format("- reproduce: `{}`\n", report.command);
   md += "\n";
   if (anyError(report))
-    md += "RMSE8 = sqrt(mean((V - V_ref)^2)) x 255 over pixels facing the light; penumbra RMSE8 over those where "
-          "V or V_ref is in (0.01, 0.99); max err in V; umbra leaks: pixels with V_ref < 0.05 and V > 0.5; "
-          "speckle: pixels whose V is more than 0.25 from the median of its 3x3 block where V_ref's is within 0.05 "
-          "of its own. The reference row's error is 0 by definition: its own noise is its standard error in the "
-          "stats column.\n\n";
+    md +=
+        "RMSE8 = sqrt(mean((V - V_ref)^2)) x 255 over pixels facing the light; penumbra RMSE8 over those where "
+        "V or V_ref is in (0.01, 0.99); max err in V; umbra leaks: pixels with V_ref < 0.05 and V > 0.5; "
+        "speckle: pixels whose V is more than 0.25 from the median of its 3x3 block where V_ref's is within 0.05 "
+        "of its own. The reference row's error is 0 by definition: its own noise is its standard error in the "
+        "stats column.\n\n";
   md += markdownTable(tableCells(report), 2);
   if (report.sequence) {
     md += fmt::format("\n## Over the sequence\n\n{} frames, {}. {}\n\n", report.sequence->frames,
@@ -364,8 +385,9 @@ std::string reportToMarkdown(const Report& report) {
     md += markdownTable(sequenceCells(report), 0);
   }
   if (!report.mapSizes.empty() && anyError(report)) {
-    md += "\n## RMSE8 against shadow-map size\n\nOne column per map size (texels per side); a technique without a map "
-          "size ran once and repeats its value.\n\n| technique |";
+    md +=
+        "\n## RMSE8 against shadow-map size\n\nOne column per map size (texels per side); a technique without a map "
+        "size ran once and repeats its value.\n\n| technique |";
     for (int size : report.mapSizes) md += fmt::format(" {} |", size);
     md += "\n|---|";
     for (size_t i = 0; i < report.mapSizes.size(); ++i) md += "---:|";
@@ -412,7 +434,8 @@ std::string reportToText(const Report& report) {
 void writeTextFile(const std::string& path, const std::string& text) {
   replaceFile(path, [&](const std::string& temp) {
     std::ofstream file(temp, std::ios::binary | std::ios::trunc);
-    if (!file) fail("cannot write '{}': the file cannot be opened (check that the directory exists and is writable)", path);
+    if (!file)
+      fail("cannot write '{}': the file cannot be opened (check that the directory exists and is writable)", path);
     file << text;
     file.close();
     if (!file) fail("cannot write '{}': the write failed (disk full?)", path);

@@ -42,8 +42,7 @@ Srgb8 divergingColor(double t) {
   const auto& [t1, c1] = stops[i];
   const double w = (t - t0) / (t1 - t0);
   Srgb8 out;
-  for (int c = 0; c < 3; ++c)
-    out[c] = static_cast<uint8_t>(std::lround((1.0 - w) * c0[c] + w * c1[c]));
+  for (int c = 0; c < 3; ++c) out[c] = static_cast<uint8_t>(std::lround((1.0 - w) * c0[c] + w * c1[c]));
   return out;
 }
 

@@ -16,8 +16,9 @@ TemporalStats temporalError(const std::vector<Image<float>>& v, const std::vecto
          reference.size(), masks.size());
   const int width = v[0].width(), height = v[0].height();
   for (size_t k = 0; k < v.size(); ++k)
-    for (const auto& [w, h] : {std::pair{v[k].width(), v[k].height()}, std::pair{reference[k].width(), reference[k].height()},
-                               std::pair{masks[k].width(), masks[k].height()}})
+    for (const auto& [w, h] :
+         {std::pair{v[k].width(), v[k].height()}, std::pair{reference[k].width(), reference[k].height()},
+          std::pair{masks[k].width(), masks[k].height()}})
       if (w != width || h != height)
         fail("temporal error: frame {} has an image of {} x {}: expected {} x {} like frame 0", k, w, h, width, height);
 

@@ -40,10 +40,13 @@ const LawlorRow& LawlorTable::row(const std::string& technique, std::optional<Pe
   for (const LawlorRow& r : rows)
     if (r.spec.technique == technique && r.spec.half == half) return r;
   fail("Lawlor table: no row for technique '{}'{}", technique,
-       !half ? "" : *half == PenumbraHalf::Outer ? " against the outer penumbra" : " against the inner penumbra");
+       !half                          ? ""
+       : *half == PenumbraHalf::Outer ? " against the outer penumbra"
+                                      : " against the inner penumbra");
 }
 
-LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options, const std::vector<LawlorRowSpec>& rows) {
+LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options,
+                           const std::vector<LawlorRowSpec>& rows) {
   if (scene.lights.empty()) fail("Lawlor table: scene '{}' has no light", scene.name);
   if (options.mapSizes.empty()) fail("Lawlor table: mapSizes is empty; expected map sizes such as 16,32,64,128");
   if (options.truthSpp < 1) fail("Lawlor table: truthSpp = 0; expected >= 1 samples per pixel");
@@ -66,8 +69,7 @@ LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options
   const Image<float> outerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Outer);
   const Image<float> innerTruth = halfPenumbraTruth(table.truth, PenumbraHalf::Inner);
   for (const LawlorRowSpec& spec : rows) {
-    const Image<float>& truth =
-        !spec.half ? table.truth : *spec.half == PenumbraHalf::Outer ? outerTruth : innerTruth;
+    const Image<float>& truth = !spec.half ? table.truth : *spec.half == PenumbraHalf::Outer ? outerTruth : innerTruth;
     LawlorRow row;
     row.spec = spec;
     const TechniqueInfo& info = findTechnique(spec.technique);
@@ -104,9 +106,9 @@ LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options
 }
 
 std::string lawlorTableMarkdown(const LawlorTable& table) {
-  std::string md = fmt::format("RMSE8 (x255) on `{}` at {}x{}, truth: reference at {} spp (mean standard error {:.4f})\n\n",
-                               table.scene, table.options.width, table.options.height, table.options.truthSpp,
-                               table.truthMeanStdError);
+  std::string md = fmt::format(
+      "RMSE8 (x255) on `{}` at {}x{}, truth: reference at {} spp (mean standard error {:.4f})\n\n", table.scene,
+      table.options.width, table.options.height, table.options.truthSpp, table.truthMeanStdError);
   md += "| technique |";
   for (int size : table.options.mapSizes) md += fmt::format(" {} ours | {} paper |", size, size);
   md += "\n|---|";

@@ -26,11 +26,11 @@
 namespace penumbra {
 
 struct LawlorRowSpec {
-  std::string label;                   //!< the paper's row name
-  std::string technique;               //!< registry name
-  std::vector<std::string> params;     //!< "key=value" (map_size is added per size)
-  std::vector<double> paper;           //!< Fig. 10's values at 16, 32, 64, 128 (empty: none)
-  std::optional<PenumbraHalf> half;    //!< measured against this half truth; absent: the full truth
+  std::string label;                 //!< the paper's row name
+  std::string technique;             //!< registry name
+  std::vector<std::string> params;   //!< "key=value" (map_size is added per size)
+  std::vector<double> paper;         //!< Fig. 10's values at 16, 32, 64, 128 (empty: none)
+  std::optional<PenumbraHalf> half;  //!< measured against this half truth; absent: the full truth
 };
 
 // Fig. 10's rows with the paper's numbers.
@@ -38,29 +38,29 @@ std::vector<LawlorRowSpec> lawlorFigure10Rows();
 
 struct LawlorTableOptions {
   std::vector<int> mapSizes{16, 32, 64, 128};
-  int width = 512, height = 512;       //!< image size, pixels
-  uint32_t truthSpp = 4096;            //!< samples per pixel of the truth, >= 1
+  int width = 512, height = 512;  //!< image size, pixels
+  uint32_t truthSpp = 4096;       //!< samples per pixel of the truth, >= 1
   uint64_t truthSeed = 1;
-  uint64_t sampledSeed = 2;            //!< seed of the "16 Samples" row (independent of the truth)
-  int figureMapSize = 32;              //!< the map size of Fig. 11's images (must be in mapSizes)
+  uint64_t sampledSeed = 2;  //!< seed of the "16 Samples" row (independent of the truth)
+  int figureMapSize = 32;    //!< the map size of Fig. 11's images (must be in mapSizes)
 };
 
 struct LawlorRow {
   LawlorRowSpec spec;
-  bool usesMap = false;                //!< has a map_size parameter
-  std::vector<double> rmse8;           //!< per map size, in LawlorTableOptions::mapSizes' order
+  bool usesMap = false;       //!< has a map_size parameter
+  std::vector<double> rmse8;  //!< per map size, in LawlorTableOptions::mapSizes' order
   std::vector<double> penumbraRmse8;
-  Image<float> figureV;                //!< V at figureMapSize (Fig. 11, top row)
+  Image<float> figureV;  //!< V at figureMapSize (Fig. 11, top row)
 };
 
 struct LawlorTable {
   LawlorTableOptions options;
   std::string scene;
   std::vector<LawlorRow> rows;
-  Image<float> truth;                  //!< V of the truth
-  Image<uint8_t> mask;                 //!< the error mask
-  double truthMeanStdError = 0.0;      //!< mean per-pixel standard error of the truth
-  double seconds = 0.0;                //!< wall-clock time of the sweep
+  Image<float> truth;              //!< V of the truth
+  Image<uint8_t> mask;             //!< the error mask
+  double truthMeanStdError = 0.0;  //!< mean per-pixel standard error of the truth
+  double seconds = 0.0;            //!< wall-clock time of the sweep
 
   //! The row of `technique` measured against the full truth, or against `half`; throws Error if absent.
   const LawlorRow& row(const std::string& technique, std::optional<PenumbraHalf> half = std::nullopt) const;

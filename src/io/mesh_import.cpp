@@ -14,12 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <vector>
 #include <system_error>
+#include <vector>
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include "penumbra/error.h"
 #include "penumbra/scene_io.h"
@@ -95,7 +95,8 @@ void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
       // assimp 5.2.5 aborts the process on an OFF file with fewer vertex and face lines than its
       // header declares (found by the mesh-file fuzz target), so a truncated file is refused here.
       if (counts[0].find_first_not_of("0123456789") == std::string::npos &&
-          counts[1].find_first_not_of("0123456789") == std::string::npos && counts[0].size() < 19 && counts[1].size() < 19) {
+          counts[1].find_first_not_of("0123456789") == std::string::npos && counts[0].size() < 19 &&
+          counts[1].size() < 19) {
         const unsigned long long vertices = std::stoull(counts[0]);
         const unsigned long long declared = vertices + std::stoull(counts[1]);
         std::string line;
@@ -116,8 +117,8 @@ void checkDeclaredCounts(const std::string& path, uintmax_t fileSize) {
           ++lines;
         }
         if (lines < declared)
-          fail("{}: the header declares {} vertices and {} faces but only {} lines follow; expected a complete file", path,
-               counts[0], counts[1], lines);
+          fail("{}: the header declares {} vertices and {} faces but only {} lines follow; expected a complete file",
+               path, counts[0], counts[1], lines);
       }
     }
   }
@@ -131,30 +132,35 @@ Mesh importMesh(const std::string& path, uint64_t maxBytes) {
   if (ec || !std::filesystem::exists(status)) {
     // The real-mesh scenes use the models Debian's assimp-testmodels installs: say which package is missing.
     if (path.rfind(kAssimpTestModels, 0) == 0)
-      fail("{}: mesh file not found; it is one of the models of Debian's assimp-testmodels package: install it "
-           "(apt-get install assimp-testmodels, or scripts/install-deps)",
-           path);
+      fail(
+          "{}: mesh file not found; it is one of the models of Debian's assimp-testmodels package: install it "
+          "(apt-get install assimp-testmodels, or scripts/install-deps)",
+          path);
     fail("{}: mesh file not found (check the path; relative paths start at the scene file's folder)", path);
   }
-  if (!std::filesystem::is_regular_file(status)) fail("{}: expected a mesh file, found a directory or special file", path);
+  if (!std::filesystem::is_regular_file(status))
+    fail("{}: expected a mesh file, found a directory or special file", path);
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) fail("{}: cannot read the mesh file ({})", path, ec.message());
   if (size == 0) fail("{}: the mesh file is empty; expected triangles", path);
   if (size > maxBytes)
-    fail("{}: the mesh file is {} bytes, over the limit of {} bytes ({:.4g} MiB); raise it with --max-mesh-size MiB if the "
-         "file is meant to be this large",
-         path, size, maxBytes, static_cast<double>(maxBytes) / (1024.0 * 1024.0));
+    fail(
+        "{}: the mesh file is {} bytes, over the limit of {} bytes ({:.4g} MiB); raise it with --max-mesh-size MiB if "
+        "the "
+        "file is meant to be this large",
+        path, size, maxBytes, static_cast<double>(maxBytes) / (1024.0 * 1024.0));
   checkPlyHeader(path);
   checkDeclaredCounts(path, size);
 
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_TEXCOORDS | aiComponent_COLORS |
-                                                          aiComponent_TANGENTS_AND_BITANGENTS | aiComponent_BONEWEIGHTS |
-                                                          aiComponent_ANIMATIONS | aiComponent_TEXTURES | aiComponent_LIGHTS |
-                                                          aiComponent_CAMERAS | aiComponent_MATERIALS);
+  importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
+                              aiComponent_TEXCOORDS | aiComponent_COLORS | aiComponent_TANGENTS_AND_BITANGENTS |
+                                  aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS | aiComponent_TEXTURES |
+                                  aiComponent_LIGHTS | aiComponent_CAMERAS | aiComponent_MATERIALS);
   const aiScene* scene = importer.ReadFile(path, aiProcess_RemoveComponent);
   if (scene == nullptr) fail("{}: cannot import the mesh file: {}", path, importer.GetErrorString());
-  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail("{}: the mesh file is incomplete (assimp could not read all of it)", path);
+  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
+    fail("{}: the mesh file is incomplete (assimp could not read all of it)", path);
   // Faces are checked before any post-processing step reads them: assimp's triangulation aborts the
   // process (an assertion) on a face without indices, and later steps index vertices by them.
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
@@ -215,8 +221,10 @@ Mesh importMesh(const std::string& path, uint64_t maxBytes) {
         const float len = glm::length(normal);
         // A zero or non-finite normal (assimp writes NaN for unreferenced vertices) gets no shading
         // direction; mark the whole mesh flat rather than invent one.
-        if (!(len > 0.0f) || !std::isfinite(len)) allHaveNormals = false;
-        else mesh.normals.push_back(normal / len);
+        if (!(len > 0.0f) || !std::isfinite(len))
+          allHaveNormals = false;
+        else
+          mesh.normals.push_back(normal / len);
       }
     }
   }

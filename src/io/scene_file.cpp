@@ -47,7 +47,8 @@ using json = nlohmann::json;
 
 class Field {
  public:
-  Field(const json& value, std::string path, const std::string& source) : value_(value), path_(std::move(path)), source_(source) {}
+  Field(const json& value, std::string path, const std::string& source)
+      : value_(value), path_(std::move(path)), source_(source) {}
 
   const json& value() const { return value_; }
   const std::string& path() const { return path_; }
@@ -58,7 +59,9 @@ class Field {
     fail("{}: {}: {}", source_, path_, fmt::format(format, std::forward<Args>(args)...));
   }
 
-  Field child(const std::string& key) const { return Field(value_.at(key), path_.empty() ? key : path_ + "." + key, source_); }
+  Field child(const std::string& key) const {
+    return Field(value_.at(key), path_.empty() ? key : path_ + "." + key, source_);
+  }
   Field element(size_t i) const { return Field(value_.at(i), fmt::format("{}[{}]", path_, i), source_); }
 
   float number() const {
@@ -99,7 +102,8 @@ class Field {
   }
   const json& array(size_t minSize, const char* what) const {
     if (!value_.is_array() || value_.size() < minSize)
-      error("expected an array of {}{}, got {}", minSize > 0 ? fmt::format("at least {} ", minSize) : "", what, describe());
+      error("expected an array of {}{}, got {}", minSize > 0 ? fmt::format("at least {} ", minSize) : "", what,
+            describe());
     return value_;
   }
 
@@ -107,12 +111,18 @@ class Field {
     std::string text = value_.dump();
     if (text.size() > 40) text = text.substr(0, 37) + "...";
     switch (value_.type()) {
-      case json::value_t::array: return fmt::format("an array of {} ({})", value_.size(), text);
-      case json::value_t::object: return "an object";
-      case json::value_t::null: return "null";
-      case json::value_t::boolean: return fmt::format("a boolean ({})", text);
-      case json::value_t::string: return fmt::format("a string ({})", text);
-      default: return fmt::format("a number ({})", text);
+      case json::value_t::array:
+        return fmt::format("an array of {} ({})", value_.size(), text);
+      case json::value_t::object:
+        return "an object";
+      case json::value_t::null:
+        return "null";
+      case json::value_t::boolean:
+        return fmt::format("a boolean ({})", text);
+      case json::value_t::string:
+        return fmt::format("a string ({})", text);
+      default:
+        return fmt::format("a number ({})", text);
     }
   }
 
@@ -214,8 +224,10 @@ json parseJson(const std::string& text, const std::string& source) {
     std::string path;
     for (size_t i = 0; i + 1 < stack.size(); ++i) {
       const Frame& f = stack[i];
-      if (f.isArray) path += fmt::format("[{}]", f.index);
-      else path += (path.empty() ? "" : ".") + f.key;
+      if (f.isArray)
+        path += fmt::format("[{}]", f.index);
+      else
+        path += (path.empty() ? "" : ".") + f.key;
     }
     return path.empty() ? last : path + "." + last;
   };
@@ -224,7 +236,9 @@ json parseJson(const std::string& text, const std::string& source) {
   };
   json::parser_callback_t callback = [&](int, json::parse_event_t event, json& parsed) {
     switch (event) {
-      case json::parse_event_t::object_start: stack.push_back(Frame{}); break;
+      case json::parse_event_t::object_start:
+        stack.push_back(Frame{});
+        break;
       case json::parse_event_t::array_start:
         stack.push_back(Frame{});
         stack.back().isArray = true;
@@ -232,7 +246,8 @@ json parseJson(const std::string& text, const std::string& source) {
       case json::parse_event_t::key: {
         const std::string key = parsed.get<std::string>();
         Frame& top = stack.back();
-        if (!top.keys.insert(key).second) fail("{}: {}: duplicate key '{}'; each key may appear once", source, pathTo(key), key);
+        if (!top.keys.insert(key).second)
+          fail("{}: {}: duplicate key '{}'; each key may appear once", source, pathTo(key), key);
         top.key = key;
         break;
       }
@@ -241,7 +256,9 @@ json parseJson(const std::string& text, const std::string& source) {
         stack.pop_back();
         elementDone();
         break;
-      case json::parse_event_t::value: elementDone(); break;
+      case json::parse_event_t::value:
+        elementDone();
+        break;
     }
     return true;
   };
@@ -260,8 +277,10 @@ json parseJson(const std::string& text, const std::string& source) {
     if (const size_t bracket = detail.find("] "); bracket != std::string::npos) detail = detail.substr(bracket + 2);
     std::string path;
     for (const Frame& f : stack) {
-      if (f.isArray) path += fmt::format("[{}]", f.index);
-      else if (!f.key.empty()) path += (path.empty() ? "" : ".") + f.key;
+      if (f.isArray)
+        path += fmt::format("[{}]", f.index);
+      else if (!f.key.empty())
+        path += (path.empty() ? "" : ".") + f.key;
     }
     fail("{}: {}: {}; expected a number within the range of a double", source, path.empty() ? "JSON" : path, detail);
   }
@@ -294,7 +313,8 @@ Motion readMotion(const Field& field, const Scene& scene) {
     motion.target = MotionTarget::Light;
   } else if (moves == "camera") {
     motion.target = MotionTarget::Camera;
-    if (auto light = o.optional("light")) light->error("a light index is for \"moves\": \"light\"; the camera moves here");
+    if (auto light = o.optional("light"))
+      light->error("a light index is for \"moves\": \"light\"; the camera moves here");
   } else {
     o.required("moves").error("expected \"light\" or \"camera\", got \"{}\"", moves);
   }
@@ -310,7 +330,8 @@ Motion readMotion(const Field& field, const Scene& scene) {
 
 Light readLight(const Field& field) {
   if (!field.value().is_object()) field.error("expected a light object, got {}", field.describe());
-  if (!field.value().contains("type")) field.error("missing required key 'type' (one of sphere, disk, rect, segment, polygon, directional)");
+  if (!field.value().contains("type"))
+    field.error("missing required key 'type' (one of sphere, disk, rect, segment, polygon, directional)");
   const std::string type = field.child("type").string();
   const auto keys = [&](std::initializer_list<const char*> shapeKeys) {
     std::vector<std::string> k{"type", "intensity"};
@@ -353,16 +374,21 @@ Light readLight(const Field& field) {
     const Vec3 direction = o->required("direction").vec3();
     const Field diameter = o->required("angular_diameter");
     const float degreesValue = diameter.number();
-    if (!(degreesValue > 0.0f && degreesValue < 180.0f)) diameter.error("expected an angle in (0, 180) degrees, got {}", degreesValue);
+    if (!(degreesValue > 0.0f && degreesValue < 180.0f))
+      diameter.error("expected an angle in (0, 180) degrees, got {}", degreesValue);
     LightProfile profile = LightProfile::Uniform;
     if (auto p = o->optional("profile")) {
       const std::string name = p->string();
-      if (name == "limb-darkened") profile = LightProfile::LimbDarkened;
-      else if (name != "uniform") p->error("expected \"uniform\" or \"limb-darkened\", got \"{}\"", name);
+      if (name == "limb-darkened")
+        profile = LightProfile::LimbDarkened;
+      else if (name != "uniform")
+        p->error("expected \"uniform\" or \"limb-darkened\", got \"{}\"", name);
     }
-    light = withPath(o->field().child("direction"), [&] { return Light::directional(direction, radians(degreesValue), profile); });
+    light = withPath(o->field().child("direction"),
+                     [&] { return Light::directional(direction, radians(degreesValue), profile); });
   } else {
-    field.child("type").error("unknown light type \"{}\"; expected one of sphere, disk, rect, segment, polygon, directional", type);
+    field.child("type").error(
+        "unknown light type \"{}\"; expected one of sphere, disk, rect, segment, polygon, directional", type);
   }
   if (auto intensity = o->optional("intensity")) light->setIntensity(intensity->nonNegative());
   return *light;
@@ -424,11 +450,13 @@ Mesh readPrimitive(const Field& field) {
   if (type == "triangle") {
     const ObjectField o(field, {"type", "vertices"});
     const Field vs = o.required("vertices");
-    if (!vs.value().is_array() || vs.value().size() != 3) vs.error("expected an array of 3 [x, y, z] vertices, got {}", vs.describe());
+    if (!vs.value().is_array() || vs.value().size() != 3)
+      vs.error("expected an array of 3 [x, y, z] vertices, got {}", vs.describe());
     const Vec3 a = vs.element(0).vec3(), b = vs.element(1).vec3(), c = vs.element(2).vec3();
     return withPath(vs, [&] { return makeTriangle(a, b, c); });
   }
-  field.child("type").error("unknown primitive type \"{}\"; expected one of plane, box, sphere, torus, cylinder, triangle", type);
+  field.child("type").error(
+      "unknown primitive type \"{}\"; expected one of plane, box, sphere, torus, cylinder, triangle", type);
 }
 
 Mesh readInlineMesh(const Field& field) {
@@ -445,10 +473,12 @@ Mesh readInlineMesh(const Field& field) {
   mesh.triangles.reserve(triangles.value().size());
   for (size_t i = 0; i < triangles.value().size(); ++i) {
     const Field t = triangles.element(i);
-    if (!t.value().is_array() || t.value().size() != 3) t.error("expected an array of 3 vertex indices, got {}", t.describe());
+    if (!t.value().is_array() || t.value().size() != 3)
+      t.error("expected an array of 3 vertex indices, got {}", t.describe());
     glm::uvec3 tri;
     for (int k = 0; k < 3; ++k) tri[k] = static_cast<uint32_t>(t.element(k).integer(0, maxIndex));
-    if (tri.x == tri.y || tri.y == tri.z || tri.x == tri.z) t.error("expected 3 distinct vertex indices, got [{}, {}, {}]", tri.x, tri.y, tri.z);
+    if (tri.x == tri.y || tri.y == tri.z || tri.x == tri.z)
+      t.error("expected 3 distinct vertex indices, got [{}, {}, {}]", tri.x, tri.y, tri.z);
     mesh.triangles.push_back(tri);
   }
 
@@ -475,10 +505,12 @@ Mat4 readTransform(const Field& field) {
     if (s->value().is_number()) {
       scale = Vec3(s->number());
     } else {
-      if (!s->value().is_array() || s->value().size() != 3) s->error("expected a number or an array of 3 numbers, got {}", s->describe());
+      if (!s->value().is_array() || s->value().size() != 3)
+        s->error("expected a number or an array of 3 numbers, got {}", s->describe());
       scale = s->vec3();
     }
-    if (scale.x == 0.0f || scale.y == 0.0f || scale.z == 0.0f) s->error("expected non-zero scale factors (a zero flattens the object)");
+    if (scale.x == 0.0f || scale.y == 0.0f || scale.z == 0.0f)
+      s->error("expected non-zero scale factors (a zero flattens the object)");
   }
   Mat4 m(1.0f);
   if (auto t = o.optional("translate")) m = glm::translate(m, t->vec3());
@@ -493,7 +525,9 @@ Mat4 readTransform(const Field& field) {
 }
 
 Mat4 readMatrix(const Field& field) {
-  const auto bad = [&] { field.error("expected 4 rows of 4 numbers (row-major, last row [0, 0, 0, 1]), got {}", field.describe()); };
+  const auto bad = [&] {
+    field.error("expected 4 rows of 4 numbers (row-major, last row [0, 0, 0, 1]), got {}", field.describe());
+  };
   if (!field.value().is_array() || field.value().size() != 4) bad();
   Mat4 m(1.0f);
   for (int row = 0; row < 4; ++row) {
@@ -504,7 +538,8 @@ Mat4 readMatrix(const Field& field) {
   if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
     field.element(3).error("expected [0, 0, 0, 1] (an affine transform; projective matrices are not supported)");
   const float det = glm::determinant(Mat3(m));
-  if (!(std::abs(det) > 0.0f) || !std::isfinite(det)) field.error("expected an invertible matrix, got determinant {}", det);
+  if (!(std::abs(det) > 0.0f) || !std::isfinite(det))
+    field.error("expected an invertible matrix, got determinant {}", det);
   return m;
 }
 
@@ -544,8 +579,10 @@ Mat4 readFit(const Field& field, const Mesh& mesh) {
   const Vec3 extent = hi - lo;
   const float largest = std::max({extent.x, extent.y, extent.z});
   if (!(largest > 0.0f) || !std::isfinite(largest))
-    field.error("expected an object with a non-zero, finite extent to fit, got a bounding box from ({}, {}, {}) to ({}, {}, {})",
-                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    field.error(
+        "expected an object with a non-zero, finite extent to fit, got a bounding box from ({}, {}, {}) to ({}, {}, "
+        "{})",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
   const float scale = size / largest;
   const Vec3 bottomCentre(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
   Mat4 m = glm::translate(Mat4(1.0f), base);
@@ -556,7 +593,8 @@ Mat4 readFit(const Field& field, const Mesh& mesh) {
 // `inputFiles` gains the mesh file the object reads, if any.
 Object readObject(const Field& field, size_t index, const std::string& baseDir, std::vector<std::string>& inputFiles,
                   const SceneLoadOptions& options) {
-  const ObjectField o(field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "fit", "analytic_sphere"});
+  const ObjectField o(
+      field, {"name", "id", "albedo", "primitive", "mesh", "inline", "transform", "matrix", "fit", "analytic_sphere"});
   Object object;
   object.name = o.required("name").string();
   object.id = o.has("id") ? o.required("id").integer(0, 0x7fffffff) : static_cast<int32_t>(index);
@@ -605,8 +643,9 @@ Object readObject(const Field& field, size_t index, const std::string& baseDir, 
   if (auto a = o.optional("analytic_sphere")) {
     // Written by sceneToJson next to the inline tessellation, in world space.
     if (!o.has("inline") || o.has("transform") || o.has("matrix") || o.has("fit"))
-      a->error("expected only on an object with 'inline' geometry and no 'transform' or 'matrix' (it is in world "
-               "space, as sceneToJson writes it); for a new sphere use \"primitive\": {{\"type\": \"sphere\"}}");
+      a->error(
+          "expected only on an object with 'inline' geometry and no 'transform' or 'matrix' (it is in world "
+          "space, as sceneToJson writes it); for a new sphere use \"primitive\": {{\"type\": \"sphere\"}}");
     const ObjectField ao(*a, {"center", "radius"});
     object.sphere = AnalyticSphere{ao.required("center").vec3(), ao.required("radius").positive()};
   }
@@ -672,7 +711,8 @@ json lightJson(const Light& light) {
       break;
     case LightShape::Disk:
       j["center"] = vec3Json(light.center());
-      j["normal"] = vec3Json(exactUnitVector(light.normal(), [&](const Vec3& w) { return Light::disk(light.center(), w, light.radius()).normal(); }));
+      j["normal"] = vec3Json(exactUnitVector(
+          light.normal(), [&](const Vec3& w) { return Light::disk(light.center(), w, light.radius()).normal(); }));
       j["radius"] = floatJson(light.radius());
       break;
     case LightShape::Rect:
@@ -726,8 +766,8 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
   const json root = parseJson(jsonText, source);
   const Field rootField(root, "", source);
   if (!root.is_object()) fail("{}: expected a JSON object at the top level, got {}", source, rootField.describe());
-  const ObjectField o(rootField,
-                      {"name", "description", "image", "camera", "ambient", "lights", "objects", "techniques", "motion"});
+  const ObjectField o(
+      rootField, {"name", "description", "image", "camera", "ambient", "lights", "objects", "techniques", "motion"});
 
   Scene scene;
   scene.source = source;
@@ -766,18 +806,23 @@ Scene parseScene(const std::string& jsonText, const std::string& source, const s
     const Field f = objects.element(i);
     Object object = readObject(f, i, baseDir, scene.inputFiles, options);
     if (auto [it, inserted] = idToIndex.emplace(object.id, i); !inserted)
-      f.error("duplicate object id {} (objects[{}] has it too; an object without 'id' takes its index); expected unique ids",
-              object.id, it->second);
+      f.error(
+          "duplicate object id {} (objects[{}] has it too; an object without 'id' takes its index); expected unique "
+          "ids",
+          object.id, it->second);
     scene.objects.push_back(std::move(object));
   }
 
   if (auto motion = o.optional("motion")) scene.motion = readMotion(*motion, scene);
 
   if (auto techniques = o.optional("techniques")) {
-    if (!techniques->value().is_object()) techniques->error("expected an object {{\"<technique>\": {{\"<parameter>\": value}}}}, got {}", techniques->describe());
+    if (!techniques->value().is_object())
+      techniques->error("expected an object {{\"<technique>\": {{\"<parameter>\": value}}}}, got {}",
+                        techniques->describe());
     for (const auto& [technique, params] : techniques->value().items()) {
       const Field tf = techniques->child(technique);
-      if (!params.is_object()) tf.error("expected an object of parameters {{\"<parameter>\": value}}, got {}", tf.describe());
+      if (!params.is_object())
+        tf.error("expected an object of parameters {{\"<parameter>\": value}}, got {}", tf.describe());
       ParamSet& set = scene.techniqueParams[technique];
       for (const auto& [param, value] : params.items()) {
         const Field pf = tf.child(param);
@@ -800,7 +845,8 @@ std::string sceneToJson(const Scene& scene) {
   out += "  \"camera\": " + camera.dump() + ",\n";
   out += "  \"ambient\": " + floatJson(scene.ambient).dump() + ",\n";
   out += "  \"lights\": [";
-  for (size_t i = 0; i < scene.lights.size(); ++i) out += (i ? ",\n    " : "\n    ") + lightJson(scene.lights[i]).dump();
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    out += (i ? ",\n    " : "\n    ") + lightJson(scene.lights[i]).dump();
   out += scene.lights.empty() ? "],\n" : "\n  ],\n";
   out += "  \"objects\": [";
   for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -814,9 +860,11 @@ std::string sceneToJson(const Scene& scene) {
       mesh["normals"] = json::array();
       for (const Vec3& n : object.mesh.normals) mesh["normals"].push_back(vec3Json(n));
     }
-    json o = {{"name", object.name}, {"id", object.id}, {"albedo", vec3Json(object.albedo)}, {"inline", std::move(mesh)}};
+    json o = {
+        {"name", object.name}, {"id", object.id}, {"albedo", vec3Json(object.albedo)}, {"inline", std::move(mesh)}};
     if (object.sphere)
-      o["analytic_sphere"] = {{"center", vec3Json(object.sphere->center)}, {"radius", floatJson(object.sphere->radius)}};
+      o["analytic_sphere"] = {{"center", vec3Json(object.sphere->center)},
+                              {"radius", floatJson(object.sphere->radius)}};
     out += (i ? ",\n    " : "\n    ") + o.dump();
   }
   out += scene.objects.empty() ? "]" : "\n  ]";
@@ -847,7 +895,8 @@ std::vector<BuiltinScene> builtinScenes() {
   for (const auto& [stem, text] : detail::embeddedScenes()) {
     const json j = parseJson(std::string(text), fmt::format("built-in:{}", stem));
     std::string description;
-    if (j.is_object() && j.contains("description") && j["description"].is_string()) description = j["description"].get<std::string>();
+    if (j.is_object() && j.contains("description") && j["description"].is_string())
+      description = j["description"].get<std::string>();
     // The first sentence (a period, a space and a capital: "Fig. 7" does not end it), so the
     // list shows one line per scene.
     for (size_t end = description.find(". "); end != std::string::npos; end = description.find(". ", end + 1))

@@ -32,12 +32,11 @@ namespace {
 // pass's CPU time in the benchmark, measured with perf) would otherwise run on the calling thread
 // alone. Images keep their storage where it is large enough.
 void resetGBuffer(GBuffer& g, int width, int height) {
-  tbb::parallel_invoke([&] { g.wsPosition.reset(width, height, Vec3(0.0f)); },
-                       [&] { g.wsNormal.reset(width, height, Vec3(0.0f)); },
-                       [&] { g.wsGeometricNormal.reset(width, height, Vec3(0.0f)); },
-                       [&] { g.objectId.reset(width, height, kNoObject); },
-                       [&] { g.triangleId.reset(width, height, -1); },
-                       [&] { g.csDepth.reset(width, height, kInfinity); });
+  tbb::parallel_invoke(
+      [&] { g.wsPosition.reset(width, height, Vec3(0.0f)); }, [&] { g.wsNormal.reset(width, height, Vec3(0.0f)); },
+      [&] { g.wsGeometricNormal.reset(width, height, Vec3(0.0f)); },
+      [&] { g.objectId.reset(width, height, kNoObject); }, [&] { g.triangleId.reset(width, height, -1); },
+      [&] { g.csDepth.reset(width, height, kInfinity); });
 }
 
 // The camera's projection fitted to the scene bounds (see the file comment): clipFromCamera's x/y

@@ -140,13 +140,15 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   size_t base = 0;
   for (const Object& object : scene.objects) {
     const Mesh& mesh = object.mesh;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const Vec3 l = m.lsFromWs(mesh.positions[i]);
-        clip[base + i] = Vec4(l.x * xyScale, l.y * xyScale, clipZScale * l.z + clipZOffset, clipWScale * l.z + clipWOffset);
-        lsZ[base + i] = l.z;
-      }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3 l = m.lsFromWs(mesh.positions[i]);
+            clip[base + i] =
+                Vec4(l.x * xyScale, l.y * xyScale, clipZScale * l.z + clipZOffset, clipWScale * l.z + clipWOffset);
+            lsZ[base + i] = l.z;
+          }
+        });
     base += mesh.positions.size();
   }
 

@@ -28,13 +28,13 @@ constexpr size_t kChunkTriangles = 4096;
 // Outcode bits of a clip-space vertex against the viewport planes (for trivial rejection) and the
 // conditions that force a triangle through the clipper.
 enum : uint8_t {
-  kOutLeft = 1,       // x < -w
-  kOutRight = 2,      // x > w
-  kOutBottom = 4,     // y < -w
-  kOutTop = 8,        // y > w
-  kOutNear = 16,      // z < -w
+  kOutLeft = 1,    // x < -w
+  kOutRight = 2,   // x > w
+  kOutBottom = 4,  // y < -w
+  kOutTop = 8,     // y > w
+  kOutNear = 16,   // z < -w
   kNonFinite = 32,
-  kNeedsClip = 64,    // behind the near plane, w <= 0 or outside the guard band
+  kNeedsClip = 64,  // behind the near plane, w <= 0 or outside the guard band
 };
 constexpr uint8_t kRejectMask = kOutLeft | kOutRight | kOutBottom | kOutTop | kOutNear;
 
@@ -49,9 +49,9 @@ struct RasterVertex {
 struct Setup {
   std::array<int32_t, 3> x, y;
   int32_t xMin, yMin, xMax, yMax;
-  float key0;        // depth key at vertex 0
+  float key0;          // depth key at vertex 0
   float keyDx, keyDy;  // per pixel in x and y
-  int32_t triangle;  // input triangle index
+  int32_t triangle;    // input triangle index
 };
 
 struct Chunk {
@@ -140,9 +140,7 @@ void setupTriangle(RasterVertex v0, RasterVertex v1, RasterVertex v2, int32_t tr
 // The intersection on an edge is always computed from its inside end to its outside end, so two
 // triangles sharing an edge produce bit-identical new vertices on it and stay watertight.
 int clipPolygon(const Vec4* in, int count, const DVec3& planeXYW, double planeZ, Vec4* out) {
-  auto distance = [&](const Vec4& c) {
-    return planeXYW.x * c.x + planeXYW.y * c.y + planeXYW.z * c.w + planeZ * c.z;
-  };
+  auto distance = [&](const Vec4& c) { return planeXYW.x * c.x + planeXYW.y * c.y + planeXYW.z * c.w + planeZ * c.z; };
   int n = 0;
   for (int i = 0; i < count; ++i) {
     const Vec4& a = in[i];
@@ -283,8 +281,7 @@ void rasterizeInTile(const Setup& s, int tx0, int ty0, const Context& ctx, TileB
 struct HomogeneousTriangle {
   glm::dvec3 row0{0.0}, row1{0.0}, row2{0.0};  // rows of adj(M)
   Vec3 w{0.0f};                                // clip w of the three vertices
-  explicit HomogeneousTriangle(const Vec4& c0, const Vec4& c1, const Vec4& c2)
-      : w(c0.w, c1.w, c2.w) {
+  explicit HomogeneousTriangle(const Vec4& c0, const Vec4& c1, const Vec4& c2) : w(c0.w, c1.w, c2.w) {
     const glm::dvec3 m0(c0.x, c0.y, c0.w), m1(c1.x, c1.y, c1.w), m2(c2.x, c2.y, c2.w);
     row0 = glm::cross(m1, m2);
     row1 = glm::cross(m2, m0);
@@ -325,8 +322,8 @@ void validate(const RasterInput& input) {
   for (size_t i = 0; i < input.triangles.size(); ++i) {
     const glm::uvec3& t = input.triangles[i];
     if (t.x >= vertexCount || t.y >= vertexCount || t.z >= vertexCount)
-      fail("rasterizer: triangle {} references vertex {}, but there are only {} vertices", i,
-           std::max({t.x, t.y, t.z}), vertexCount);
+      fail("rasterizer: triangle {} references vertex {}, but there are only {} vertices", i, std::max({t.x, t.y, t.z}),
+           vertexCount);
   }
 }
 

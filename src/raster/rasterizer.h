@@ -52,26 +52,26 @@ namespace penumbra::raster {
 template <class T>
 using ScratchVector = std::vector<T, tbb::scalable_allocator<T>>;
 
-inline constexpr int kSubpixelBits = 8;                 //!< vertex snapping: 1/256 pixel
+inline constexpr int kSubpixelBits = 8;  //!< vertex snapping: 1/256 pixel
 inline constexpr int kSubpixelScale = 1 << kSubpixelBits;
-inline constexpr int kTileSize = 64;                    //!< pixels per tile side
-inline constexpr int kMaxImageSize = 16384;             //!< width and height, pixels
+inline constexpr int kTileSize = 64;         //!< pixels per tile side
+inline constexpr int kMaxImageSize = 16384;  //!< width and height, pixels
 
 struct RasterInput {
   int width = 0;
   int height = 0;
-  std::span<const Vec4> clipPositions;     //!< per vertex, clip space
-  std::span<const glm::uvec3> triangles;   //!< vertex indices into clipPositions
-  std::span<const int32_t> payloads;       //!< per triangle (object id, ...); empty: payload = -1
-  int attributeCount = 0;                  //!< N floats per vertex
-  std::span<const float> attributes;       //!< vertexCount * N, the N floats of a vertex together
+  std::span<const Vec4> clipPositions;    //!< per vertex, clip space
+  std::span<const glm::uvec3> triangles;  //!< vertex indices into clipPositions
+  std::span<const int32_t> payloads;      //!< per triangle (object id, ...); empty: payload = -1
+  int attributeCount = 0;                 //!< N floats per vertex
+  std::span<const float> attributes;      //!< vertexCount * N, the N floats of a vertex together
 };
 
 struct RasterOutput {
-  Image<float> depth;        //!< depth key z/w of the visible surface; kInfinity where empty
-  Image<float> clipW;        //!< clip w at the sample (perspective: view depth); kInfinity where empty
-  Image<int32_t> triangle;   //!< index into RasterInput::triangles; -1 where empty
-  Image<int32_t> payload;    //!< that triangle's payload; -1 where empty
+  Image<float> depth;                    //!< depth key z/w of the visible surface; kInfinity where empty
+  Image<float> clipW;                    //!< clip w at the sample (perspective: view depth); kInfinity where empty
+  Image<int32_t> triangle;               //!< index into RasterInput::triangles; -1 where empty
+  Image<int32_t> payload;                //!< that triangle's payload; -1 where empty
   std::vector<Image<float>> attributes;  //!< N channels, perspective-correct; 0 where empty
 };
 
@@ -79,10 +79,10 @@ struct RasterOutput {
 // j * kTileSize + i of each array, for i < width, j < height.
 struct TileSamples {
   int x0 = 0, y0 = 0, width = 0, height = 0;
-  const int32_t* triangle = nullptr;    //!< input triangle index; -1 where empty
-  const float* depth = nullptr;         //!< depth key; kInfinity where empty
-  const Vec3* barycentrics = nullptr;   //!< perspective-correct, of the input triangle's vertices
-  const float* clipW = nullptr;         //!< clip w at the sample
+  const int32_t* triangle = nullptr;   //!< input triangle index; -1 where empty
+  const float* depth = nullptr;        //!< depth key; kInfinity where empty
+  const Vec3* barycentrics = nullptr;  //!< perspective-correct, of the input triangle's vertices
+  const float* clipW = nullptr;        //!< clip w at the sample
 };
 // Called once per tile, concurrently for different tiles (it must only write that tile's pixels).
 using TileVisitor = std::function<void(const TileSamples&)>;

@@ -37,7 +37,8 @@ struct RayScene::Impl {
   static void onError(void* userPtr, RTCError code, const char* message) {
     auto* self = static_cast<Impl*>(userPtr);
     std::lock_guard<std::mutex> lock(self->errorMutex);
-    if (self->firstError.empty()) self->firstError = fmt::format("{} (code {})", message ? message : "no message", static_cast<int>(code));
+    if (self->firstError.empty())
+      self->firstError = fmt::format("{} (code {})", message ? message : "no message", static_cast<int>(code));
   }
 
   // Throws the recorded Embree error, if any, naming what was being done.
@@ -49,7 +50,8 @@ struct RayScene::Impl {
       message.swap(firstError);
     }
     if (code != RTC_ERROR_NONE || !message.empty())
-      fail("ray tracing (Embree): {} failed: {}", what, message.empty() ? fmt::format("error code {}", static_cast<int>(code)) : message);
+      fail("ray tracing (Embree): {} failed: {}", what,
+           message.empty() ? fmt::format("error code {}", static_cast<int>(code)) : message);
   }
 };
 
@@ -76,7 +78,9 @@ inline void fillRay(RTCRay& r, const Ray& ray) {
 RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.device = rtcNewDevice(nullptr);
-  if (!im.device) fail("ray tracing (Embree): could not create a device (error code {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+  if (!im.device)
+    fail("ray tracing (Embree): could not create a device (error code {})",
+         static_cast<int>(rtcGetDeviceError(nullptr)));
   rtcSetDeviceErrorFunction(im.device, &Impl::onError, &im);
 
   im.scene = rtcNewScene(im.device);
@@ -93,16 +97,16 @@ RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3& tri = mesh.triangles[t];
       if (tri.x >= mesh.positions.size() || tri.y >= mesh.positions.size() || tri.z >= mesh.positions.size())
-        fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name, t,
-             std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
+        fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name,
+             t, std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
     }
 
     RTCGeometry geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // rtcSetNewGeometryBuffer pads the buffer so Embree's 16-byte loads of the last vertex stay inside it.
-    auto* vertices = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-    auto* indices = static_cast<uint32_t*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangles.size()));
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), mesh.positions.size()));
+    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(uint32_t), mesh.triangles.size()));
     if (!vertices || !indices) {
       rtcReleaseGeometry(geom);
       im.check(fmt::format("allocating the buffers of object '{}'", object.name));

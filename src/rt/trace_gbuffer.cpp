@@ -29,11 +29,13 @@ GBuffer traceGBuffer(const Scene& scene, const RayScene& rays, int width, int he
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
     for (int y = range.begin(); y < range.end(); ++y) {
       for (int x = 0; x < width; ++x) {
-        const Ray ray = scene.camera.generateRay(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, width, height);
+        const Ray ray =
+            scene.camera.generateRay(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f, width, height);
         const std::optional<RayHit> hit = rays.intersect(ray);
         if (!hit) continue;
         const auto found = meshById.find(hit->objectId);
-        if (found == meshById.end()) fail("traceGBuffer: the ray scene was not built from this scene (object id {} is not in it)", hit->objectId);
+        if (found == meshById.end())
+          fail("traceGBuffer: the ray scene was not built from this scene (object id {} is not in it)", hit->objectId);
         const Mesh& mesh = *found->second;
         const glm::uvec3& tri = mesh.triangles[static_cast<size_t>(hit->triangleId)];
         const float b1 = hit->barycentrics.x, b2 = hit->barycentrics.y, b0 = 1.0f - b1 - b2;

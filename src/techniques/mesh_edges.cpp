@@ -60,7 +60,8 @@ void MeshEdges::build(const Mesh& mesh) {
     const Vec3 p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
     const Vec3 n = glm::cross(p1 - p0, p2 - p0);
     const float n2 = glm::dot(n, n);
-    if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2)) continue;  // cannot be hit
+    if (!(n2 > 0.0f) || !std::isfinite(n2) || !isFinite(p0) || !isFinite(p1) || !isFinite(p2))
+      continue;  // cannot be hit
     const uint32_t v[3] = {tri.x, tri.y, tri.z};
     for (uint32_t k = 0; k < 3; ++k) {
       const uint32_t wa = weld[v[k]], wb = weld[v[(k + 1) % 3]];
@@ -69,8 +70,9 @@ void MeshEdges::build(const Mesh& mesh) {
     }
   }
   // (key, use) is a total order: a parallel sort gives the one order.
-  tbb::parallel_sort(half.begin(), half.end(),
-                     [](const HalfEdge& x, const HalfEdge& y) { return x.key < y.key || (x.key == y.key && x.use < y.use); });
+  tbb::parallel_sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.key < y.key || (x.key == y.key && x.use < y.use);
+  });
   low.clear();
   high.clear();
   firstUse.clear();

@@ -29,11 +29,11 @@ struct MeshFingerprint {
 MeshFingerprint meshFingerprint(const Mesh& mesh);
 
 struct MeshEdges {
-  std::vector<uint32_t> weld;           //!< per mesh vertex: the first vertex at its position
-  std::vector<uint32_t> low, high;      //!< per edge: its welded ends, low < high
-  std::vector<uint32_t> firstUse;       //!< per edge, and one past the last: its uses below
-  std::vector<uint32_t> useTriangle;    //!< per use: the triangle (index into the mesh's triangles)
-  std::vector<uint8_t> useCorner;       //!< per use: k, the half-edge from corner k to corner (k + 1) % 3
+  std::vector<uint32_t> weld;         //!< per mesh vertex: the first vertex at its position
+  std::vector<uint32_t> low, high;    //!< per edge: its welded ends, low < high
+  std::vector<uint32_t> firstUse;     //!< per edge, and one past the last: its uses below
+  std::vector<uint32_t> useTriangle;  //!< per use: the triangle (index into the mesh's triangles)
+  std::vector<uint8_t> useCorner;     //!< per use: k, the half-edge from corner k to corner (k + 1) % 3
 
   size_t edgeCount() const { return low.size(); }
   // The mesh's triangle indices must be in range (the scene loader's check).

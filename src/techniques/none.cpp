@@ -15,7 +15,9 @@ class NoneTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene&, const Light&) override {}  // nothing to prepare, for any light shape
 
-  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override { v.reset(gbuffer.width(), gbuffer.height(), 1.0f); }
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
+    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  }
 };
 
 }  // namespace

@@ -31,7 +31,8 @@ class RaytracedHardTechnique final : public ShadowTechnique {
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
-    if (!rays_ || !light_) fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
+    if (!rays_ || !light_)
+      fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     const Light& light = *light_;
@@ -78,7 +79,9 @@ TechniqueInfo raytracedHardTechniqueInfo() {
   info.name = "raytraced-hard";
   info.summary = "one shadow ray per pixel to the light's centre: the exact hard shadow";
   info.source = "baseline (the \"shadow volumes\" row of Lawlor 2006)";
-  info.create = [](const Params&) -> std::unique_ptr<ShadowTechnique> { return std::make_unique<RaytracedHardTechnique>(); };
+  info.create = [](const Params&) -> std::unique_ptr<ShadowTechnique> {
+    return std::make_unique<RaytracedHardTechnique>();
+  };
   return info;
 }
 

@@ -95,7 +95,8 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
             // Copied member by member: a whole-struct copy made the compiler assemble the ray in a
             // stack temporary with narrow stores and reload it with 16-byte loads: a store-forwarding
             // stall in the hottest loop.
-            const Ray ray = rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon);
+            const Ray ray =
+                rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon);
             packet[i].origin = ray.origin;
             packet[i].direction = ray.direction;
             packet[i].tMin = ray.tMin;

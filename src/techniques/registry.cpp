@@ -33,21 +33,47 @@ namespace {
 // without a line fails tests/techniques/registry_test.cpp.
 std::string lightHandling(const std::string& name) {
   static const std::vector<std::pair<std::string, std::string>> lines = {
-      {"reference", "every shape, sampled over its emitting area; a concave polygon uniformly by area over its ear-clipping triangulation (unbiased)"},
+      {"reference",
+       "every shape, sampled over its emitting area; a concave polygon uniformly by area over its ear-clipping "
+       "triangulation (unbiased)"},
       {"none", "every shape, a concave polygon too (ignored: V = 1)"},
-      {"hard", "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can lie off the emitter"},
-      {"raytraced-hard", "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can lie off the emitter"},
-      {"pcf", "every shape, as a point at its centre sample (a concave polygon: its area centroid); the kernel does not follow the light's size"},
-      {"pcss", "every shape; light_size defaults to Light::extent(), so a polygon, concave or not, is the disk around its centroid that holds it; a segment is a line of taps along its image in the map, a rect the parallelogram of its image"},
-      {"multisample", "every shape, sampled over its emitting area; a concave polygon uniformly by area, so its shape is kept"},
-      {"brabec", "every shape; r_max follows Light::extent(), so a polygon, concave or not, is the disk around its centroid that holds it"},
-      {"plm", "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its centroid; segment refused"},
-      {"smoothies", "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its centroid; segment refused"},
-      {"kirsch", "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its centroid; segment refused"},
+      {"hard",
+       "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can "
+       "lie off the emitter"},
+      {"raytraced-hard",
+       "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can "
+       "lie off the emitter"},
+      {"pcf",
+       "every shape, as a point at its centre sample (a concave polygon: its area centroid); the kernel does not "
+       "follow the light's size"},
+      {"pcss",
+       "every shape; light_size defaults to Light::extent(), so a polygon, concave or not, is the disk around its "
+       "centroid that holds it; a segment is a line of taps along its image in the map, a rect the parallelogram of "
+       "its image"},
+      {"multisample",
+       "every shape, sampled over its emitting area; a concave polygon uniformly by area, so its shape is kept"},
+      {"brabec",
+       "every shape; r_max follows Light::extent(), so a polygon, concave or not, is the disk around its centroid that "
+       "holds it"},
+      {"plm",
+       "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its "
+       "centroid; segment refused"},
+      {"smoothies",
+       "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its "
+       "centroid; segment refused"},
+      {"kirsch",
+       "sphere, disk, rect, polygon, directional; a polygon, concave or not, is the disk of equal area around its "
+       "centroid; segment refused"},
       {"heidrich", "segment only; every other shape (a polygon too) is refused"},
-      {"parker", "every shape but segment; a polygon, concave or not, is the sphere of its bounding diameter 2 Light::extent() around its centroid"},
-      {"ssv", "rect and polygon (convex parts of at most 32 vertices); a concave polygon is cut into its fewest convex parts, run one by one, V combined by area (Rouf 2007, 5.2.5)"},
-      {"wedges", "rect and polygon (convex parts of at most 32 vertices); a concave polygon is cut into its fewest convex parts, run one by one, V combined by area"},
+      {"parker",
+       "every shape but segment; a polygon, concave or not, is the sphere of its bounding diameter 2 Light::extent() "
+       "around its centroid"},
+      {"ssv",
+       "rect and polygon (convex parts of at most 32 vertices); a concave polygon is cut into its fewest convex parts, "
+       "run one by one, V combined by area (Rouf 2007, 5.2.5)"},
+      {"wedges",
+       "rect and polygon (convex parts of at most 32 vertices); a concave polygon is cut into its fewest convex parts, "
+       "run one by one, V combined by area"},
   };
   for (const auto& [technique, line] : lines)
     if (technique == name) return line;
@@ -100,7 +126,8 @@ std::function<ResourceEstimate(const Params&, int, int)> resourceEstimate(const 
   if (name == "heidrich")
     return Estimate([](const Params& p, int, int) {
       const auto points = static_cast<double>(p.getInt("subdivisions") + 1);
-      return mapEstimate(p, points, kHeidrichPointBytes * points, fmt::format(", subdivisions={}", p.getInt("subdivisions")));
+      return mapEstimate(p, points, kHeidrichPointBytes * points,
+                         fmt::format(", subdivisions={}", p.getInt("subdivisions")));
     });
   // none, ssv, wedges: buffers of the scene's size (edges, a light-space grid of at most 1024^2
   // cells), no light map, no rays.
@@ -112,21 +139,10 @@ std::function<ResourceEstimate(const Params&, int, int)> resourceEstimate(const 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = [] {
     std::vector<TechniqueInfo> infos = {
-      referenceTechniqueInfo(),
-      noneTechniqueInfo(),
-      hardTechniqueInfo(),
-      raytracedHardTechniqueInfo(),
-      pcfTechniqueInfo(),
-      pcssTechniqueInfo(),
-      multisampleTechniqueInfo(),
-      brabecTechniqueInfo(),
-      plmTechniqueInfo(),
-      smoothiesTechniqueInfo(),
-      kirschTechniqueInfo(),
-      heidrichTechniqueInfo(),
-      parkerTechniqueInfo(),
-      ssvTechniqueInfo(),
-      wedgesTechniqueInfo(),
+        referenceTechniqueInfo(), noneTechniqueInfo(),      hardTechniqueInfo(),        raytracedHardTechniqueInfo(),
+        pcfTechniqueInfo(),       pcssTechniqueInfo(),      multisampleTechniqueInfo(), brabecTechniqueInfo(),
+        plmTechniqueInfo(),       smoothiesTechniqueInfo(), kirschTechniqueInfo(),      heidrichTechniqueInfo(),
+        parkerTechniqueInfo(),    ssvTechniqueInfo(),       wedgesTechniqueInfo(),
     };
     for (TechniqueInfo& info : infos) {
       info.lights = lightHandling(info.name);

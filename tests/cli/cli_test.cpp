@@ -23,9 +23,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "eval/html_table.h"
 #include "penumbra/image_io.h"
 #include "penumbra/registry.h"
-#include "eval/html_table.h"
 
 namespace penumbra {
 namespace {
@@ -89,7 +89,8 @@ class CliTest : public ::testing::Test {
     EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
     EXPECT_EQ(r.output.rfind("penumbra: error: ", 0), 0u) << args << "\n" << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n" << r.output;
-    for (const std::string& e : expected) EXPECT_NE(r.output.find(e), std::string::npos) << "missing '" << e << "' in: " << r.output;
+    for (const std::string& e : expected)
+      EXPECT_NE(r.output.find(e), std::string::npos) << "missing '" << e << "' in: " << r.output;
   }
 
   fs::path dir_;
@@ -185,7 +186,8 @@ TEST_F(CliTest, NeverOverwritesTheSceneFile) {
               {"refusing to write 's.json'", "input scene file"});
   // A scene file that happens to carry an output's name is refused too, before any work.
   write("tiny_none.png", text);
-  expectError("render --scene tiny_none.png -t none --width 8 --height 8 --out .", {"refusing to write", "tiny_none.png"});
+  expectError("render --scene tiny_none.png -t none --width 8 --height 8 --out .",
+              {"refusing to write", "tiny_none.png"});
   EXPECT_EQ(read("s.json"), text);
   EXPECT_EQ(read("tiny_none.png"), text);
 }
@@ -227,7 +229,8 @@ TEST_F(CliTest, TheTechniquesPageListsEveryParameterAsTheSchemaHasIt) {
     const std::string rest = line.substr(marker.size());
     const size_t space = rest.find(' ');
     const std::string expected = "- `" + rest.substr(0, space) + "`" + rest.substr(space);
-    EXPECT_NE(page.str().find(expected + "\n"), std::string::npos) << "docs/techniques.md lacks or differs on:\n" << expected;
+    EXPECT_NE(page.str().find(expected + "\n"), std::string::npos) << "docs/techniques.md lacks or differs on:\n"
+                                                                   << expected;
     ++checked;
   }
   EXPECT_GT(checked, 50u);
@@ -310,8 +313,10 @@ TEST_F(CliTest, CompareWritesReportWithReferenceAndNone) {
 // parameters) has no flicker at all.
 TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
   write("s.json", sceneJson(kLight, kObjects));
-  const Result r = run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path '0,4,0;0.3,4,0' "
-                       "--frames 3 " + kTiny);
+  const Result r =
+      run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path '0,4,0;0.3,4,0' "
+          "--frames 3 " +
+          kTiny);
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("over 3 frames (light 0 along (0, 4, 0) -> (0.3, 4, 0))"), std::string::npos) << r.output;
   const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
@@ -327,7 +332,8 @@ TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
     double mean = 0.0;
     for (const auto& f : frames) {
       mean += f["rmse8"].get<double>() / 3.0;
-      for (const auto& [kind, file] : f["images"].items()) EXPECT_TRUE(exists("out/report/" + file.get<std::string>())) << file;
+      for (const auto& [kind, file] : f["images"].items())
+        EXPECT_TRUE(exists("out/report/" + file.get<std::string>())) << file;
     }
     EXPECT_NEAR(row["rmse8"].get<double>(), mean, 1e-9) << row["name"];
     if (row["name"] == "reference") {
@@ -337,11 +343,14 @@ TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
     }
   }
   // Each frame's truth is cached on its own: a second run reuses all three and gives the same numbers.
-  const Result again = run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path "
-                           "'0,4,0;0.3,4,0' --frames 3 " + kTiny);
+  const Result again =
+      run("compare --scene s.json --techniques reference,raytraced-hard,hard --motion-path "
+          "'0,4,0;0.3,4,0' --frames 3 " +
+          kTiny);
   ASSERT_EQ(again.code, 0) << again.output;
   size_t reused = 0;
-  for (size_t at = again.output.find("truth: reused"); at != std::string::npos; at = again.output.find("truth: reused", at + 1))
+  for (size_t at = again.output.find("truth: reused"); at != std::string::npos;
+       at = again.output.find("truth: reused", at + 1))
     ++reused;
   EXPECT_EQ(reused, 6u) << again.output;  // 3 frames x (the truth and the noise floor's)
   const nlohmann::json second = nlohmann::json::parse(read("out/report/compare.json"));
@@ -353,7 +362,8 @@ TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
   EXPECT_EQ(second["sequence"], j["sequence"]);
 
   // The scene file's motion, and bad motions named.
-  write("m.json", sceneJson(kLight, kObjects, R"(, "motion": {"moves": "camera", "path": [[0, 3, 5], [0.5, 3, 5]], "frames": 2})"));
+  write("m.json", sceneJson(kLight, kObjects,
+                            R"(, "motion": {"moves": "camera", "path": [[0, 3, 5], [0.5, 3, 5]], "frames": 2})"));
   const Result camera = run("compare --scene m.json --techniques raytraced-hard " + kTiny);
   ASSERT_EQ(camera.code, 0) << camera.output;
   EXPECT_NE(camera.output.find("over 2 frames (the camera along (0, 3, 5) -> (0.5, 3, 5))"), std::string::npos)
@@ -368,12 +378,16 @@ TEST_F(CliTest, CompareOverASequenceReportsFlickerAndTheNoiseFloor) {
               {"--map-sizes is for a still scene"});
 }
 
-std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) { return testing::htmlTableValues(html); }
+std::map<std::string, std::vector<std::string>> pageTable(const std::string& html) {
+  return testing::htmlTableValues(html);
+}
 
 TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
   write("s.json", sceneJson(kLight, kObjects));
-  const Result r = run("compare --scene s.json --techniques reference,none,raytraced-hard,hard -p reference.spp=2 "
-                       "--map-sizes 32,16 " + kTiny);
+  const Result r =
+      run("compare --scene s.json --techniques reference,none,raytraced-hard,hard -p reference.spp=2 "
+          "--map-sizes 32,16 " +
+          kTiny);
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
   const std::string html = read("out/report/index.html");
@@ -410,8 +424,10 @@ TEST_F(CliTest, ComparePageShowsTheJsonNumbers) {
     ASSERT_EQ(row["map_size_sweep"].size(), 2u) << row["name"];
     const double a = row["map_size_sweep"][0]["rmse8"], b = row["map_size_sweep"][1]["rmse8"];
     EXPECT_EQ(row["map_size_varies"].get<bool>(), row["name"] == "hard") << row["name"];
-    if (row["name"] == "hard") EXPECT_NE(a, b);  // a 16^2 and a 32^2 map do not cast the same shadow
-    else EXPECT_EQ(a, b);
+    if (row["name"] == "hard")
+      EXPECT_NE(a, b);  // a 16^2 and a 32^2 map do not cast the same shadow
+    else
+      EXPECT_EQ(a, b);
   }
   const std::string md = read("out/report/compare.md");
   EXPECT_NE(md.find("| technique | 16 | 32 |"), std::string::npos) << md;
@@ -447,7 +463,8 @@ TEST_F(CliTest, CompareReusesTheCachedTruth) {
   EXPECT_EQ(j2["techniques"][0]["rmse8"], j1["techniques"][0]["rmse8"]);
 
   // Anything the truth depends on is part of the key: another sample count or image size renders again.
-  for (const std::string& other : {std::string("--spp 5 --width 32 --height 32"), std::string("--spp 4 --width 32 --height 16")}) {
+  for (const std::string& other :
+       {std::string("--spp 5 --width 32 --height 32"), std::string("--spp 4 --width 32 --height 16")}) {
     const Result r = run("compare --scene s.json --techniques none --out out " + other);
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("truth: rendering"), std::string::npos) << other << "\n" << r.output;
@@ -473,10 +490,8 @@ TEST_F(CliTest, CompareReusesTheCachedTruth) {
 
 TEST_F(CliTest, CompareOptionsAreChecked) {
   write("s.json", sceneJson(kLight, kObjects));
-  expectError("compare --scene s.json --techniques none --profile-row 32 " + kTiny,
-              {"--profile-row 32", "0 to 31"});
-  expectError("compare --scene s.json --techniques none -p reference.spp=2 " + kTiny,
-              {"reference.spp=2", "--spp"});
+  expectError("compare --scene s.json --techniques none --profile-row 32 " + kTiny, {"--profile-row 32", "0 to 31"});
+  expectError("compare --scene s.json --techniques none -p reference.spp=2 " + kTiny, {"reference.spp=2", "--spp"});
   expectError("compare --scene s.json --techniques hard --map-sizes 16,3 " + kTiny, {"map_size", "3", "--map-sizes"});
   const Result r = run("compare --scene s.json --techniques none --profile-row 7 " + kTiny);
   ASSERT_EQ(r.code, 0) << r.output;
@@ -517,7 +532,8 @@ TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {
   const Result named = run("compare --scene s.json --techniques hard," + skippedName + ",pcf " + kTiny);
   EXPECT_EQ(named.code, 1) << named.output;
   EXPECT_NE(named.output.find("penumbra: error: a technique asked for did not run on this scene (the reasons are in "
-                              "the report): " + skippedName),
+                              "the report): " +
+                              skippedName),
             std::string::npos)
       << named.output;
   ASSERT_TRUE(fs::exists(dir_ / "out/report/index.html")) << named.output;
@@ -530,7 +546,8 @@ TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {
   EXPECT_NE(k["skipped"][0]["reason"].get<std::string>().find("sphere"), std::string::npos);
 
   // bench alike: the row says why, the others are timed, and a named one fails the run.
-  const Result bench = run("bench --scene s.json --techniques hard," + skippedName + " --repeat 1 --width 32 --height 32");
+  const Result bench =
+      run("bench --scene s.json --techniques hard," + skippedName + " --repeat 1 --width 32 --height 32");
   EXPECT_EQ(bench.code, 1) << bench.output;
   EXPECT_NE(bench.output.find(skippedName + ": not run here: "), std::string::npos) << bench.output;
   EXPECT_NE(bench.output.find("hard "), std::string::npos) << bench.output;
@@ -548,8 +565,9 @@ TEST_F(CliTest, EmptySceneRendersFullyLit) {
 }
 
 TEST_F(CliTest, BenchPrintsRatiosAndWritesJson) {
-  const Result r = run("bench --scene torus -t none,raytraced-hard --baseline raytraced-hard --repeat 2 --width 16 "
-                       "--height 16 --json b.json");
+  const Result r =
+      run("bench --scene torus -t none,raytraced-hard --baseline raytraced-hard --repeat 2 --width 16 "
+          "--height 16 --json b.json");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("G-buffer raster"), std::string::npos);
   const nlohmann::json j = nlohmann::json::parse(read("b.json"));
@@ -572,7 +590,8 @@ namespace {
 
 // A scene JSON like sceneJson's, with the given (JSON-escaped) name.
 std::string namedScene(const std::string& escapedName) {
-  return "{\"name\": \"" + escapedName + "\", " + kCamera + ", \"lights\": [" + kLight + "], \"objects\": " + kObjects + "}";
+  return "{\"name\": \"" + escapedName + "\", " + kCamera + ", \"lights\": [" + kLight + "], \"objects\": " + kObjects +
+         "}";
 }
 
 std::vector<std::string> filesUnder(const fs::path& dir) {
@@ -588,11 +607,11 @@ TEST_F(CliTest, SceneNamesNeverBecomePaths) {
   write("victim.txt", "keep");
   write("work/rock.obj", "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n");
   const std::pair<std::string, std::string> cases[] = {
-      {"../escaped", "_escaped_none.png"},           // a relative path
+      {"../escaped", "_escaped_none.png"},          // a relative path
       {"/tmp/absolute", "_tmp_absolute_none.png"},  // an absolute one
       {"rock.obj\\u0000", "rock.obj__none.png"},    // a NUL that cut the suffix off
       {"../victim.txt\\u0000", "_victim.txt__none.png"},
-      {"a#b?c%d e", "a_b_c_d_e_none.png"},          // characters that break a URL
+      {"a#b?c%d e", "a_b_c_d_e_none.png"},  // characters that break a URL
   };
   for (const auto& [name, expected] : cases) {
     SCOPED_TRACE(name);
@@ -673,7 +692,8 @@ TEST_F(CliTest, AnInterruptedCompareLeavesThePreviousReportWhole) {
   const std::string html = read("out/report/index.html"), json = read("out/report/compare.json");
   const std::vector<std::string> files = filesUnder(dir_ / "out/report");
   // A truth of many samples takes seconds; interrupt it once its staging folder exists.
-  const std::string command = "cd '" + dir_.string() + "' && exec '" PENUMBRA_CLI
+  const std::string command = "cd '" + dir_.string() +
+                              "' && exec '" PENUMBRA_CLI
                               "' compare --scene s.json -t hard --width 256 --height 256 --spp 65536 --out out "
                               ">/dev/null 2>&1";
   const pid_t pid = fork();
@@ -717,7 +737,8 @@ TEST_F(CliTest, TheCacheDoesNotTrustAnEditedImage) {
   EXPECT_GT(j["techniques"][0]["rmse8"].get<double>(), 0.0);
   // A cache folder that cannot be made is a warning: the report is still written.
   write("plain.txt", "a file, not a folder");
-  const Result uncached = run("compare --scene s.json -t hard --cache-dir plain.txt/cache --width 32 --height 32 --spp 4 --out out2");
+  const Result uncached =
+      run("compare --scene s.json -t hard --cache-dir plain.txt/cache --width 32 --height 32 --spp 4 --out out2");
   EXPECT_EQ(uncached.code, 0) << uncached.output;
   EXPECT_NE(uncached.output.find("penumbra: warning: "), std::string::npos) << uncached.output;
   EXPECT_TRUE(exists("out2/report/index.html")) << uncached.output;
@@ -735,7 +756,8 @@ TEST_F(CliTest, RunsTooLargeForTheMachineAreRefusedUpFront) {
   EXPECT_NE(multisample.output.find("multisample needs about 256.5 GiB"), std::string::npos) << multisample.output;
   EXPECT_NE(multisample.output.find("map_size=8192, samples=1024"), std::string::npos) << multisample.output;
   EXPECT_NE(multisample.output.find("--force"), std::string::npos) << multisample.output;
-  EXPECT_EQ(multisample.output.find("scene torus"), std::string::npos) << "refused after starting work: " << multisample.output;
+  EXPECT_EQ(multisample.output.find("scene torus"), std::string::npos)
+      << "refused after starting work: " << multisample.output;
   EXPECT_FALSE(exists("o")) << "nothing is written for a refused run";
 
   const Result heidrich = run("render --scene linear -t heidrich -p subdivisions=64 -p map_size=8192 --out o");
@@ -749,7 +771,8 @@ TEST_F(CliTest, RunsTooLargeForTheMachineAreRefusedUpFront) {
   EXPECT_NE(rays.output.find("spp=65536"), std::string::npos) << rays.output;
   const Result truth = run("compare --scene torus -t hard --width 8192 --height 8192 --spp 4096 --out c");
   EXPECT_EQ(truth.code, 1) << truth.output;
-  EXPECT_NE(truth.output.find("the most by reference (8192 x 8192 pixels x spp=4096)"), std::string::npos) << truth.output;
+  EXPECT_NE(truth.output.find("the most by reference (8192 x 8192 pixels x spp=4096)"), std::string::npos)
+      << truth.output;
   EXPECT_EQ(truth.output.find("truth: rendering"), std::string::npos) << truth.output;
   const Result bench = run("bench --scene torus -t reference --spp 65536 --width 1024 --height 1024 --repeat 5");
   EXPECT_EQ(bench.code, 1) << bench.output;
@@ -771,7 +794,10 @@ TEST_F(CliTest, MeshFilesAreSizeCheckedBeforeImport) {
     {"name": "tri", "mesh": "tri.obj"}])"));
   const Result refused = run("render --scene m.json -t hard --width 16 --height 16 --max-mesh-size 0.002 --out o");
   EXPECT_EQ(refused.code, 1) << refused.output;
-  EXPECT_NE(refused.output.find("tri.obj: the mesh file is " + std::to_string(obj.size()) + " bytes, over the limit of 2097 bytes"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("tri.obj: the mesh file is " + std::to_string(obj.size()) +
+                                " bytes, over the limit of 2097 bytes"),
+            std::string::npos)
+      << refused.output;
   EXPECT_NE(refused.output.find("--max-mesh-size"), std::string::npos) << refused.output;
   const Result raised = run("render --scene m.json -t hard --width 16 --height 16 --max-mesh-size 1 --out o");
   EXPECT_EQ(raised.code, 0) << raised.output;
@@ -784,7 +810,10 @@ TEST_F(CliTest, MeshFilesAreSizeCheckedBeforeImport) {
   write("big.json", sceneJson(kLight, R"([{"name": "big", "mesh": "big.obj"}])"));
   const Result big = run("render --scene big.json -t hard --width 16 --height 16 --out o");
   EXPECT_EQ(big.code, 1) << big.output;
-  EXPECT_NE(big.output.find("big.obj: the mesh file is 1073741826 bytes, over the limit of 1073741824 bytes (1024 MiB)"), std::string::npos) << big.output;
+  EXPECT_NE(
+      big.output.find("big.obj: the mesh file is 1073741826 bytes, over the limit of 1073741824 bytes (1024 MiB)"),
+      std::string::npos)
+      << big.output;
 }
 
 // Errors that can be known before rendering are reported before rendering: an output folder that

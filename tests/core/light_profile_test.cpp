@@ -78,16 +78,19 @@ TEST(LightProfile, ClosedFormsMatchTheLightsOwnSamples) {
 }
 
 TEST(LightProfile, LightsAskForTheirProfile) {
-  EXPECT_EQ(VisibilityToIllumination::forLight(Light::sphere(Vec3(0.0f), 1.0f)).profile(), VisibilityProfile::UniformDisk);
+  EXPECT_EQ(VisibilityToIllumination::forLight(Light::sphere(Vec3(0.0f), 1.0f)).profile(),
+            VisibilityProfile::UniformDisk);
   EXPECT_EQ(VisibilityToIllumination::forLight(Light::disk(Vec3(0.0f), Vec3(0, 1, 0), 1.0f)).profile(),
             VisibilityProfile::UniformDisk);
   EXPECT_EQ(VisibilityToIllumination::forLight(Light::directional(Vec3(0, 1, 0), 0.1f)).profile(),
             VisibilityProfile::UniformDisk);
-  EXPECT_EQ(VisibilityToIllumination::forLight(Light::directional(Vec3(0, 1, 0), 0.1f, LightProfile::LimbDarkened)).profile(),
-            VisibilityProfile::LimbDarkenedDisk);
+  EXPECT_EQ(
+      VisibilityToIllumination::forLight(Light::directional(Vec3(0, 1, 0), 0.1f, LightProfile::LimbDarkened)).profile(),
+      VisibilityProfile::LimbDarkenedDisk);
   EXPECT_EQ(VisibilityToIllumination::forLight(Light::rect(Vec3(0.0f), Vec3(1, 0, 0), Vec3(0, 0, 1))).profile(),
             VisibilityProfile::Linear);
-  EXPECT_EQ(VisibilityToIllumination::forLight(Light::segment(Vec3(0.0f), Vec3(1.0f))).profile(), VisibilityProfile::Linear);
+  EXPECT_EQ(VisibilityToIllumination::forLight(Light::segment(Vec3(0.0f), Vec3(1.0f))).profile(),
+            VisibilityProfile::Linear);
 }
 
 }  // namespace

@@ -83,7 +83,8 @@ Vec2 shoelaceCentroid(const std::vector<Vec2>& q, double* area = nullptr) {
 
 TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
   // An irregular convex pentagon in the plane z = 2.
-  const std::vector<Vec2> q = {Vec2(-1.0f, -0.6f), Vec2(0.8f, -0.8f), Vec2(1.2f, 0.2f), Vec2(0.3f, 0.9f), Vec2(-0.9f, 0.5f)};
+  const std::vector<Vec2> q = {Vec2(-1.0f, -0.6f), Vec2(0.8f, -0.8f), Vec2(1.2f, 0.2f), Vec2(0.3f, 0.9f),
+                               Vec2(-0.9f, 0.5f)};
   std::vector<Vec3> vs;
   for (const Vec2& p : q) vs.push_back(Vec3(p.x, p.y, 2.0f));
   const Light light = Light::polygon(vs);
@@ -110,7 +111,8 @@ TEST(LightSample, PolygonSamplesLieInsideAndAverageToTheAreaCentroid) {
 // An L (three unit squares: [0,2] x [0,1] and [0,1] x [1,2]) and a U (a 3 x 2 block with a 1 x 1.5
 // notch from the top), in the plane z = 2, counter-clockwise.
 const std::vector<Vec2> kL = {Vec2(0, 0), Vec2(2, 0), Vec2(2, 1), Vec2(1, 1), Vec2(1, 2), Vec2(0, 2)};
-const std::vector<Vec2> kU = {Vec2(0, 0), Vec2(3, 0), Vec2(3, 2), Vec2(2, 2), Vec2(2, 0.5f), Vec2(1, 0.5f), Vec2(1, 2), Vec2(0, 2)};
+const std::vector<Vec2> kU = {Vec2(0, 0),    Vec2(3, 0),    Vec2(3, 2), Vec2(2, 2),
+                              Vec2(2, 0.5f), Vec2(1, 0.5f), Vec2(1, 2), Vec2(0, 2)};
 
 std::vector<Vec3> inPlaneZ2(const std::vector<Vec2>& q) {
   std::vector<Vec3> vs;
@@ -122,7 +124,8 @@ std::vector<Vec3> inPlaneZ2(const std::vector<Vec2>& q) {
 bool insidePolygon(const std::vector<Vec2>& q, const Vec2& x) {
   bool in = false;
   for (size_t i = 0, j = q.size() - 1; i < q.size(); j = i++)
-    if ((q[i].y > x.y) != (q[j].y > x.y) && x.x < (q[j].x - q[i].x) * (x.y - q[i].y) / (q[j].y - q[i].y) + q[i].x) in = !in;
+    if ((q[i].y > x.y) != (q[j].y > x.y) && x.x < (q[j].x - q[i].x) * (x.y - q[i].y) / (q[j].y - q[i].y) + q[i].x)
+      in = !in;
   return in;
 }
 
@@ -298,7 +301,8 @@ TEST(LightIrradiance, RectAboveACentredPoint) {
 double lambertIrradiance(const std::vector<Vec3>& vs, const Vec3& p, const Vec3& n) {
   double sum = 0.0;
   for (size_t i = 0; i < vs.size(); ++i) {
-    const DVec3 a = glm::normalize(DVec3(vs[i]) - DVec3(p)), b = glm::normalize(DVec3(vs[(i + 1) % vs.size()]) - DVec3(p));
+    const DVec3 a = glm::normalize(DVec3(vs[i]) - DVec3(p)),
+                b = glm::normalize(DVec3(vs[(i + 1) % vs.size()]) - DVec3(p));
     const double angle = std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0));
     sum += angle * glm::dot(DVec3(n), glm::normalize(glm::cross(a, b)));
   }
@@ -314,12 +318,14 @@ TEST(LightIrradiance, ConcavePolygonMatchesLambertsFormula) {
   for (const auto& q : {kL, kU}) {
     const std::vector<Vec3> vs = inPlaneZ2(q);
     const Light light = Light::polygon(vs);
-    for (const Vec3& p : {Vec3(0.5f, 0.5f, 0.0f), Vec3(1.5f, 1.5f, 0.0f), Vec3(-1.0f, 0.3f, 0.0f), Vec3(2.0f, 2.0f, -1.0f)})
+    for (const Vec3& p :
+         {Vec3(0.5f, 0.5f, 0.0f), Vec3(1.5f, 1.5f, 0.0f), Vec3(-1.0f, 0.3f, 0.0f), Vec3(2.0f, 2.0f, -1.0f)})
       for (const Vec3& n : {Vec3(0, 0, 1), glm::normalize(Vec3(0.3f, -0.2f, 1.0f))}) {
         SCOPED_TRACE(::testing::Message() << "p = (" << p.x << ", " << p.y << ", " << p.z << ")");
         const double exact = lambertIrradiance(vs, p, n);
         double sum = 0.0;
-        for (const LightSample& s : samples(light, p, 16384)) sum += std::max(0.0f, glm::dot(n, s.wsDirection)) * std::abs(s.wsDirection.z) / (s.distance * s.distance);
+        for (const LightSample& s : samples(light, p, 16384))
+          sum += std::max(0.0f, glm::dot(n, s.wsDirection)) * std::abs(s.wsDirection.z) / (s.distance * s.distance);
         const double sampled = light.area() * sum / 16384.0;
         EXPECT_NEAR(sampled, exact, 0.003 * exact);
         EXPECT_NEAR(light.irradiance(p, n), exact, 0.02 * exact);
@@ -327,7 +333,8 @@ TEST(LightIrradiance, ConcavePolygonMatchesLambertsFormula) {
   }
   // The closed form checks itself against a case with a known answer: a rect's corner formula.
   const Light rect = Light::rect(Vec3(0, 0, 2), Vec3(0.6f, 0, 0), Vec3(0, 0.4f, 0));
-  EXPECT_NEAR(lambertIrradiance(rect.vertices(), Vec3(0.0f), Vec3(0, 0, 1)), 4.0 * cornerIrradiance(0.6, 0.4, 2.0), 1e-6);
+  EXPECT_NEAR(lambertIrradiance(rect.vertices(), Vec3(0.0f), Vec3(0, 0, 1)), 4.0 * cornerIrradiance(0.6, 0.4, 2.0),
+              1e-6);
 }
 
 TEST(LightIrradiance, DirectionalSphereAndIntensity) {
@@ -433,16 +440,47 @@ TEST(LightFactories, RejectDegenerateLights) {
   expectError([&] { Light::polygon({Vec3(0.0f), Vec3(1, 0, 0), Vec3(2, 0, 0)}); }, "zero area");
   expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0.5f), Vec3(0, 1, 0)}); }, "not planar");
   // Simple polygons only: the messages name the vertices or edges (edge i runs from vertex i to i + 1).
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}); }, "polygon edges 0 and 2 cross; expected a simple polygon");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 2, 0), Vec3(0, 2, 0), Vec3(1, -1, 0)}); }, "polygon edges 0 and 3 cross");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0)}); }, "polygon edges 0 and 1 overlap");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 2, 0), Vec3(1, 0, 0), Vec3(0, 2, 0)}); }, "polygon edges 0 and 2 touch");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 1, 0), Vec3(2, 2, 0), Vec3(1, 1, 0), Vec3(0, 2, 0)}); },
-              "polygon vertices 2 and 4 coincide; expected distinct vertices");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}); }, "vertices 1 and 2 coincide");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)});
+      },
+      "polygon edges 0 and 2 cross; expected a simple polygon");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 2, 0), Vec3(0, 2, 0), Vec3(1, -1, 0)});
+      },
+      "polygon edges 0 and 3 cross");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0)});
+      },
+      "polygon edges 0 and 1 overlap");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 2, 0), Vec3(1, 0, 0), Vec3(0, 2, 0)});
+      },
+      "polygon edges 0 and 2 touch");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 1, 0), Vec3(2, 2, 0), Vec3(1, 1, 0), Vec3(0, 2, 0)});
+      },
+      "polygon vertices 2 and 4 coincide; expected distinct vertices");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)});
+      },
+      "vertices 1 and 2 coincide");
   // A bow tie has no net area, but its crossing is what is wrong with it.
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)}); }, "edges 1 and 3 cross");
-  expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0.5f), Vec3(0.5f, 0.5f, 0), Vec3(0, 1, 0)}); }, "not planar");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)});
+      },
+      "edges 1 and 3 cross");
+  expectError(
+      [&] {
+        Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0.5f), Vec3(0.5f, 0.5f, 0), Vec3(0, 1, 0)});
+      },
+      "not planar");
   expectError([&] { Light::polygon({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(nan, 1, 0)}); }, "vertex 2");
   expectError([&] { Light::directional(z, 0.0f); }, "angular_diameter");
   expectError([&] { Light::directional(z, kPi); }, "angular_diameter");

@@ -50,8 +50,8 @@ TEST(Motion, EveryLightShapeMovesAsARigidBody) {
       Light::disk(Vec3(0, 4, 0), Vec3(0.2f, -1, 0), 0.5f),
       Light::rect(Vec3(0, 4, 0), Vec3(0.5f, 0, 0), Vec3(0, 0, 0.25f)),
       Light::segment(Vec3(-1, 4, 0), Vec3(1, 4, 0.5f)),
-      Light::polygon({Vec3(0, 4, 0), Vec3(1, 4, 0), Vec3(1, 4, 1), Vec3(0.5f, 4, 1), Vec3(0.5f, 4, 0.5f),
-                      Vec3(0, 4, 0.5f)}),
+      Light::polygon(
+          {Vec3(0, 4, 0), Vec3(1, 4, 0), Vec3(1, 4, 1), Vec3(0.5f, 4, 1), Vec3(0.5f, 4, 0.5f), Vec3(0, 4, 0.5f)}),
   };
   for (const Light& light : lights) {
     Light l = light;
@@ -106,8 +106,7 @@ TEST(Motion, BadMotionsAreRefusedNamingTheField) {
   const Scene scene = sceneWith(Light::sphere(Vec3(0, 4, 0), 0.5f));
   Motion m;
   m.path = {Vec3(0, 4, 0)};
-  EXPECT_NE(errorOf(m, scene).find("x.json: motion: path has 1 key point(s): expected at least 2"),
-            std::string::npos);
+  EXPECT_NE(errorOf(m, scene).find("x.json: motion: path has 1 key point(s): expected at least 2"), std::string::npos);
   m.path = {Vec3(0, 4, 0), Vec3(0, 4, 0)};
   EXPECT_NE(errorOf(m, scene).find("zero length"), std::string::npos);
   m.path = {Vec3(0, 4, 0), Vec3(0, std::nanf(""), 0)};

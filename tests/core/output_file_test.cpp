@@ -46,7 +46,9 @@ class ReplaceFile : public ::testing::Test {
     s << in.rdbuf();
     return s.str();
   }
-  size_t entries() const { return static_cast<size_t>(std::distance(fs::directory_iterator(dir_), fs::directory_iterator())); }
+  size_t entries() const {
+    return static_cast<size_t>(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()));
+  }
   fs::path dir_;
 };
 
@@ -79,8 +81,10 @@ TEST_F(ReplaceFile, ReplacesALinkItselfAndRefusesReadOnlyFilesAndFolders) {
   EXPECT_THROW(replaceFile((dir_ / "ro").string(), [](const std::string& temp) { std::ofstream(temp) << "x"; }), Error);
   EXPECT_EQ(read(dir_ / "ro"), "mine");
   fs::create_directories(dir_ / "folder");
-  EXPECT_THROW(replaceFile((dir_ / "folder").string(), [](const std::string& temp) { std::ofstream(temp) << "x"; }), Error);
-  EXPECT_THROW(replaceFile((dir_ / "missing/x").string(), [](const std::string& temp) { std::ofstream(temp) << "x"; }), Error);
+  EXPECT_THROW(replaceFile((dir_ / "folder").string(), [](const std::string& temp) { std::ofstream(temp) << "x"; }),
+               Error);
+  EXPECT_THROW(replaceFile((dir_ / "missing/x").string(), [](const std::string& temp) { std::ofstream(temp) << "x"; }),
+               Error);
 }
 
 TEST_F(ReplaceFile, FileIdentitySeesThroughOtherNames) {

@@ -45,7 +45,8 @@ double cross(const DVec2& a, const DVec2& b) { return a.x * b.y - a.y * b.x; }
 bool inside(const Poly& q, const DVec2& x) {
   bool in = false;
   for (size_t i = 0, j = q.size() - 1; i < q.size(); j = i++)
-    if ((q[i].y > x.y) != (q[j].y > x.y) && x.x < (q[j].x - q[i].x) * (x.y - q[i].y) / (q[j].y - q[i].y) + q[i].x) in = !in;
+    if ((q[i].y > x.y) != (q[j].y > x.y) && x.x < (q[j].x - q[i].x) * (x.y - q[i].y) / (q[j].y - q[i].y) + q[i].x)
+      in = !in;
   return in;
 }
 
@@ -179,7 +180,8 @@ std::pair<size_t, double> exhaustiveMinimum(const Poly& p) {
     }
     for (size_t k = from; k < diagonals.size(); ++k) {
       bool crosses = false;
-      for (const auto& c : chosen) crosses = crosses || properCross(p[c.first], p[c.second], p[diagonals[k].first], p[diagonals[k].second]);
+      for (const auto& c : chosen)
+        crosses = crosses || properCross(p[c.first], p[c.second], p[diagonals[k].first], p[diagonals[k].second]);
       if (crosses) continue;
       chosen.push_back(diagonals[k]);
       search(k + 1, left - 1);
@@ -293,7 +295,8 @@ TEST(PlanarPolygon, OptimalPartitionOfTheLargestPolygonIsQuick) {
   // with one corner pushed in: at kOptimalPartitionMaxVertices about 9 million steps.
   const size_t n = kOptimalPartitionMaxVertices;
   Poly p;
-  for (size_t i = 0; i < n; ++i) p.push_back((i == 0 ? 0.9 : 1.0) * DVec2(std::cos(2.0 * kPiD * i / n), std::sin(2.0 * kPiD * i / n)));
+  for (size_t i = 0; i < n; ++i)
+    p.push_back((i == 0 ? 0.9 : 1.0) * DVec2(std::cos(2.0 * kPiD * i / n), std::sin(2.0 * kPiD * i / n)));
   Timer timer;
   const auto pieces = optimalConvexPartition(p, 1e-12);
   const double ms = timer.elapsedMs();

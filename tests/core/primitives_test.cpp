@@ -41,7 +41,8 @@ double signedVolume(const Mesh& m) {
 double surfaceArea(const Mesh& m) {
   double a = 0.0;
   for (const glm::uvec3& t : m.triangles)
-    a += 0.5 * glm::length(glm::cross(DVec3(m.positions[t.y] - m.positions[t.x]), DVec3(m.positions[t.z] - m.positions[t.x])));
+    a += 0.5 * glm::length(
+                   glm::cross(DVec3(m.positions[t.y] - m.positions[t.x]), DVec3(m.positions[t.z] - m.positions[t.x])));
   return a;
 }
 

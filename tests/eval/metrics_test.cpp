@@ -20,9 +20,15 @@ TEST(ErrorMask, HitPixelsFacingTheLightCentreOnly) {
   // Pixel 0: floor facing up, towards the light. Pixel 1: facing down, away from it.
   // Pixel 2: a wall whose normal is perpendicular to the direction to the light (dot = 0: not facing).
   // Pixel 3: miss.
-  g.objectId(0, 0) = 0; g.wsPosition(0, 0) = Vec3(0.0f); g.wsNormal(0, 0) = Vec3(0.0f, 1.0f, 0.0f);
-  g.objectId(1, 0) = 0; g.wsPosition(1, 0) = Vec3(0.0f); g.wsNormal(1, 0) = Vec3(0.0f, -1.0f, 0.0f);
-  g.objectId(2, 0) = 1; g.wsPosition(2, 0) = Vec3(0.0f); g.wsNormal(2, 0) = Vec3(1.0f, 0.0f, 0.0f);
+  g.objectId(0, 0) = 0;
+  g.wsPosition(0, 0) = Vec3(0.0f);
+  g.wsNormal(0, 0) = Vec3(0.0f, 1.0f, 0.0f);
+  g.objectId(1, 0) = 0;
+  g.wsPosition(1, 0) = Vec3(0.0f);
+  g.wsNormal(1, 0) = Vec3(0.0f, -1.0f, 0.0f);
+  g.objectId(2, 0) = 1;
+  g.wsPosition(2, 0) = Vec3(0.0f);
+  g.wsNormal(2, 0) = Vec3(1.0f, 0.0f, 0.0f);
   g.wsNormal(3, 0) = Vec3(0.0f, 1.0f, 0.0f);  // a miss never counts, whatever its stale normal
   const Image<uint8_t> mask = errorMask(g, light);
   EXPECT_EQ(mask(0, 0), 1);
@@ -34,8 +40,10 @@ TEST(ErrorMask, HitPixelsFacingTheLightCentreOnly) {
 TEST(ErrorMask, DirectionalLightUsesItsDirection) {
   GBuffer g(2, 1);
   const Light sun = Light::directional(Vec3(1.0f, 1.0f, 0.0f), radians(0.5f));
-  g.objectId(0, 0) = 0; g.wsNormal(0, 0) = Vec3(1.0f, 0.0f, 0.0f);   // dot = 0.707 > 0
-  g.objectId(1, 0) = 0; g.wsNormal(1, 0) = Vec3(-1.0f, 0.0f, 0.0f);  // dot < 0
+  g.objectId(0, 0) = 0;
+  g.wsNormal(0, 0) = Vec3(1.0f, 0.0f, 0.0f);  // dot = 0.707 > 0
+  g.objectId(1, 0) = 0;
+  g.wsNormal(1, 0) = Vec3(-1.0f, 0.0f, 0.0f);  // dot < 0
   const Image<uint8_t> mask = errorMask(g, sun);
   EXPECT_EQ(mask(0, 0), 1);
   EXPECT_EQ(mask(1, 0), 0);
@@ -110,10 +118,14 @@ TEST(CompareVisibility, PenumbraIntervalIsOpen) {
   // 0.01 and 0.99 themselves are not penumbra values; just inside them are.
   Image<float> v(4, 1), ref(4, 1);
   Image<uint8_t> mask(4, 1, 1);
-  v[0] = 0.01f; ref[0] = 0.0f;
-  v[1] = 0.99f; ref[1] = 1.0f;
-  v[2] = 0.011f; ref[2] = 0.0f;
-  v[3] = 1.0f; ref[3] = 0.989f;
+  v[0] = 0.01f;
+  ref[0] = 0.0f;
+  v[1] = 0.99f;
+  ref[1] = 1.0f;
+  v[2] = 0.011f;
+  ref[2] = 0.0f;
+  v[3] = 1.0f;
+  ref[3] = 0.989f;
   const ErrorStats s = compareVisibility(v, ref, mask);
   EXPECT_EQ(s.penumbraPixels, 2u);
   const double e2 = 0.011f, e3 = 1.0f - 0.989f;
@@ -144,7 +156,6 @@ TEST(CompareVisibility, SizeMismatchIsAnError) {
   Image<uint8_t> mask(2, 2, 1);
   EXPECT_THROW(compareVisibility(v, ref, mask), Error);
 }
-
 
 // Lawlor 2006, Sec. 2: a straight occluder edge under a distant light symmetric about its centre.
 // Seen from a receiver at edge offset u (in light radii, u < 0 inside the hard shadow of the centre

@@ -60,8 +60,8 @@ TEST(ReportFigures, SignedErrorMapPngHoldsTheColourMapBytes) {
   v(2, 0) = 0.5f - 0.125f;  // -range/2
   v(3, 0) = 1.0f;           // +2 range: saturated red
   mask(4, 0) = 0;           // not measured
-  const auto path = std::filesystem::temp_directory_path() /
-                    ("penumbra_error_map_" + std::to_string(getpid()) + ".png");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("penumbra_error_map_" + std::to_string(getpid()) + ".png");
   writePng(path.string(), signedErrorMap(v, reference, mask, range));
   int w = 0, h = 0, channels = 0;
   unsigned char* bytes = stbi_load(path.string().c_str(), &w, &h, &channels, 3);
@@ -72,8 +72,7 @@ TEST(ReportFigures, SignedErrorMapPngHoldsTheColourMapBytes) {
   const Srgb8 expected[] = {divergingColor(0.0), divergingColor(1.0), divergingColor(-0.5), divergingColor(1.0),
                             unmeasuredColor()};
   for (int x = 0; x < 5; ++x)
-    for (int c = 0; c < 3; ++c)
-      EXPECT_EQ(bytes[3 * x + c], expected[x][c]) << "pixel " << x << " channel " << c;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(bytes[3 * x + c], expected[x][c]) << "pixel " << x << " channel " << c;
   stbi_image_free(bytes);
 }
 
@@ -100,7 +99,7 @@ TEST(ReportFigures, MostPenumbraRowCountsMaskedPenumbraPixels) {
   for (int x = 0; x < 8; ++x) reference(x, 5) = 0.0f;  // umbra: not penumbra
   EXPECT_EQ(mostPenumbraRow(reference, mask), 1);      // 3 vs 3: the topmost row wins the tie
   mask(1, 4) = 1;
-  EXPECT_EQ(mostPenumbraRow(reference, mask), 4);      // 4 vs 3
+  EXPECT_EQ(mostPenumbraRow(reference, mask), 4);  // 4 vs 3
   // No penumbra anywhere: the middle row.
   EXPECT_EQ(mostPenumbraRow(Image<float>(8, 6, 1.0f), mask), 3);
   EXPECT_THROW(mostPenumbraRow(Image<float>(8, 5, 1.0f), mask), Error);

@@ -11,11 +11,11 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
-#include "penumbra/error.h"
 #include "eval/html_table.h"
+#include "penumbra/error.h"
 
 namespace penumbra {
 namespace {
@@ -104,9 +104,9 @@ TEST(Report, TextAndMarkdownListEveryRow) {
   for (const std::string& s : {text, md}) {
     EXPECT_NE(s.find("reference"), std::string::npos);
     EXPECT_NE(s.find("raytraced-hard"), std::string::npos);
-    EXPECT_NE(s.find("12.50"), std::string::npos);   // RMSE8
-    EXPECT_NE(s.find("40.25"), std::string::npos);   // penumbra RMSE8
-    EXPECT_NE(s.find("5.00"), std::string::npos);    // ratio of the reference
+    EXPECT_NE(s.find("12.50"), std::string::npos);  // RMSE8
+    EXPECT_NE(s.find("40.25"), std::string::npos);  // penumbra RMSE8
+    EXPECT_NE(s.find("5.00"), std::string::npos);   // ratio of the reference
     EXPECT_NE(s.find("mean_std_error=0.004"), std::string::npos);
   }
   EXPECT_NE(md.find("| technique |"), std::string::npos);
@@ -130,7 +130,8 @@ TEST(Report, EveryWriterNotesARowThatTracedTrueSpheres) {
   EXPECT_EQ(j.at("notes").at(0).get<std::string>(), notes[0]);
   EXPECT_NE(reportToMarkdown(r).find("- " + notes[0]), std::string::npos);
   EXPECT_NE(reportToText(r).find("note: " + notes[0]), std::string::npos);
-  EXPECT_NE(reportToHtml(r).find("<ul id=\"notes\"><li>parker traced 5 sphere objects as true spheres"), std::string::npos);
+  EXPECT_NE(reportToHtml(r).find("<ul id=\"notes\"><li>parker traced 5 sphere objects as true spheres"),
+            std::string::npos);
 }
 
 // A compare report with a profile, a map-size sweep and error maps.
@@ -164,15 +165,17 @@ Report richReport() {
   return r;
 }
 
-std::map<std::string, std::vector<std::string>> tableValues(const std::string& html) { return testing::htmlTableValues(html); }
+std::map<std::string, std::vector<std::string>> tableValues(const std::string& html) {
+  return testing::htmlTableValues(html);
+}
 
 TEST(Report, HtmlTableHoldsTheJsonNumbers) {
   const Report r = richReport();
   const nlohmann::json j = nlohmann::json::parse(reportToJson(r));
   const auto table = tableValues(reportToHtml(r));
   ASSERT_EQ(table.size(), j["techniques"].size());
-  const char* keys[] = {"rmse8", "penumbra_rmse8", "max_abs_error", "umbra_leaks", "speckle", "prepare_ms", "visibility_ms", "total_ms",
-                        "ratio_to_baseline"};
+  const char* keys[] = {"rmse8",      "penumbra_rmse8", "max_abs_error", "umbra_leaks",      "speckle",
+                        "prepare_ms", "visibility_ms",  "total_ms",      "ratio_to_baseline"};
   for (const auto& row : j["techniques"]) {
     const auto it = table.find(row["label"].get<std::string>());
     ASSERT_NE(it, table.end()) << row["label"];
@@ -190,7 +193,8 @@ TEST(Report, TechniquesNotRunKeepARowWithTheReason) {
   r.skipped = {{"ssv", "ssv: a sphere light is not supported | needs a polygon\nlight"}};
   const std::string md = reportToMarkdown(r);
   EXPECT_NE(md.find("| ssv | - |"), std::string::npos) << md;
-  EXPECT_NE(md.find("not run here: ssv: a sphere light is not supported \\| needs a polygon light |"), std::string::npos)
+  EXPECT_NE(md.find("not run here: ssv: a sphere light is not supported \\| needs a polygon light |"),
+            std::string::npos)
       << md;
   const std::string text = reportToText(r);
   EXPECT_NE(text.find("not run here: ssv: a sphere light"), std::string::npos) << text;
@@ -349,7 +353,8 @@ TEST(Report, MarkdownHasTheMapSizeTable) {
 }
 
 TEST(Report, DescribeLightNamesShapeAndValues) {
-  EXPECT_EQ(describeLight(Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f)), "sphere center (0, 4, 0) radius 0.5, intensity 1");
+  EXPECT_EQ(describeLight(Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f)),
+            "sphere center (0, 4, 0) radius 0.5, intensity 1");
 }
 
 TEST(Report, WriteTextFileFailsWithThePath) {
@@ -360,7 +365,8 @@ TEST(Report, WriteTextFileFailsWithThePath) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
   }
-  const auto path = std::filesystem::temp_directory_path() / ("penumbra_report_test_" + std::to_string(getpid()) + ".md");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("penumbra_report_test_" + std::to_string(getpid()) + ".md");
   writeTextFile(path.string(), "hello\n");
   std::ifstream in(path);
   std::stringstream ss;

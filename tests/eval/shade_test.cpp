@@ -38,9 +38,9 @@ TEST(Shade, HandComputedRadiance) {
   GBuffer g(4, 1);
   const float c60 = std::cos(radians(60.0f));
   for (int x = 0; x < 3; ++x) g.objectId(x, 0) = 7;
-  g.wsNormal(0, 0) = Vec3(0.0f, 1.0f, 0.0f);                        // E = 2, V = 1
-  g.wsNormal(1, 0) = Vec3(0.0f, 1.0f, 0.0f);                        // E = 2, V = 0
-  g.wsNormal(2, 0) = Vec3(std::sin(radians(60.0f)), c60, 0.0f);     // E = 1, V = 1
+  g.wsNormal(0, 0) = Vec3(0.0f, 1.0f, 0.0f);                     // E = 2, V = 1
+  g.wsNormal(1, 0) = Vec3(0.0f, 1.0f, 0.0f);                     // E = 2, V = 0
+  g.wsNormal(2, 0) = Vec3(std::sin(radians(60.0f)), c60, 0.0f);  // E = 1, V = 1
   Image<float> v(4, 1, 1.0f);
   v(1, 0) = 0.0f;
   ShadeOptions options;
@@ -81,7 +81,9 @@ TEST(Shade, LinearInVisibility) {
     g.wsNormal(x, 0) = Vec3(0.0f, 1.0f, 0.0f);
   }
   Image<float> v(3, 1);
-  v[0] = 0.0f; v[1] = 0.5f; v[2] = 1.0f;
+  v[0] = 0.0f;
+  v[1] = 0.5f;
+  v[2] = 1.0f;
   const Image<Vec3> rgb = shade(scene, scene.lights[0], g, v);
   expectVec(0.5f * (rgb[0] + rgb[2]), rgb[1]);
 }

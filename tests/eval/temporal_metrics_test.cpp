@@ -57,8 +57,8 @@ TEST(TemporalError, OnlyPenumbraPixelsInBothMasksCount) {
   const int w = 3, h = 1;
   std::vector<Image<float>> truth = {filled(w, h, 1.0f), filled(w, h, 1.0f)};
   std::vector<Image<float>> v = {filled(w, h, 1.0f), filled(w, h, 1.0f)};
-  v[1](0, 0) = 0.0f;   // lit -> black where the truth stays lit
-  v[1](1, 0) = 0.5f;   // lit -> penumbra
+  v[1](0, 0) = 0.0f;  // lit -> black where the truth stays lit
+  v[1](1, 0) = 0.5f;  // lit -> penumbra
   std::vector<Image<uint8_t>> masks = {allMask(w, h), allMask(w, h)};
   masks[1](2, 0) = 0;  // out of the second frame's mask
   v[1](2, 0) = 0.5f;

@@ -40,8 +40,8 @@ TEST(LawlorTable, ShapeOfFigure10At16To128) {
   const LawlorTable& t = smallTable();
   ASSERT_EQ(t.rows.size(), 11u);
   for (const char* name : {"plm", "smoothies", "kirsch", "pcf", "hard", "raytraced-hard", "reference"})
-    std::printf("[ measured ] %-14s 16: %5.2f  64: %5.2f  128: %5.2f\n", name, t.row(name).rmse8[0], t.row(name).rmse8[1],
-                t.row(name).rmse8[2]);
+    std::printf("[ measured ] %-14s 16: %5.2f  64: %5.2f  128: %5.2f\n", name, t.row(name).rmse8[0],
+                t.row(name).rmse8[1], t.row(name).rmse8[2]);
   // Measured (256x256, 512-spp truth), 16 / 64 / 128: plm 10.92 / 3.63 / 2.33, smoothies 35.12 / 21.31 /
   // 19.88, kirsch 33.02 / 20.58 / 18.79, pcf 23.04 / 11.26 / 12.37, hard 34.27 / 18.99 / 17.47,
   // raytraced-hard 16.06, reference (16 spp) 2.44.
@@ -67,12 +67,13 @@ TEST(LawlorTable, ShapeOfFigure10At16To128) {
 TEST(LawlorTable, HalfPenumbraRowsBeatTheHardShadowMapAgainstTheirHalf) {
   const LawlorTable& t = smallTable();
   const PenumbraHalf outer = PenumbraHalf::Outer, inner = PenumbraHalf::Inner;
-  std::printf("[ measured ] half truths, 16 / 64 / 128: smoothies %.2f / %.2f / %.2f (hard %.2f / %.2f / %.2f), "
-              "kirsch %.2f / %.2f / %.2f (hard %.2f / %.2f / %.2f)\n",
-              t.row("smoothies", outer).rmse8[0], t.row("smoothies", outer).rmse8[1], t.row("smoothies", outer).rmse8[2],
-              t.row("hard", outer).rmse8[0], t.row("hard", outer).rmse8[1], t.row("hard", outer).rmse8[2],
-              t.row("kirsch", inner).rmse8[0], t.row("kirsch", inner).rmse8[1], t.row("kirsch", inner).rmse8[2],
-              t.row("hard", inner).rmse8[0], t.row("hard", inner).rmse8[1], t.row("hard", inner).rmse8[2]);
+  std::printf(
+      "[ measured ] half truths, 16 / 64 / 128: smoothies %.2f / %.2f / %.2f (hard %.2f / %.2f / %.2f), "
+      "kirsch %.2f / %.2f / %.2f (hard %.2f / %.2f / %.2f)\n",
+      t.row("smoothies", outer).rmse8[0], t.row("smoothies", outer).rmse8[1], t.row("smoothies", outer).rmse8[2],
+      t.row("hard", outer).rmse8[0], t.row("hard", outer).rmse8[1], t.row("hard", outer).rmse8[2],
+      t.row("kirsch", inner).rmse8[0], t.row("kirsch", inner).rmse8[1], t.row("kirsch", inner).rmse8[2],
+      t.row("hard", inner).rmse8[0], t.row("hard", inner).rmse8[1], t.row("hard", inner).rmse8[2]);
   for (size_t i = 0; i < t.options.mapSizes.size(); ++i) {
     const int size = t.options.mapSizes[i];
     EXPECT_LT(t.row("smoothies", outer).rmse8[i], t.row("hard", outer).rmse8[i]) << size;

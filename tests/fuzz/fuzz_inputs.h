@@ -34,12 +34,14 @@ inline void sceneFile(const uint8_t* data, size_t size) {
   }
   const std::string written = sceneToJson(scene);
   const Scene again = parseScene(written, "written.json");  // an Error here escapes: a round-trip bug
-  if (sceneToJson(again) != written) throw std::logic_error("sceneToJson(parseScene(sceneToJson(s))) differs from sceneToJson(s)");
+  if (sceneToJson(again) != written)
+    throw std::logic_error("sceneToJson(parseScene(sceneToJson(s))) differs from sceneToJson(s)");
 }
 
 // The mesh-file extensions a fuzz input can choose with its first byte: the formats assimp reads that
 // users are likeliest to hand penumbra.
-inline constexpr std::string_view kMeshExtensions[] = {"obj", "ply", "stl", "off", "gltf", "glb", "dae", "3ds", "fbx", "x"};
+inline constexpr std::string_view kMeshExtensions[] = {"obj", "ply", "stl", "off", "gltf",
+                                                       "glb", "dae", "3ds", "fbx", "x"};
 
 // A mesh file through the path a user's file takes: a scene file that names it in "mesh", loaded by
 // parseScene, which calls importMesh. The first byte picks the file's extension (so assimp picks
@@ -54,7 +56,8 @@ inline void meshFile(const uint8_t* data, size_t size, const std::filesystem::pa
     if (!out) throw std::runtime_error("cannot write the fuzz input to " + (dir / name).string());
   }
   const std::string scene = R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0]}, "lights": [],
-    "objects": [{"name": "fuzzed", "mesh": ")" + name + R"("}]})";
+    "objects": [{"name": "fuzzed", "mesh": ")" +
+                            name + R"("}]})";
   try {
     parseScene(scene, (dir / "scene.json").string(), dir.string());
   } catch (const Error&) {

@@ -43,14 +43,19 @@ inline constexpr int kSmallSceneLightShapes = 6;
 inline Light smallSceneLight(uint8_t pick) {
   const Vec3 c = kSmallSceneLightCenter;
   switch (pick % kSmallSceneLightShapes) {
-    case 0: return Light::sphere(c, 0.4f);
-    case 1: return Light::disk(c, Vec3(0.0f, -1.0f, 0.0f), 0.4f);
-    case 2: return Light::rect(c, Vec3(0.4f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f));
+    case 0:
+      return Light::sphere(c, 0.4f);
+    case 1:
+      return Light::disk(c, Vec3(0.0f, -1.0f, 0.0f), 0.4f);
+    case 2:
+      return Light::rect(c, Vec3(0.4f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f));
     case 3:
       return Light::polygon({c + Vec3(-0.5f, 0.0f, -0.5f), c + Vec3(0.5f, 0.0f, -0.5f), c + Vec3(0.5f, 0.0f, 0.0f), c,
                              c + Vec3(0.0f, 0.0f, 0.5f), c + Vec3(-0.5f, 0.0f, 0.5f)});
-    case 4: return Light::segment(c - Vec3(0.6f, 0.0f, 0.0f), c + Vec3(0.6f, 0.0f, 0.0f));
-    default: return Light::directional(Vec3(0.3f, 1.0f, 0.2f), radians(3.0f));
+    case 4:
+      return Light::segment(c - Vec3(0.6f, 0.0f, 0.0f), c + Vec3(0.6f, 0.0f, 0.0f));
+    default:
+      return Light::directional(Vec3(0.3f, 1.0f, 0.2f), radians(3.0f));
   }
 }
 
@@ -70,7 +75,8 @@ inline Scene smallScene(const Light& light) {
   add(1, makeBox(Vec3(0.6f)), glm::translate(Mat4(1.0f), Vec3(-0.6f, 0.3f, 0.0f)));
   add(2, makeSphere(0.3f, 12, 6), glm::translate(Mat4(1.0f), Vec3(0.6f, 1.0f, 0.2f)));
   add(3, makePlane(0.8f, 0.5f),
-      glm::translate(Mat4(1.0f), Vec3(0.0f, 1.6f, -0.5f)) * glm::rotate(Mat4(1.0f), radians(30.0f), Vec3(1.0f, 0.0f, 0.0f)));
+      glm::translate(Mat4(1.0f), Vec3(0.0f, 1.6f, -0.5f)) *
+          glm::rotate(Mat4(1.0f), radians(30.0f), Vec3(1.0f, 0.0f, 0.0f)));
   scene.lights.push_back(light);
   scene.camera.position = Vec3(0.0f, 4.0f, 4.0f);
   scene.camera.lookAt = Vec3(0.0f, 0.3f, 0.0f);
@@ -110,7 +116,8 @@ inline void techniqueParams(const uint8_t* data, size_t size) {
   if (v.width() != kFuzzImageSize || v.height() != kFuzzImageSize)
     throw std::logic_error(info.name + ": V does not have the G-buffer's size");
   for (float x : v)
-    if (!(std::isfinite(x) && x >= 0.0f && x <= 1.0f)) throw std::logic_error(info.name + ": V outside [0, 1] or not finite");
+    if (!(std::isfinite(x) && x >= 0.0f && x <= 1.0f))
+      throw std::logic_error(info.name + ": V outside [0, 1] or not finite");
 }
 
 }  // namespace penumbra::fuzz

@@ -57,9 +57,9 @@ TEST(FuzzCorpus, SceneSeedsGiveTheirKnownOutcome) {
   for (const char* good : {"torus.json", "triangle.json", "slit.json", "inline_lights.json", "primitives.json"})
     EXPECT_NO_THROW(parse(good)) << good;
   EXPECT_EQ(parse("inline_lights.json").lights.size(), 6u);
-  for (const char* bad : {"malformed_truncated.json", "duplicate_key.json", "huge_number.json", "bad_indices.json",
-                          "mesh_missing.json", "big_image.json", "not_object.json", "empty.json", "utf16.json",
-                          "crash-json-number-overflow"}) {
+  for (const char* bad :
+       {"malformed_truncated.json", "duplicate_key.json", "huge_number.json", "bad_indices.json", "mesh_missing.json",
+        "big_image.json", "not_object.json", "empty.json", "utf16.json", "crash-json-number-overflow"}) {
     try {
       parse(bad);
       ADD_FAILURE() << bad << " must be refused";
@@ -94,8 +94,8 @@ TEST(FuzzCorpus, MeshSeedsGiveTheirKnownOutcome) {
     const std::vector<uint8_t> bytes = readBytes(kCorpus / "mesh_file" / name);
     const auto path = dir.path() / (std::filesystem::path(name).stem().string() + "." +
                                     std::string(fuzz::kMeshExtensions[bytes.at(0) % std::size(fuzz::kMeshExtensions)]));
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data() + 1),
-                                                static_cast<std::streamsize>(bytes.size() - 1));
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data() + 1), static_cast<std::streamsize>(bytes.size() - 1));
     return importMesh(path.string());
   };
   EXPECT_EQ(import("tetra.obj").triangleCount(), 4u);

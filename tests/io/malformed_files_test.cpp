@@ -22,7 +22,8 @@ namespace {
 
 class ScratchDir {
  public:
-  ScratchDir() : path_(std::filesystem::temp_directory_path() / ("penumbra-malformed-test-" + std::to_string(getpid()))) {
+  ScratchDir()
+      : path_(std::filesystem::temp_directory_path() / ("penumbra-malformed-test-" + std::to_string(getpid()))) {
     std::filesystem::create_directories(path_);
   }
   ~ScratchDir() {
@@ -55,8 +56,9 @@ TEST(MalformedFiles, NonFiniteMeshVerticesAreRefusedThroughTheSceneFile) {
   for (const std::string bad : {"nan", "inf", "-inf", "1e39"}) {
     dir.write("ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     dir.write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 " + bad + " 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n");
-    const auto scene = dir.write("scene.json", std::string(kSceneHead) +
-                                                   R"({"name": "a", "mesh": "ok.obj"}, {"name": "b", "mesh": "bad.obj"}]})");
+    const auto scene =
+        dir.write("scene.json",
+                  std::string(kSceneHead) + R"({"name": "a", "mesh": "ok.obj"}, {"name": "b", "mesh": "bad.obj"}]})");
     const std::string message = loadError(scene);
     EXPECT_FALSE(message.empty()) << bad << ": a non-finite vertex must be refused";
     EXPECT_NE(message.find(scene.string()), std::string::npos) << "names the scene file: " << message;
@@ -79,10 +81,12 @@ TEST(MalformedFiles, NonFiniteInlineVerticesAreRefusedWithTheirIndex) {
 TEST(MalformedFiles, TruncatedPlyHeaderIsRefusedInsteadOfHanging) {
   // assimp 5.2.5 loops forever on these (found by the mesh-file fuzz target); the importer refuses them first.
   const ScratchDir dir;
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
-  for (const auto& [name, bytes] : {std::pair<std::string, std::string>{"truncated.ply", head},
-                                    {"no_end.ply", head + "element face 1\nxend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
-                                    {"by_signature.mesh", head}}) {
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  for (const auto& [name, bytes] :
+       {std::pair<std::string, std::string>{"truncated.ply", head},
+        {"no_end.ply", head + "element face 1\nxend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+        {"by_signature.mesh", head}}) {
     const auto path = dir.write(name, bytes);
     try {
       importMesh(path.string());
@@ -93,9 +97,10 @@ TEST(MalformedFiles, TruncatedPlyHeaderIsRefusedInsteadOfHanging) {
     }
   }
   // A complete header with CRLF line endings still loads.
-  const auto crlf = dir.write("crlf.ply", "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
-                                          "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n"
-                                          "end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n");
+  const auto crlf = dir.write("crlf.ply",
+                              "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+                              "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n"
+                              "end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n");
   EXPECT_EQ(importMesh(crlf.string()).triangleCount(), 1u);
 }
 
@@ -104,8 +109,9 @@ TEST(MalformedFiles, ElementCountsBeyondTheFileSizeAreRefused) {
   const ScratchDir dir;
   for (const auto& [name, bytes] : {std::pair<std::string, std::string>{"huge.off", "OFF\n35353523535 6 0\n0 0 0\n"},
                                     {"huge_same_line.off", "OFF 3 99999999999\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
-                                    {"huge.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n"
-                                                 "property float y\nproperty float z\nend_header\n0 0 0\n"}}) {
+                                    {"huge.ply",
+                                     "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n"
+                                     "property float y\nproperty float z\nend_header\n0 0 0\n"}}) {
     const auto path = dir.write(name, bytes);
     try {
       importMesh(path.string());
@@ -115,7 +121,9 @@ TEST(MalformedFiles, ElementCountsBeyondTheFileSizeAreRefused) {
       EXPECT_NE(std::string(e.what()).find("declares"), std::string::npos) << e.what();
     }
   }
-  EXPECT_EQ(importMesh(dir.write("ok.off", "OFF\n# a comment\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").string()).triangleCount(), 1u);
+  EXPECT_EQ(importMesh(dir.write("ok.off", "OFF\n# a comment\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").string())
+                .triangleCount(),
+            1u);
 }
 
 const std::filesystem::path kTestModels = "/usr/share/assimp/models";
@@ -182,8 +190,10 @@ TEST(MalformedFiles, AssimpInvalidModelsAreRefusedNamingTheFile) {
     ++files;
     const std::string outcome = importOutcome(path);
     // malformed2.obj only names a missing material: its triangles are fine and load.
-    if (path.filename() == "malformed2.obj") EXPECT_EQ(outcome, "") << path;
-    else EXPECT_NE(outcome, "") << path << " is invalid and must be refused";
+    if (path.filename() == "malformed2.obj")
+      EXPECT_EQ(outcome, "") << path;
+    else
+      EXPECT_NE(outcome, "") << path << " is invalid and must be refused";
   }
   EXPECT_GE(files, 14u) << "assimp-testmodels' invalid/ holds 15 models";
 }

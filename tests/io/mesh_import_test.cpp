@@ -129,11 +129,17 @@ std::pair<json, std::string> gltfParts(const Mesh& m, const Vec3& translation) {
       {"nodes", {{{"mesh", 0}, {"translation", {translation.x, translation.y, translation.z}}}}},
       {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}, {"mode", 4}}}}}}},
       {"buffers", {{{"byteLength", buffer.size()}}}},
-      {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", positionBytes}, {"target", 34962}},
-                       {{"buffer", 0}, {"byteOffset", positionBytes}, {"byteLength", m.triangles.size() * 6}, {"target", 34963}}}},
-      {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", m.positions.size()}, {"type", "VEC3"},
-                      {"min", {lower.x, lower.y, lower.z}}, {"max", {upper.x, upper.y, upper.z}}},
-                     {{"bufferView", 1}, {"componentType", 5123}, {"count", m.triangles.size() * 3}, {"type", "SCALAR"}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", positionBytes}, {"target", 34962}},
+        {{"buffer", 0}, {"byteOffset", positionBytes}, {"byteLength", m.triangles.size() * 6}, {"target", 34963}}}},
+      {"accessors",
+       {{{"bufferView", 0},
+         {"componentType", 5126},
+         {"count", m.positions.size()},
+         {"type", "VEC3"},
+         {"min", {lower.x, lower.y, lower.z}},
+         {"max", {upper.x, upper.y, upper.z}}},
+        {{"bufferView", 1}, {"componentType", 5123}, {"count", m.triangles.size() * 3}, {"type", "SCALAR"}}}},
   };
   return {j, buffer};
 }
@@ -165,7 +171,8 @@ std::string errorOf(const std::string& path) {
   return "";
 }
 
-#define EXPECT_CONTAINS(haystack, needle) EXPECT_NE((haystack).find(needle), std::string::npos) << "message: " << (haystack)
+#define EXPECT_CONTAINS(haystack, needle) \
+  EXPECT_NE((haystack).find(needle), std::string::npos) << "message: " << (haystack)
 
 TEST(MeshImport, ObjPlyGltfAndGlbGiveTheSameTriangles) {
   TempDir dir;
@@ -184,7 +191,7 @@ TEST(MeshImport, ObjPlyGltfAndGlbGiveTheSameTriangles) {
     EXPECT_EQ(m.triangleCount(), 12u);
     EXPECT_EQ(m.positions.size(), 8u);  // shared vertices stay shared
     EXPECT_TRUE(closedByIndex(m));
-    EXPECT_TRUE(m.normals.empty());     // the files hold no normals: flat
+    EXPECT_TRUE(m.normals.empty());  // the files hold no normals: flat
     EXPECT_EQ(triangleSet(m, offset), expected);
   }
 }

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -50,7 +50,8 @@ std::string errorOf(const std::string& text, const std::string& source = "scenes
 }
 std::string errorOfJson(const json& j) { return errorOf(j.dump()); }
 
-#define EXPECT_CONTAINS(haystack, needle) EXPECT_NE((haystack).find(needle), std::string::npos) << "message: " << (haystack)
+#define EXPECT_CONTAINS(haystack, needle) \
+  EXPECT_NE((haystack).find(needle), std::string::npos) << "message: " << (haystack)
 
 std::string readText(const std::string& path) {
   std::ifstream in(path);
@@ -178,7 +179,8 @@ TEST(BuiltinScenes, EveryOneLoadsAndIsSane) {
       }
     // The camera sees the scene's centre.
     const Vec3 toCentre = glm::normalize(b.center() - s.camera.position);
-    EXPECT_GT(glm::dot(toCentre, glm::normalize(s.camera.lookAt - s.camera.position)), std::cos(radians(s.camera.fovYDegrees / 2)));
+    EXPECT_GT(glm::dot(toCentre, glm::normalize(s.camera.lookAt - s.camera.position)),
+              std::cos(radians(s.camera.fovYDegrees / 2)));
   }
 }
 
@@ -205,7 +207,9 @@ TEST(BuiltinScenes, ConcaveOccluderIsClosedAndOutward) {
   double volume = 0.0;
   for (const glm::uvec3& t : slab->mesh.triangles) {
     for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
-    volume += glm::dot(DVec3(slab->mesh.positions[t.x]), glm::cross(DVec3(slab->mesh.positions[t.y]), DVec3(slab->mesh.positions[t.z]))) / 6.0;
+    volume += glm::dot(DVec3(slab->mesh.positions[t.x]),
+                       glm::cross(DVec3(slab->mesh.positions[t.y]), DVec3(slab->mesh.positions[t.z]))) /
+              6.0;
   }
   for (const auto& [e, n] : edges) {
     EXPECT_EQ(n, 1);
@@ -225,8 +229,8 @@ TEST(BuiltinScenes, TriangleSceneMatchesLawlorsSetup) {
   std::vector<float> heights;
   for (const Vec3& p : tri->mesh.positions) heights.push_back(p.y);
   std::sort(heights.begin(), heights.end());
-  EXPECT_EQ(heights[0], 0.0f);   // touches the ground
-  EXPECT_GT(heights[1], 0.0f);   // slightly raised
+  EXPECT_EQ(heights[0], 0.0f);               // touches the ground
+  EXPECT_GT(heights[1], 0.0f);               // slightly raised
   EXPECT_GT(heights[2], 5.0f * heights[1]);  // far off the ground
 }
 
@@ -289,7 +293,8 @@ TEST(ParseScene, EmptyLightsAndObjectsParse) {
 
 TEST(ParseScene, TransformScalesThenRotatesXYZThenTranslates) {
   json j = baseScene();
-  j["objects"] = json::array({json::parse(R"({"name": "t", "primitive": {"type": "triangle", "vertices": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]},
+  j["objects"] = json::array(
+      {json::parse(R"({"name": "t", "primitive": {"type": "triangle", "vertices": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]},
       "transform": {"scale": [2, 3, 4], "rotate": [90, 90, 0], "translate": [10, 20, 30]}})")});
   const Scene s = parseScene(j.dump(), "t.json");
   const auto& p = s.objects[0].mesh.positions;
@@ -317,7 +322,8 @@ TEST(ParseScene, FitScalesUniformlyAndSetsTheBottomCentreOnBase) {
   EXPECT_NEAR(b.lower.z, 3.0f - 1.0f, 1e-4f);
   EXPECT_NEAR(b.upper.z, 3.0f + 1.0f, 1e-4f);
   // base defaults to the origin; a sphere stays a true sphere (uniform scale).
-  j["objects"] = json::array({json::parse(R"({"name": "s", "primitive": {"type": "sphere", "radius": 3}, "fit": {"size": 1}})")});
+  j["objects"] =
+      json::array({json::parse(R"({"name": "s", "primitive": {"type": "sphere", "radius": 3}, "fit": {"size": 1}})")});
   const Scene t = parseScene(j.dump(), "f.json");
   ASSERT_TRUE(t.objects[0].sphere.has_value());
   EXPECT_NEAR(t.objects[0].sphere->radius, 0.5f, 1e-5f);
@@ -418,8 +424,9 @@ TEST(SceneToJson, DerivedUnitVectorsAndAnglesRoundTrip) {
   for (int i = 0; i < 1000; ++i) {
     json j = baseScene();
     const Vec3 d(next() - 0.5f, next() + 0.1f, next() - 0.5f);
-    j["lights"] = json::array({{{"type", "disk"}, {"center", {0, 4, 0}}, {"normal", {d.x, -d.y, d.z}}, {"radius", 0.3}},
-                               {{"type", "directional"}, {"direction", {d.x, d.y, d.z}}, {"angular_diameter", 0.1 + 20.0 * next()}}});
+    j["lights"] = json::array(
+        {{{"type", "disk"}, {"center", {0, 4, 0}}, {"normal", {d.x, -d.y, d.z}}, {"radius", 0.3}},
+         {{"type", "directional"}, {"direction", {d.x, d.y, d.z}}, {"angular_diameter", 0.1 + 20.0 * next()}}});
     const Scene original = parseScene(j.dump(), "x.json");
     const Scene back = parseScene(sceneToJson(original), "x.json");
     failures += back.lights[0].normal() != original.lights[0].normal();
@@ -474,9 +481,12 @@ struct ErrorCase {
 
 TEST(SceneErrors, EachNamesFileFieldAndExpectation) {
   const std::vector<ErrorCase> cases = {
-      {"unknown top-level key", [](json& j) { j["lihgts"] = json::array(); },
+      {"unknown top-level key",
+       [](json& j) { j["lihgts"] = json::array(); },
        {"scenes/x.json", "unknown key 'lihgts'", "did you mean 'lights'"}},
-      {"unknown object key", [](json& j) { j["objects"][1]["colour"] = 1; }, {"scenes/x.json: objects[1]: unknown key 'colour'"}},
+      {"unknown object key",
+       [](json& j) { j["objects"][1]["colour"] = 1; },
+       {"scenes/x.json: objects[1]: unknown key 'colour'"}},
       {"missing camera", [](json& j) { j.erase("camera"); }, {"scenes/x.json", "missing required key 'camera'"}},
       {"a model of assimp-testmodels that is not there",
        [](json& j) {
@@ -485,108 +495,207 @@ TEST(SceneErrors, EachNamesFileFieldAndExpectation) {
        },
        {"scenes/x.json: objects[1].mesh: /usr/share/assimp/models/OBJ/no_such_model.obj: mesh file not found",
         "Debian's assimp-testmodels package"}},
-      {"a light beyond the ray tracer's reach", [](json& j) { j["lights"][0]["center"] = {0, 3e38, 0}; },
+      {"a light beyond the ray tracer's reach",
+       [](json& j) {
+         j["lights"][0]["center"] = {0, 3e38, 0};
+       },
        {"scenes/x.json: lights[0]: expected world coordinates within +-1e+18", "the light reaches 3e+38"}},
-      {"an object scaled beyond the ray tracer's reach", [](json& j) { j["objects"][1]["transform"]["scale"] = 3e38; },
+      {"an object scaled beyond the ray tracer's reach",
+       [](json& j) { j["objects"][1]["transform"]["scale"] = 3e38; },
        {"scenes/x.json: objects[1].transform: transform is singular or overflows (determinant inf)"}},
-      {"an object translated beyond the ray tracer's reach", [](json& j) { j["objects"][1]["transform"]["translate"] = {0, 2e18, 0}; },
-       {"scenes/x.json: objects[1]: expected world coordinates within +-1e+18", "the object (after its transform) reaches"}},
-      {"fit without size", [](json& j) { j["objects"][1]["fit"] = json::object(); },
+      {"an object translated beyond the ray tracer's reach",
+       [](json& j) {
+         j["objects"][1]["transform"]["translate"] = {0, 2e18, 0};
+       },
+       {"scenes/x.json: objects[1]: expected world coordinates within +-1e+18",
+        "the object (after its transform) reaches"}},
+      {"fit without size",
+       [](json& j) { j["objects"][1]["fit"] = json::object(); },
        {"scenes/x.json: objects[1].fit: missing required key 'size'"}},
-      {"fit to a zero size", [](json& j) { j["objects"][1]["fit"] = {{"size", 0}}; },
+      {"fit to a zero size",
+       [](json& j) {
+         j["objects"][1]["fit"] = {{"size", 0}};
+       },
        {"scenes/x.json: objects[1].fit.size: expected a number > 0"}},
       {"missing lights", [](json& j) { j.erase("lights"); }, {"missing required key 'lights'"}},
-      {"missing object name", [](json& j) { j["objects"][0].erase("name"); }, {"objects[0]: missing required key 'name'"}},
-      {"rotate of 2 numbers", [](json& j) { j["objects"][1]["transform"]["rotate"] = {1, 2}; },
+      {"missing object name",
+       [](json& j) { j["objects"][0].erase("name"); },
+       {"objects[0]: missing required key 'name'"}},
+      {"rotate of 2 numbers",
+       [](json& j) {
+         j["objects"][1]["transform"]["rotate"] = {1, 2};
+       },
        {"scenes/x.json: objects[1].transform.rotate: expected an array of 3 numbers"}},
-      {"string where a number goes", [](json& j) { j["objects"][1]["primitive"]["radius"] = "big"; },
+      {"string where a number goes",
+       [](json& j) { j["objects"][1]["primitive"]["radius"] = "big"; },
        {"objects[1].primitive.radius: expected a number, got a string"}},
-      {"negative radius", [](json& j) { j["objects"][1]["primitive"]["radius"] = -1; }, {"objects[1].primitive.radius: expected a number > 0"}},
-      {"float where an integer goes", [](json& j) { j["objects"][1]["primitive"]["segments"] = 8.5; },
+      {"negative radius",
+       [](json& j) { j["objects"][1]["primitive"]["radius"] = -1; },
+       {"objects[1].primitive.radius: expected a number > 0"}},
+      {"float where an integer goes",
+       [](json& j) { j["objects"][1]["primitive"]["segments"] = 8.5; },
        {"objects[1].primitive.segments: expected an integer"}},
-      {"too few segments", [](json& j) { j["objects"][1]["primitive"]["segments"] = 2; }, {"objects[1].primitive.segments: expected an integer in [3,"}},
-      {"number out of float range", [](json& j) { j["camera"]["position"][0] = 1e300; }, {"camera.position[0]: expected a finite number"}},
-      {"unknown primitive", [](json& j) { j["objects"][1]["primitive"]["type"] = "cone"; },
+      {"too few segments",
+       [](json& j) { j["objects"][1]["primitive"]["segments"] = 2; },
+       {"objects[1].primitive.segments: expected an integer in [3,"}},
+      {"number out of float range",
+       [](json& j) { j["camera"]["position"][0] = 1e300; },
+       {"camera.position[0]: expected a finite number"}},
+      {"unknown primitive",
+       [](json& j) { j["objects"][1]["primitive"]["type"] = "cone"; },
        {"objects[1].primitive.type: unknown primitive type \"cone\"", "plane, box, sphere"}},
-      {"two geometries", [](json& j) { j["objects"][1]["mesh"] = "a.obj"; }, {"objects[1]: expected exactly one of 'primitive', 'mesh' or 'inline'"}},
+      {"two geometries",
+       [](json& j) { j["objects"][1]["mesh"] = "a.obj"; },
+       {"objects[1]: expected exactly one of 'primitive', 'mesh' or 'inline'"}},
       {"no geometry", [](json& j) { j["objects"][1].erase("primitive"); }, {"objects[1]: expected exactly one of"}},
-      {"transform and matrix", [](json& j) { j["objects"][1]["matrix"] = json::parse("[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]"); },
+      {"transform and matrix",
+       [](json& j) { j["objects"][1]["matrix"] = json::parse("[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]"); },
        {"objects[1]: expected at most one of 'transform' and 'matrix'"}},
-      {"projective matrix", [](json& j) {
+      {"projective matrix",
+       [](json& j) {
          j["objects"][1].erase("transform");
          j["objects"][1]["matrix"] = json::parse("[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,1,1]]");
-       }, {"objects[1].matrix[3]: expected [0, 0, 0, 1]"}},
-      {"zero scale", [](json& j) { j["objects"][1]["transform"]["scale"] = 0; }, {"objects[1].transform.scale: expected non-zero"}},
-      {"duplicate explicit ids", [](json& j) {
+       },
+       {"objects[1].matrix[3]: expected [0, 0, 0, 1]"}},
+      {"zero scale",
+       [](json& j) { j["objects"][1]["transform"]["scale"] = 0; },
+       {"objects[1].transform.scale: expected non-zero"}},
+      {"duplicate explicit ids",
+       [](json& j) {
          j["objects"][0]["id"] = 3;
          j["objects"][1]["id"] = 3;
-       }, {"objects[1]: duplicate object id 3", "objects[0]"}},
-      {"explicit id equal to another's index", [](json& j) { j["objects"][0]["id"] = 1; }, {"objects[1]: duplicate object id 1"}},
+       },
+       {"objects[1]: duplicate object id 3", "objects[0]"}},
+      {"explicit id equal to another's index",
+       [](json& j) { j["objects"][0]["id"] = 1; },
+       {"objects[1]: duplicate object id 1"}},
       {"negative id", [](json& j) { j["objects"][0]["id"] = -1; }, {"objects[0].id: expected an integer in [0,"}},
-      {"albedo above 1", [](json& j) { j["objects"][0]["albedo"] = {0.5, 1.5, 0.5}; }, {"objects[0].albedo: expected reflectances in [0, 1]"}},
-      {"albedo as a string", [](json& j) { j["objects"][0]["albedo"] = "red"; }, {"objects[0].albedo: expected a number or an array of 3 numbers"}},
-      {"unknown light type", [](json& j) { j["lights"][0]["type"] = "spot"; }, {"lights[0].type: unknown light type \"spot\""}},
+      {"albedo above 1",
+       [](json& j) {
+         j["objects"][0]["albedo"] = {0.5, 1.5, 0.5};
+       },
+       {"objects[0].albedo: expected reflectances in [0, 1]"}},
+      {"albedo as a string",
+       [](json& j) { j["objects"][0]["albedo"] = "red"; },
+       {"objects[0].albedo: expected a number or an array of 3 numbers"}},
+      {"unknown light type",
+       [](json& j) { j["lights"][0]["type"] = "spot"; },
+       {"lights[0].type: unknown light type \"spot\""}},
       {"light without type", [](json& j) { j["lights"][0].erase("type"); }, {"lights[0]: missing required key 'type'"}},
       {"zero light radius", [](json& j) { j["lights"][0]["radius"] = 0; }, {"lights[0].radius: expected a number > 0"}},
-      {"key of another light type", [](json& j) { j["lights"][0]["normal"] = {0, 1, 0}; }, {"lights[0]: unknown key 'normal'"}},
-      {"degenerate disk normal", [](json& j) {
+      {"key of another light type",
+       [](json& j) {
+         j["lights"][0]["normal"] = {0, 1, 0};
+       },
+       {"lights[0]: unknown key 'normal'"}},
+      {"degenerate disk normal",
+       [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "disk", "center": [0, 4, 0], "normal": [0, 0, 0], "radius": 1})");
-       }, {"scenes/x.json: lights[0].normal: disk normal must be a non-zero vector"}},
-      {"self-intersecting polygon light", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,4,1],[1,4,-1],[0,4,2]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon edges 0 and 3 cross; expected a simple polygon"}},
-      {"bow-tie polygon light", [](json& j) {
+       },
+       {"scenes/x.json: lights[0].normal: disk normal must be a non-zero vector"}},
+      {"self-intersecting polygon light",
+       [](json& j) {
+         j["lights"][0] =
+             json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,4,1],[1,4,-1],[0,4,2]]})");
+       },
+       {"scenes/x.json: lights[0].vertices: polygon edges 0 and 3 cross; expected a simple polygon"}},
+      {"bow-tie polygon light",
+       [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[1,4,0],[0,4,1],[1,4,1]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon edges 1 and 3 cross; expected a simple polygon"}},
-      {"polygon light with a repeated vertex", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[1,4,1],[2,4,2],[1,4,1],[0,4,2]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon vertices 2 and 4 coincide; expected distinct vertices"}},
-      {"non-planar polygon light", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,5,1],[1,4,2],[0,4,2]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon is not planar", "expected all vertices in one plane"}},
-      {"zero-area polygon light", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[1,4,0],[3,4,0]]})");
-       }, {"scenes/x.json: lights[0].vertices: polygon has zero area"}},
-      {"rect with parallel edges", [](json& j) {
+       },
+       {"scenes/x.json: lights[0].vertices: polygon edges 1 and 3 cross; expected a simple polygon"}},
+      {"polygon light with a repeated vertex",
+       [](json& j) {
+         j["lights"][0] =
+             json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[1,4,1],[2,4,2],[1,4,1],[0,4,2]]})");
+       },
+       {"scenes/x.json: lights[0].vertices: polygon vertices 2 and 4 coincide; expected distinct vertices"}},
+      {"non-planar polygon light",
+       [](json& j) {
+         j["lights"][0] =
+             json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[2,4,0],[2,4,1],[1,5,1],[1,4,2],[0,4,2]]})");
+       },
+       {"scenes/x.json: lights[0].vertices: polygon is not planar", "expected all vertices in one plane"}},
+      {"zero-area polygon light",
+       [](json& j) { j["lights"][0] = json::parse(R"({"type": "polygon", "vertices": [[0,4,0],[1,4,0],[3,4,0]]})"); },
+       {"scenes/x.json: lights[0].vertices: polygon has zero area"}},
+      {"rect with parallel edges",
+       [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "rect", "center": [0,4,0], "u": [1,0,0], "v": [1,0,0.1]})");
-       }, {"scenes/x.json: lights[0]: rect half-edges u and v must be perpendicular"}},
-      {"directional angle out of range", [](json& j) {
+       },
+       {"scenes/x.json: lights[0]: rect half-edges u and v must be perpendicular"}},
+      {"directional angle out of range",
+       [](json& j) {
          j["lights"][0] = json::parse(R"({"type": "directional", "direction": [0,1,0], "angular_diameter": 180})");
-       }, {"lights[0].angular_diameter: expected an angle in (0, 180) degrees"}},
-      {"unknown profile", [](json& j) {
-         j["lights"][0] = json::parse(R"({"type": "directional", "direction": [0,1,0], "angular_diameter": 1, "profile": "gaussian"})");
-       }, {"lights[0].profile: expected \"uniform\" or \"limb-darkened\""}},
-      {"negative intensity", [](json& j) { j["lights"][0]["intensity"] = -2; }, {"lights[0].intensity: expected a number >= 0"}},
-      {"camera looking at itself", [](json& j) { j["camera"]["look_at"] = j["camera"]["position"]; },
+       },
+       {"lights[0].angular_diameter: expected an angle in (0, 180) degrees"}},
+      {"unknown profile",
+       [](json& j) {
+         j["lights"][0] = json::parse(
+             R"({"type": "directional", "direction": [0,1,0], "angular_diameter": 1, "profile": "gaussian"})");
+       },
+       {"lights[0].profile: expected \"uniform\" or \"limb-darkened\""}},
+      {"negative intensity",
+       [](json& j) { j["lights"][0]["intensity"] = -2; },
+       {"lights[0].intensity: expected a number >= 0"}},
+      {"camera looking at itself",
+       [](json& j) { j["camera"]["look_at"] = j["camera"]["position"]; },
        {"scenes/x.json: camera: look_at must differ from position"}},
       {"camera fov", [](json& j) { j["camera"]["fov_y"] = 180; }, {"scenes/x.json: camera: fov_y must be in (0, 180)"}},
-      {"image width zero", [](json& j) { j["image"] = {{"width", 0}, {"height", 10}}; }, {"image.width: expected an integer in [1, 16384]"}},
-      {"technique param of wrong type", [](json& j) { j["techniques"] = json::parse(R"({"pcss": {"kernel": [1, 2]}})"); },
+      {"image width zero",
+       [](json& j) {
+         j["image"] = {{"width", 0}, {"height", 10}};
+       },
+       {"image.width: expected an integer in [1, 16384]"}},
+      {"technique param of wrong type",
+       [](json& j) { j["techniques"] = json::parse(R"({"pcss": {"kernel": [1, 2]}})"); },
        {"techniques.pcss.kernel: expected a number, a boolean or a string"}},
-      {"technique not an object", [](json& j) { j["techniques"] = json::parse(R"({"pcss": 3})"); }, {"techniques.pcss: expected an object"}},
-      {"inline index out of range", [](json& j) {
-         j["objects"][1] = json::parse(R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 3]]}})");
-       }, {"objects[1].inline.triangles[0][2]: expected an integer in [0, 2]"}},
-      {"inline repeated index", [](json& j) {
-         j["objects"][1] = json::parse(R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 1]]}})");
-       }, {"objects[1].inline.triangles[0]: expected 3 distinct vertex indices"}},
-      {"inline normals count", [](json& j) {
-         j["objects"][1] = json::parse(R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 2]], "normals": [[0,0,1]]}})");
-       }, {"objects[1].inline.normals: expected one normal per position (3), got 1"}},
-      {"inline normal not unit", [](json& j) {
-         j["objects"][1] = json::parse(R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 2]], "normals": [[0,0,1],[0,0,1],[0,0,2]]}})");
-       }, {"objects[1].inline.normals[2]: expected a unit vector"}},
-      {"degenerate triangle primitive", [](json& j) {
+      {"technique not an object",
+       [](json& j) { j["techniques"] = json::parse(R"({"pcss": 3})"); },
+       {"techniques.pcss: expected an object"}},
+      {"inline index out of range",
+       [](json& j) {
+         j["objects"][1] = json::parse(
+             R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 3]]}})");
+       },
+       {"objects[1].inline.triangles[0][2]: expected an integer in [0, 2]"}},
+      {"inline repeated index",
+       [](json& j) {
+         j["objects"][1] = json::parse(
+             R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 1]]}})");
+       },
+       {"objects[1].inline.triangles[0]: expected 3 distinct vertex indices"}},
+      {"inline normals count",
+       [](json& j) {
+         j["objects"][1] = json::parse(
+             R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 2]], "normals": [[0,0,1]]}})");
+       },
+       {"objects[1].inline.normals: expected one normal per position (3), got 1"}},
+      {"inline normal not unit",
+       [](json& j) {
+         j["objects"][1] = json::parse(
+             R"({"name": "m", "inline": {"positions": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0, 1, 2]], "normals": [[0,0,1],[0,0,1],[0,0,2]]}})");
+       },
+       {"objects[1].inline.normals[2]: expected a unit vector"}},
+      {"degenerate triangle primitive",
+       [](json& j) {
          j["objects"][1]["primitive"] = json::parse(R"({"type": "triangle", "vertices": [[0,0,0],[1,1,1],[2,2,2]]})");
-       }, {"objects[1].primitive.vertices: triangle vertices must not be collinear"}},
-      {"torus minor radius too large", [](json& j) {
+       },
+       {"objects[1].primitive.vertices: triangle vertices must not be collinear"}},
+      {"torus minor radius too large",
+       [](json& j) {
          j["objects"][1]["primitive"] = json::parse(R"({"type": "torus", "major_radius": 1, "minor_radius": 1})");
-       }, {"objects[1].primitive.minor_radius: expected a number smaller than major_radius"}},
-      {"missing mesh file", [](json& j) {
+       },
+       {"objects[1].primitive.minor_radius: expected a number smaller than major_radius"}},
+      {"missing mesh file",
+       [](json& j) {
          j["objects"][1].erase("primitive");
          j["objects"][1]["mesh"] = "nowhere/missing.obj";
-       }, {"scenes/x.json: objects[1].mesh:", "nowhere/missing.obj", "not found"}},
-      {"top level not an object", [](json& j) { j = json::array(); }, {"scenes/x.json: expected a JSON object at the top level"}},
+       },
+       {"scenes/x.json: objects[1].mesh:", "nowhere/missing.obj", "not found"}},
+      {"top level not an object",
+       [](json& j) { j = json::array(); },
+       {"scenes/x.json: expected a JSON object at the top level"}},
   };
   for (const ErrorCase& c : cases) {
     SCOPED_TRACE(c.what);
@@ -604,7 +713,8 @@ TEST(SceneErrors, MalformedJsonGivesLineAndColumn) {
 }
 
 TEST(SceneErrors, DuplicateKeysAreRejected) {
-  const std::string text = R"({"name": "x", "camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "fov_y": 30, "fov_y": 40},
+  const std::string text =
+      R"({"name": "x", "camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "fov_y": 30, "fov_y": 40},
                                "lights": [], "objects": []})";
   EXPECT_CONTAINS(errorOf(text), "scenes/x.json: camera.fov_y: duplicate key 'fov_y'");
   const std::string inArray = R"({"lights": [], "camera": {"position": [0, 2, 5], "look_at": [0, 0, 0]},

@@ -20,10 +20,10 @@ namespace {
 
 struct Comparison {
   int pixels = 0;
-  int hits = 0;               // pixels both see, on the same object
-  int objectMismatch = 0;     // hit vs miss, or different objects
-  int triangleMismatch = 0;   // same object, different triangle (pixel centres on shared edges)
-  int edgeOutliers = 0;       // triangle-mismatch pixels further apart than the snapping allows
+  int hits = 0;                   // pixels both see, on the same object
+  int objectMismatch = 0;         // hit vs miss, or different objects
+  int triangleMismatch = 0;       // same object, different triangle (pixel centres on shared edges)
+  int edgeOutliers = 0;           // triangle-mismatch pixels further apart than the snapping allows
   double maxPositionError = 0.0;  // same triangle, relative to the scene's radius
   double maxDepthError = 0.0;     // same triangle, relative to the depth
   double minGeometricDot = 1.0;   // same triangle
@@ -63,7 +63,8 @@ Comparison compare(const Scene& scene, const GBuffer& raster, const GBuffer& tra
       c.maxPositionError = std::max(c.maxPositionError, double(positionError / radius));
       c.maxDepthError = std::max(c.maxDepthError,
                                  double(std::abs(raster.csDepth(x, y) - traced.csDepth(x, y)) / traced.csDepth(x, y)));
-      c.minGeometricDot = std::min(c.minGeometricDot, double(glm::dot(raster.wsGeometricNormal(x, y), traced.wsGeometricNormal(x, y))));
+      c.minGeometricDot =
+          std::min(c.minGeometricDot, double(glm::dot(raster.wsGeometricNormal(x, y), traced.wsGeometricNormal(x, y))));
       c.minShadingDot = std::min(c.minShadingDot, double(glm::dot(raster.wsNormal(x, y), traced.wsNormal(x, y))));
       EXPECT_NEAR(glm::length(raster.wsNormal(x, y)), 1.0f, 1e-5f);
     }
@@ -77,13 +78,17 @@ void expectMatchesRayCasting(const Scene& scene, int width, int height, int minH
   ASSERT_EQ(raster.width(), width);
   ASSERT_EQ(raster.height(), height);
   const Comparison c = compare(scene, raster, traced);
-  SCOPED_TRACE(::testing::Message() << scene.name << " " << width << "x" << height << ": objectMismatch " << c.objectMismatch
-                                    << " triangleMismatch " << c.triangleMismatch << " of " << c.pixels
-                                    << ", position " << c.maxPositionError << ", depth " << c.maxDepthError
-                                    << ", edge outliers " << c.edgeOutliers << ", normals " << c.minGeometricDot << " " << c.minShadingDot);
+  SCOPED_TRACE(::testing::Message() << scene.name << " " << width << "x" << height << ": objectMismatch "
+                                    << c.objectMismatch << " triangleMismatch " << c.triangleMismatch << " of "
+                                    << c.pixels << ", position " << c.maxPositionError << ", depth " << c.maxDepthError
+                                    << ", edge outliers " << c.edgeOutliers << ", normals " << c.minGeometricDot << " "
+                                    << c.minShadingDot);
   if (std::getenv("PENUMBRA_PRINT_MEASURED"))
-    std::printf("gbuffer %dx%d: objectMismatch %d triangleMismatch %d of %d, position %.3g depth %.3g, edge outliers %d, normals %.8f %.8f, hits %d\n",
-                width, height, c.objectMismatch, c.triangleMismatch, c.pixels, c.maxPositionError, c.maxDepthError, c.edgeOutliers, c.minGeometricDot, c.minShadingDot, c.hits);
+    std::printf(
+        "gbuffer %dx%d: objectMismatch %d triangleMismatch %d of %d, position %.3g depth %.3g, edge outliers %d, "
+        "normals %.8f %.8f, hits %d\n",
+        width, height, c.objectMismatch, c.triangleMismatch, c.pixels, c.maxPositionError, c.maxDepthError,
+        c.edgeOutliers, c.minGeometricDot, c.minShadingDot, c.hits);
   EXPECT_GT(c.hits, minHits);
   // Measured (PENUMBRA_PRINT_MEASURED=1): <= 1 pixel in 76800 changes object (a silhouette),
   // <= 3 change triangle (centres within snapping of a shared edge); same-triangle positions agree

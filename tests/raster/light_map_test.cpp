@@ -55,7 +55,8 @@ MapComparison compareWithRays(const Scene& scene, const LightMap& m) {
       ++c.hits;
       const float error = std::abs(m.lsDepth(s, t) - hit->t);
       const Vec2 b = hit->barycentrics;
-      if (std::min({b.x, b.y, 1.0f - b.x - b.y}) > 0.02f) c.maxInteriorError = std::max(c.maxInteriorError, double(error / hit->t));
+      if (std::min({b.x, b.y, 1.0f - b.x - b.y}) > 0.02f)
+        c.maxInteriorError = std::max(c.maxInteriorError, double(error / hit->t));
       // Near a shared edge the rasterizer's 1/512-texel snapping may pick the neighbouring
       // triangle: allow that much offset along the surface, stretched by the slope seen from the light.
       const float cosine = std::abs(glm::dot(hit->wsGeometricNormal, glm::normalize(ray.direction)));
@@ -68,7 +69,9 @@ void expectMatchesRays(const Scene& scene, const LightMap& m, int minHits) {
   const MapComparison c = compareWithRays(scene, m);
   SCOPED_TRACE(::testing::Message() << "idMismatch " << c.idMismatch << " of " << c.texels << ", interior depth "
                                     << c.maxInteriorError << ", outliers " << c.depthOutliers << ", hits " << c.hits);
-  if (std::getenv("PENUMBRA_PRINT_MEASURED")) std::printf("light map: idMismatch %d of %d, interior %.3g, outliers %d, hits %d\n", c.idMismatch, c.texels, c.maxInteriorError, c.depthOutliers, c.hits);
+  if (std::getenv("PENUMBRA_PRINT_MEASURED"))
+    std::printf("light map: idMismatch %d of %d, interior %.3g, outliers %d, hits %d\n", c.idMismatch, c.texels,
+                c.maxInteriorError, c.depthOutliers, c.hits);
   EXPECT_GT(c.hits, minHits);
   // Measured (PENUMBRA_PRINT_MEASURED=1): no texel changes object in these maps; interior depths
   // agree to 3.8e-6 relative, and no texel is off by more than the snapping allows.
@@ -80,7 +83,8 @@ void expectMatchesRays(const Scene& scene, const LightMap& m, int minHits) {
 void expectCornersInside(const Scene& scene, const LightMap& m) {
   const Bounds3 b = scene.bounds();
   for (int i = 0; i < 8; ++i) {
-    const Vec3 corner((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y, (i & 4) ? b.upper.z : b.lower.z);
+    const Vec3 corner((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y,
+                      (i & 4) ? b.upper.z : b.lower.z);
     const Vec3 p = m.project(corner);
     EXPECT_GE(p.x, 0.0f);
     EXPECT_LE(p.x, static_cast<float>(m.size));
@@ -103,7 +107,8 @@ TEST(LightMap, SphereLightMatchesRaysFromTheCentreSample) {
   const Bounds3 b = scene.bounds();
   float outermost = 0.0f;
   for (int i = 0; i < 8; ++i) {
-    const Vec3 corner((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y, (i & 4) ? b.upper.z : b.lower.z);
+    const Vec3 corner((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y,
+                      (i & 4) ? b.upper.z : b.lower.z);
     const Vec3 p = m.project(corner);
     outermost = std::max({outermost, std::abs(p.x - 128.0f), std::abs(p.y - 128.0f)});
   }
@@ -176,7 +181,8 @@ TEST(LightMap, ProjectInvertsUnprojectAndTexelSizesAreConsistent) {
   const Scene scene = rastertest::objectsScene();
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> st(0.0f, 512.0f), depth(0.5f, 12.0f);
-  for (const Light& light : {Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f), Light::directional(Vec3(0.4f, 1.0f, -0.3f), 0.01f)}) {
+  for (const Light& light :
+       {Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f), Light::directional(Vec3(0.4f, 1.0f, -0.3f), 0.01f)}) {
     const LightMap m = renderLightMap(scene, light, 512);
     for (int i = 0; i < 200; ++i) {
       const float s = st(rng), t = st(rng), z = depth(rng);

@@ -177,9 +177,7 @@ struct Perspective {
   float tanHalf = std::tan(radians(30.0f));
   float zNear = 0.1f;
   float aspect() const { return static_cast<float>(width) / height; }
-  Vec4 clip(const Vec3& cs) const {
-    return Vec4(cs.x / (tanHalf * aspect()), cs.y / tanHalf, -zNear, -cs.z);
-  }
+  Vec4 clip(const Vec3& cs) const { return Vec4(cs.x / (tanHalf * aspect()), cs.y / tanHalf, -zNear, -cs.z); }
   glm::dvec3 rayDirection(int x, int y) const {
     const double ndcX = 2.0 * (x + 0.5) / width - 1.0, ndcY = 1.0 - 2.0 * (y + 0.5) / height;
     return {ndcX * tanHalf * aspect(), ndcY * tanHalf, -1.0};
@@ -245,7 +243,9 @@ TEST(Rasterizer, PerspectiveCorrectInterpolationOnATiltedPlane) {
       maxError = std::max(maxError, glm::length(got - expected) / glm::length(expected));
       maxDepthError = std::max(maxDepthError, std::abs(out.clipW(x, y) - h.t) / h.t);
       // What screen-space (affine) interpolation would give at this pixel.
-      const auto ndc = [&](const Vec3& p) { return glm::dvec2(p.x / (-p.z * cam.tanHalf * cam.aspect()), p.y / (-p.z * cam.tanHalf)); };
+      const auto ndc = [&](const Vec3& p) {
+        return glm::dvec2(p.x / (-p.z * cam.tanHalf * cam.aspect()), p.y / (-p.z * cam.tanHalf));
+      };
       const glm::dvec2 s0 = ndc(cs[0]), s1 = ndc(cs[1]), s2 = ndc(cs[2]);
       const glm::dvec2 q(2.0 * (x + 0.5) / cam.width - 1.0, 1.0 - 2.0 * (y + 0.5) / cam.height);
       const auto cross2 = [](const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; };
@@ -350,7 +350,7 @@ TEST(Rasterizer, HugeTrianglesAreClippedToTheGuardBand) {
   m.width = 200;
   m.height = 150;
   m.clip = {Vec4(-3e7f, -2e7f, 0.1f, 1.0f), Vec4(4e7f, -1e7f, 0.1f, 1.0f), Vec4(1e5f, 5e7f, 0.1f, 1.0f),
-            Vec4(0.0f, 0.0f, 0.0f, 1.0f), Vec4(NAN, 0.0f, 0.0f, 1.0f), Vec4(0.5f, 0.5f, 0.0f, 1.0f)};
+            Vec4(0.0f, 0.0f, 0.0f, 1.0f),   Vec4(NAN, 0.0f, 0.0f, 1.0f),   Vec4(0.5f, 0.5f, 0.0f, 1.0f)};
   m.triangles = {{0, 1, 2}, {3, 4, 5}};
   const Image<int> count = coverageCount(m);
   const RasterOutput out = rasterize(m.input());

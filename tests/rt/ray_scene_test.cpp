@@ -127,7 +127,8 @@ TEST(RayScene, EmptySceneHitsNothing) {
   rays.occluded16(packet, 16, out);
   for (bool o : out) EXPECT_FALSE(o);
   // Objects without triangles are as empty, and later objects keep their ids.
-  Scene s = makeScene({makeObject(1, Mesh{}, "empty"), makeObject(2, quadMesh(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0)))});
+  Scene s = makeScene(
+      {makeObject(1, Mesh{}, "empty"), makeObject(2, quadMesh(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0)))});
   const RayScene rays2(s);
   const auto hit = rays2.intersect(r);
   ASSERT_TRUE(hit.has_value());
@@ -136,8 +137,8 @@ TEST(RayScene, EmptySceneHitsNothing) {
 
 TEST(RayScene, DegenerateTrianglesDoNotCrashOrHit) {
   Mesh m;
-  m.positions = {Vec3(-1, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0),  // collinear
-                 Vec3(0, 1, 0),                                  // for a repeated-index triangle
+  m.positions = {Vec3(-1, 0, 0),   Vec3(0, 0, 0),   Vec3(1, 0, 0),  // collinear
+                 Vec3(0, 1, 0),                                     // for a repeated-index triangle
                  Vec3(-1, -1, -1), Vec3(1, -1, -1), Vec3(0, 1, -1)};
   m.triangles = {{0, 1, 2}, {3, 3, 3}, {1, 3, 3}, {4, 5, 6}};
   const RayScene rays(makeScene({makeObject(4, m)}));

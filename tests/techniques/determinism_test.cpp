@@ -76,7 +76,8 @@ const TestScene* acceptedScene(const TechniqueInfo& info) {
     } catch (const Error& e) {
       const std::string message = e.what();
       if (message.find(toString(s.scene.lights[0].shape())) == std::string::npos) {
-        ADD_FAILURE() << info.name << " on " << s.scene.name << " failed with an Error that is not a light-shape refusal: " << message;
+        ADD_FAILURE() << info.name << " on " << s.scene.name
+                      << " failed with an Error that is not a light-shape refusal: " << message;
         return nullptr;
       }
     }
@@ -116,10 +117,12 @@ TEST(Determinism, SameSeedAndThreadCountGiveBitIdenticalOutput) {
     ASSERT_EQ(other.size(), first.size()) << info.name;
     size_t at = 0;
     EXPECT_EQ(differingPixels(first, again, at), 0u)
-        << info.name << " on " << s->scene.name << ": a run of one instance prepared for another scene before differs, first at pixel " << at
-        << " (" << (at < first.size() ? first[at] : 0.0f) << " vs " << (at < first.size() ? again[at] : 0.0f) << ")";
+        << info.name << " on " << s->scene.name
+        << ": a run of one instance prepared for another scene before differs, first at pixel " << at << " ("
+        << (at < first.size() ? first[at] : 0.0f) << " vs " << (at < first.size() ? again[at] : 0.0f) << ")";
     EXPECT_EQ(differingPixels(afterOther, freshOther, at), 0u)
-        << info.name << " on " << s->scene.name << " less its last object, after a run on the whole scene: differs from a fresh "
+        << info.name << " on " << s->scene.name
+        << " less its last object, after a run on the whole scene: differs from a fresh "
         << "instance, first at pixel " << at;
     EXPECT_EQ(differingPixels(first, other, at), 0u)
         << info.name << " on " << s->scene.name << ": a fresh instance differs, first at pixel " << at << " ("

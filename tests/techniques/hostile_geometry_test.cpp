@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "penumbra/error.h"
 #include "penumbra/metrics.h"
@@ -46,7 +46,8 @@ std::vector<Light> lightsAround(const Vec3& center, float size) {
   return {Light::sphere(center, size),
           Light::disk(center, Vec3(0.0f, -1.0f, 0.0f), size),
           Light::rect(center, Vec3(size, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f * size)),
-          Light::polygon({center + Vec3(-size, 0.0f, 0.0f), center + Vec3(0.0f, 0.0f, size), center + Vec3(size, 0.0f, 0.0f)}),
+          Light::polygon(
+              {center + Vec3(-size, 0.0f, 0.0f), center + Vec3(0.0f, 0.0f, size), center + Vec3(size, 0.0f, 0.0f)}),
           Light::segment(center - Vec3(size, 0.0f, 0.0f), center + Vec3(size, 0.0f, 0.0f)),
           Light::directional(center, radians(4.0f))};
 }
@@ -88,8 +89,9 @@ struct TechniqueRun {
 // (whose geometry and camera must not depend on the light: one G-buffer serves all). Checks that
 // each output is valid, that refusals name the light's shape, and that every technique ran with at
 // least one light. Returns every run.
-std::vector<TechniqueRun> runEveryTechnique(const std::function<Scene(const Light&)>& makeScene, const std::vector<Light>& lights,
-                                   const GBuffer& gbuffer, const std::string& what, bool everyLight = true) {
+std::vector<TechniqueRun> runEveryTechnique(const std::function<Scene(const Light&)>& makeScene,
+                                            const std::vector<Light>& lights, const GBuffer& gbuffer,
+                                            const std::string& what, bool everyLight = true) {
   std::vector<TechniqueRun> runs;
   for (const TechniqueInfo& info : techniqueRegistry()) {
     bool anyRan = false;
@@ -282,8 +284,8 @@ TEST(HostileGeometry, NonFiniteVerticesBuiltInCode) {
       } catch (const Error&) {
         continue;  // refusing a broken scene is fine; crashing or writing NaN is not
       }
-      expectValidVisibility(info.name + " with a " + std::string(toString(light.shape())) + " light and non-finite vertices",
-                            gbuffer, v);
+      expectValidVisibility(
+          info.name + " with a " + std::string(toString(light.shape())) + " light and non-finite vertices", gbuffer, v);
     }
   }
 }
@@ -435,8 +437,7 @@ TEST(HostileGeometry, AMillionTinyTriangles) {
   // parker's light buffer (12 s, coarsened to stay within its entry limit: 8 GB without); ssv and
   // wedges take 8-13 s each (the screen is a two-sided sheet of 10^6 separate pieces: 10^6
   // silhouette rings, tens of thousands of them in each penumbra pixel's light).
-  const std::vector<TechniqueRun> runs =
-      runEveryTechnique(make, lights, gbuffer, "with 10^6 tiny triangles", false);
+  const std::vector<TechniqueRun> runs = runEveryTechnique(make, lights, gbuffer, "with 10^6 tiny triangles", false);
   // Under the screen, the reference sees about half of the light through it.
   const TechniqueRun* reference = findRun(runs, "reference", LightShape::Sphere);
   ASSERT_NE(reference, nullptr);

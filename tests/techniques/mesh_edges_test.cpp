@@ -43,8 +43,8 @@ TEST(MeshEdges, WeldsByPositionAndMatchesTheSharedEdge) {
 
 TEST(MeshEdges, LeavesOutTrianglesThatCannotBeHitAndCollapsedHalfEdges) {
   Mesh m;
-  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(2, 0, 0), Vec3(1, 0, 0),
-                 Vec3(std::numeric_limits<float>::infinity(), 0, 0)};
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1),
+                 Vec3(2, 0, 0), Vec3(1, 0, 0), Vec3(std::numeric_limits<float>::infinity(), 0, 0)};
   m.triangles = {glm::uvec3(0, 1, 3),   // collinear: zero area
                  glm::uvec3(0, 5, 2),   // a non-finite corner
                  glm::uvec3(0, 1, 4),   // corners 1 and 4 weld: zero area, dropped

@@ -12,8 +12,8 @@ namespace {
 TEST(None, VisibilityIsOneEverywhere) {
   auto t = createTechnique("none");
   EXPECT_EQ(t->name(), "none");
-  const Scene scene = testing::makeScene(
-      {testing::makeObject(1, testing::quadMesh(Vec3(0, 0, 2), Vec3(5, 0, 0), Vec3(0, 5, 0)))});
+  const Scene scene =
+      testing::makeScene({testing::makeObject(1, testing::quadMesh(Vec3(0, 0, 2), Vec3(5, 0, 0), Vec3(0, 5, 0)))});
   t->prepare(scene, Light::disk(Vec3(0, 0, 4), Vec3(0, 0, 1), 0.5f));
   GBuffer g = testing::pointsGBuffer({Vec3(0.0f), Vec3(1.0f, 0.0f, 0.0f), Vec3(0.0f)}, Vec3(0, 0, 1), 2);
   g.objectId(2, 0) = kNoObject;

@@ -53,8 +53,7 @@ std::vector<ParamValue> sweepValues(const ParamSpec& spec) {
   const double lo = spec.min.value_or(0.0), hi = spec.max.value_or(lo + 1.0);
   std::vector<double> points = {lo, hi};
   const bool geometric = lo > 0.0 && hi / lo > 100.0;
-  for (double f : {0.25, 0.5, 0.75})
-    points.push_back(geometric ? lo * std::pow(hi / lo, f) : lo + f * (hi - lo));
+  for (double f : {0.25, 0.5, 0.75}) points.push_back(geometric ? lo * std::pow(hi / lo, f) : lo + f * (hi - lo));
   std::vector<ParamValue> out;
   for (double x : points) {
     if (spec.type == ParamType::Int) {
@@ -157,7 +156,8 @@ bool isRangeEnd(const ParamSpec& spec, const ParamValue& value) {
     const auto x = static_cast<double>(std::get<int64_t>(value));
     return x == *spec.min || x == *spec.max;
   }
-  if (spec.type == ParamType::Float) return std::get<double>(value) == *spec.min || std::get<double>(value) == *spec.max;
+  if (spec.type == ParamType::Float)
+    return std::get<double>(value) == *spec.min || std::get<double>(value) == *spec.max;
   return true;  // every bool and choice is an end
 }
 
@@ -174,7 +174,8 @@ TEST(ParamRanges, EveryParameterSurvivesItsRangeEndsUnderEveryLight) {
         given.set(spec.name, value, "sweep");
         for (const SweepLight& light : lights) {
           if (spec.name == "map_size" && !light.mapSizes) continue;
-          const std::string label = fmt::format("{} {}={} under a {} light", info.name, spec.name, formatParamValue(value), light.what);
+          const std::string label =
+              fmt::format("{} {}={} under a {} light", info.name, spec.name, formatParamValue(value), light.what);
           SCOPED_TRACE(label);
           runOnce(info, given, light, gbuffer, label, outcome, isRangeEnd(spec, value) ? std::string() : spec.name);
         }

@@ -60,8 +60,8 @@ TEST(RaytracedHard, DirectionalLightCentreDirection) {
   // Sun along (1, 0, 2) / |.| with a 30 degree disk: only its centre direction matters.
   const Light light = Light::directional(Vec3(1, 0, 2), radians(30.0f));
   // The ray from p crosses z = 2 at p.x + 1.
-  const std::vector<Vec3> points = {Vec3(-1.0f, 0, 0), Vec3(-1.45f, 0.2f, 0), Vec3(-0.55f, -0.25f, 0),
-                                    Vec3(-1.55f, 0, 0), Vec3(-0.45f, 0, 0), Vec3(-1.0f, 0.35f, 0)};
+  const std::vector<Vec3> points = {Vec3(-1.0f, 0, 0),  Vec3(-1.45f, 0.2f, 0), Vec3(-0.55f, -0.25f, 0),
+                                    Vec3(-1.55f, 0, 0), Vec3(-0.45f, 0, 0),    Vec3(-1.0f, 0.35f, 0)};
   const std::vector<float> expected = {0, 0, 0, 1, 1, 1};
   EXPECT_EQ(hardVisibility(light, points), expected);
 }

@@ -58,8 +58,8 @@ const std::vector<std::string>& corpusScenes() {
 
 // The techniques the bar applies to (parker has its own test below: its paper puts the whole penumbra
 // outside the hard shadow).
-const std::vector<std::string> kSoft = {"pcf", "pcss", "multisample", "brabec", "plm", "smoothies",
-                                        "kirsch", "heidrich", "ssv", "wedges"};
+const std::vector<std::string> kSoft = {"pcf",       "pcss",   "multisample", "brabec", "plm",
+                                        "smoothies", "kirsch", "heidrich",    "ssv",    "wedges"};
 
 struct TechniqueRun {
   std::optional<ErrorStats> error;  //!< absent: the technique refused the light (`refusal` says why)
@@ -136,7 +136,8 @@ TEST(RealMeshCorpus, EveryTechniqueRunsOrRefusesOnlyTheLightShape) {
       if (run.error) continue;
       SCOPED_TRACE(label(c) + " " + name);
       bool namesAShape = false;
-      for (const std::string& shape : shapes) namesAShape = namesAShape || run.refusal.find("a " + shape + " light") != std::string::npos;
+      for (const std::string& shape : shapes)
+        namesAShape = namesAShape || run.refusal.find("a " + shape + " light") != std::string::npos;
       EXPECT_TRUE(namesAShape) << run.refusal;
       EXPECT_EQ(run.refusal.find("object '"), std::string::npos) << "refused for a model: " << run.refusal;
     }
@@ -147,7 +148,9 @@ TEST(RealMeshCorpus, EveryTechniqueRunsOrRefusesOnlyTheLightShape) {
 // another by a few pixels along contact lines and one-pixel shadow lines of thin parts, where the
 // umbra's or the line's edge passes between pixel centres. The margin is stated once, here: a count
 // may exceed hard's by max(3 pixels, 10% of hard's count).
-bool withinCountMargin(size_t count, size_t hardCount) { return count <= std::max<size_t>(hardCount + 3, hardCount + hardCount / 10); }
+bool withinCountMargin(size_t count, size_t hardCount) {
+  return count <= std::max<size_t>(hardCount + 3, hardCount + hardCount / 10);
+}
 
 // The bar's misses measured on the whole corpus, per technique and measure: the test fails when a
 // technique misses more cases than recorded here (a regression) and, on the full corpus, when it
@@ -195,7 +198,8 @@ const RecordedMisses kRecordedMisses[] = {
      "the texels in front of the receiver and sizes its filter from that mean by similar triangles, as if blocker "
      "and receiver were parallel planes. Of its 146 specks "
      "in the 8 cases (hard: 75), 78 lie in the reference's umbra, 55 of them beside a pixel where hard leaks or "
-     "speckles (the filter reads the same centre map and spreads its misses over part of their neighbours); 35 are lit pixels on a "
+     "speckles (the filter reads the same centre map and spreads its misses over part of their neighbours); 35 are lit "
+     "pixels on a "
      "crease or beside a rising surface, whose texels a texel away lie closer than the receiver plane (filter "
      "radius under a texel); 32 lie in smooth penumbrae. Not the tap counts (32 or 64 search taps, 64 filter "
      "taps: 8 or 9 misses), nor the mean depth (the deepest blocker instead: 9 misses)"},
@@ -240,7 +244,8 @@ TEST(RealMeshCorpus, SoftTechniquesBeatHardWithoutLeaksOrSpeckle) {
   }
   for (const auto& [key, count] : misses) {
     bool known = false;
-    for (const RecordedMisses& r : kRecordedMisses) known = known || (key.first == r.technique && key.second == r.measure);
+    for (const RecordedMisses& r : kRecordedMisses)
+      known = known || (key.first == r.technique && key.second == r.measure);
     EXPECT_TRUE(known || count == 0) << key.first << " misses the bar on " << key.second << " in " << count << " cases";
   }
 }
@@ -278,8 +283,8 @@ TEST(RealMeshCorpus, HalfPenumbraTechniquesBeatHardAgainstTheirHalf) {
       const Image<float> truth = halfPenumbraTruth(c.reference, half);
       const ErrorStats e = compareVisibility(run.v, truth, c.mask);
       const ErrorStats h = compareVisibility(c.runs.at("hard").v, truth, c.mask);
-      table += fmt::format("{} {}: {:.2f} ({:.2f}) / {} ({}) / {} ({})\n", label(c), name, e.rmse8, h.rmse8, e.umbraLeaks,
-                           h.umbraLeaks, e.speckle, h.speckle);
+      table += fmt::format("{} {}: {:.2f} ({:.2f}) / {} ({}) / {} ({})\n", label(c), name, e.rmse8, h.rmse8,
+                           e.umbraLeaks, h.umbraLeaks, e.speckle, h.speckle);
       ++cases;
       const bool beats = e.rmse8 < h.rmse8;
       misses += beats ? 0 : 1;

@@ -70,7 +70,9 @@ void expectMatches(const Estimate& e, const std::vector<double>& exact) {
   }
 }
 
-double overlap1D(double a0, double a1, double b0, double b1) { return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)); }
+double overlap1D(double a0, double a1, double b0, double b1) {
+  return std::max(0.0, std::min(a1, b1) - std::max(a0, b0));
+}
 
 // Area of the lens where two circles (radii r1, r2, centres d apart) overlap.
 double lensArea(double r1, double r2, double d) {
@@ -90,8 +92,8 @@ TEST(Reference, RectLightOverParallelRectOccluder) {
   const Vec3 occCenter(0.12f, -0.05f, kOccluderZ);
   const double ox = 0.65, oy = 0.4;  // occluder half extents
   const Scene scene = withReceiver({makeObject(1, quadMesh(occCenter, Vec3(ox, 0, 0), Vec3(0, oy, 0)), "occluder")});
-  const std::vector<Vec3> points = {Vec3(0, 0, 0), Vec3(0.5f, 0, 0), Vec3(1.5f, 0.5f, 0), Vec3(1.0f, 0.9f, 0),
-                                    Vec3(-0.7f, -0.6f, 0), Vec3(3.0f, 0, 0)};
+  const std::vector<Vec3> points = {Vec3(0, 0, 0),       Vec3(0.5f, 0, 0),      Vec3(1.5f, 0.5f, 0),
+                                    Vec3(1.0f, 0.9f, 0), Vec3(-0.7f, -0.6f, 0), Vec3(3.0f, 0, 0)};
   std::vector<double> exact;
   for (const Vec3& p : points) {
     const double cx = 2.0 * occCenter.x - p.x, cy = 2.0 * occCenter.y - p.y;
@@ -133,8 +135,8 @@ TEST(Reference, SphereLightOnItsAxisSeesItsSilhouetteDisk) {
   for (const double cx : {0.0, 0.5, 0.75, 1.0}) {
     SCOPED_TRACE(::testing::Message() << "occluder offset " << cx);
     const Vec3 c(static_cast<float>(cx), 0.0f, static_cast<float>(zOcc));
-    const Scene scene =
-        withReceiver({makeObject(1, regularPolygonMesh(c, Vec3(1, 0, 0), Vec3(0, 1, 0), static_cast<float>(rOcc), 512))});
+    const Scene scene = withReceiver(
+        {makeObject(1, regularPolygonMesh(c, Vec3(1, 0, 0), Vec3(0, 1, 0), static_cast<float>(rOcc), 512))});
     const double exact = 1.0 - lensArea(rs, 2.0 * rOcc, 2.0 * cx) / (kPiD * rs * rs);
     expectMatches(runReference(scene, light, {Vec3(0.0f)}), {exact});
   }
@@ -153,7 +155,11 @@ double polygonArea(const std::vector<Vec2>& poly) {
 
 std::vector<Vec2> clipToBox(std::vector<Vec2> poly, const Vec2& lo, const Vec2& hi) {
   // Each half-plane as (axis, bound, keep-below).
-  const struct { int axis; float bound; bool below; } planes[4] = {{0, lo.x, false}, {0, hi.x, true}, {1, lo.y, false}, {1, hi.y, true}};
+  const struct {
+    int axis;
+    float bound;
+    bool below;
+  } planes[4] = {{0, lo.x, false}, {0, hi.x, true}, {1, lo.y, false}, {1, hi.y, true}};
   for (const auto& pl : planes) {
     std::vector<Vec2> out;
     auto inside = [&](const Vec2& p) { return pl.below ? p[pl.axis] <= pl.bound : p[pl.axis] >= pl.bound; };
@@ -218,11 +224,13 @@ TEST(Reference, LShapedLightOverHalfPlaneOccluder) {
   ASSERT_FALSE(light.convex());
   const double lightArea = polygonArea(lightPoly);
   ASSERT_NEAR(lightArea, 3.0, 1e-6);
-  const std::vector<Vec3> points = {Vec3(-1.5f, 0.1f, 0), Vec3(-0.7f, 0.3f, 0), Vec3(-0.2f, -0.5f, 0), Vec3(0.0f, 0.0f, 0),
-                                    Vec3(0.4f, 0.2f, 0),  Vec3(0.9f, -0.4f, 0), Vec3(1.5f, 0.0f, 0)};
+  const std::vector<Vec3> points = {Vec3(-1.5f, 0.1f, 0), Vec3(-0.7f, 0.3f, 0), Vec3(-0.2f, -0.5f, 0),
+                                    Vec3(0.0f, 0.0f, 0),  Vec3(0.4f, 0.2f, 0),  Vec3(0.9f, -0.4f, 0),
+                                    Vec3(1.5f, 0.0f, 0)};
   {
     SCOPED_TRACE("edge along y");
-    const Scene scene = withReceiver({makeObject(1, quadMesh(Vec3(-25.0f, 0, kOccluderZ), Vec3(25.0f, 0, 0), Vec3(0, 25.0f, 0)), "half-plane")});
+    const Scene scene = withReceiver(
+        {makeObject(1, quadMesh(Vec3(-25.0f, 0, kOccluderZ), Vec3(25.0f, 0, 0), Vec3(0, 25.0f, 0)), "half-plane")});
     std::vector<double> exact;
     for (const Vec3& p : points) {
       const double s = std::clamp(-static_cast<double>(p.x), -1.0, 1.0);
@@ -236,7 +244,8 @@ TEST(Reference, LShapedLightOverHalfPlaneOccluder) {
     SCOPED_TRACE("diagonal edge");
     const float h = 25.0f * std::sqrt(0.5f);  // the half-plane x + y < 0 as a 50 x 50 square beside its edge
     const Vec3 along(h, -h, 0), across(-h, -h, 0);
-    const Scene scene = withReceiver({makeObject(1, quadMesh(Vec3(0, 0, kOccluderZ) + across, across, along), "half-plane")});
+    const Scene scene =
+        withReceiver({makeObject(1, quadMesh(Vec3(0, 0, kOccluderZ) + across, across, along), "half-plane")});
     std::vector<double> exact;
     for (const Vec3& p : points) {
       const auto lit = clipToHalfPlane(lightPoly, Vec2(1, 1), -(p.x + p.y));
@@ -272,7 +281,8 @@ double segmentFraction(double t) {  // fraction of the unit disk with x < -t
 double limbDarkenedSegmentFraction(double t, double u) {
   if (t >= 1.0) return 0.0;
   if (t <= -1.0) return 1.0;
-  const double blocked = (1.0 - u) * (std::acos(t) - t * std::sqrt(1.0 - t * t)) + u * kPiD / 2.0 * (2.0 / 3.0 - t + t * t * t / 3.0);
+  const double blocked =
+      (1.0 - u) * (std::acos(t) - t * std::sqrt(1.0 - t * t)) + u * kPiD / 2.0 * (2.0 / 3.0 - t + t * t * t / 3.0);
   return blocked / (kPiD * (1.0 - u / 3.0));
 }
 
@@ -286,7 +296,8 @@ struct EdgeSetup {
   }
   std::vector<Vec3> points() const {
     std::vector<Vec3> ps;
-    for (const double t : {-1.5, -0.8, -0.3, 0.0, 0.25, 0.5, 0.9, 1.5}) ps.push_back(Vec3(static_cast<float>(t * h * rho()), 0.0f, 0.0f));
+    for (const double t : {-1.5, -0.8, -0.3, 0.0, 0.25, 0.5, 0.9, 1.5})
+      ps.push_back(Vec3(static_cast<float>(t * h * rho()), 0.0f, 0.0f));
     return ps;
   }
 };
@@ -350,7 +361,8 @@ struct SmallRender {
   Light light = Light::disk(Vec3(0, 0, kLightZ), Vec3(0, 0, -1), 1.0f);
   GBuffer g;
   SmallRender() {
-    scene = withReceiver({makeObject(1, regularPolygonMesh(Vec3(0.2f, 0, kOccluderZ), Vec3(1, 0, 0), Vec3(0, 1, 0), 0.5f, 64))});
+    scene = withReceiver(
+        {makeObject(1, regularPolygonMesh(Vec3(0.2f, 0, kOccluderZ), Vec3(1, 0, 0), Vec3(0, 1, 0), 0.5f, 64))});
     scene.camera.position = Vec3(0.5f, -3.0f, 6.0f);
     scene.camera.lookAt = Vec3(0.0f);
     scene.camera.up = Vec3(0, 0, 1);
@@ -368,7 +380,8 @@ struct SmallRender {
 };
 
 bool bitIdentical(const Image<float>& a, const Image<float>& b) {
-  return a.width() == b.width() && a.height() == b.height() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+  return a.width() == b.width() && a.height() == b.height() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
 TEST(Reference, DeterministicPerSeedAndThreadCount) {
@@ -408,7 +421,8 @@ TEST(Reference, StatsCountRaysAndStandardErrors) {
   for (int y = 0; y < r.g.height(); ++y)
     for (int x = 0; x < r.g.width(); ++x) {
       const float se = reference.standardError()(x, y);
-      if (!r.g.hit(x, y) || v(x, y) == 0.0f || v(x, y) == 1.0f) EXPECT_EQ(se, 0.0f);
+      if (!r.g.hit(x, y) || v(x, y) == 0.0f || v(x, y) == 1.0f)
+        EXPECT_EQ(se, 0.0f);
       else {
         // For a uniform light: sqrt(V (1 - V) n / (n - 1)) / sqrt(n).
         const double V = v(x, y);

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <set>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "penumbra/error.h"
 #include "penumbra/metrics.h"
@@ -35,17 +35,17 @@ Scene groundAndBox(const Light& light) {
 }
 
 std::vector<Light> everyLightShape() {
-  return {Light::sphere(Vec3(0.5f, 5.0f, 0.0f), 0.5f),
-          Light::disk(Vec3(0.5f, 5.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
-          Light::rect(Vec3(0.5f, 5.0f, 0.0f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f)),
-          Light::segment(Vec3(-0.5f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f)),
-          Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(0.5f, 5.0f, 0.8f), Vec3(1.0f, 5.0f, 0.0f)}),
-          Light::directional(Vec3(0.1f, 1.0f, 0.0f), radians(5.0f), LightProfile::LimbDarkened),
-          // A concave polygon: an L (its centroid on the emitter) and a U (its centroid off it).
-          Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.4f), Vec3(0.4f, 5.0f, 0.4f),
-                          Vec3(0.4f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)}),
-          Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 1.0f), Vec3(0.9f, 5.0f, 1.0f),
-                          Vec3(0.9f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)})};
+  return {
+      Light::sphere(Vec3(0.5f, 5.0f, 0.0f), 0.5f), Light::disk(Vec3(0.5f, 5.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
+      Light::rect(Vec3(0.5f, 5.0f, 0.0f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f)),
+      Light::segment(Vec3(-0.5f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f)),
+      Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(0.5f, 5.0f, 0.8f), Vec3(1.0f, 5.0f, 0.0f)}),
+      Light::directional(Vec3(0.1f, 1.0f, 0.0f), radians(5.0f), LightProfile::LimbDarkened),
+      // A concave polygon: an L (its centroid on the emitter) and a U (its centroid off it).
+      Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.0f), Vec3(1.0f, 5.0f, 0.4f), Vec3(0.4f, 5.0f, 0.4f),
+                      Vec3(0.4f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)}),
+      Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 0.0f), Vec3(1.2f, 5.0f, 1.0f), Vec3(0.9f, 5.0f, 1.0f),
+                      Vec3(0.9f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 0.2f), Vec3(0.3f, 5.0f, 1.0f), Vec3(0.0f, 5.0f, 1.0f)})};
 }
 
 // Runs a technique with cheap settings; returns V. Techniques that reject a light shape must say
@@ -163,7 +163,8 @@ TEST(Registry, EveryTechniqueEstimatesItsCost) {
       ParamSet doubled;
       doubled.set("map_size", int64_t{2048}, "test");
       const ResourceEstimate big = info.estimate(resolveParams(info.name, info.params, doubled), 64, 32);
-      EXPECT_NEAR(big.bytes, 4.0 * e.bytes, 1e-6 * e.bytes) << info.name << ": a map of 2048^2 holds 4x the texels of 1024^2";
+      EXPECT_NEAR(big.bytes, 4.0 * e.bytes, 1e-6 * e.bytes)
+          << info.name << ": a map of 2048^2 holds 4x the texels of 1024^2";
       EXPECT_NE(big.drivers.find("map_size=2048"), std::string::npos) << info.name << ": " << big.drivers;
     }
     if (e.rays > 0.0) EXPECT_GE(info.estimate(defaults, 128, 32).rays, 2.0 * e.rays - 1e-9) << info.name;
@@ -188,9 +189,9 @@ TEST(Registry, DegenerateTrianglesDoNotBreakAnyTechnique) {
   box.positions.push_back(Vec3(0.4f, 1.4f, 0.3f));  // collinear with the two below
   box.positions.push_back(Vec3(0.6f, 1.6f, 0.5f));
   if (!box.normals.empty()) box.normals.resize(box.positions.size(), Vec3(0.0f, 1.0f, 0.0f));
-  box.triangles.push_back({n, n + 1, n + 2});      // zero area: two equal corners
-  box.triangles.push_back({n, n + 2, n + 3});      // zero area: collinear corners
-  box.triangles.push_back({0u, 0u, 0u});           // one vertex three times
+  box.triangles.push_back({n, n + 1, n + 2});  // zero area: two equal corners
+  box.triangles.push_back({n, n + 2, n + 3});  // zero area: collinear corners
+  box.triangles.push_back({0u, 0u, 0u});       // one vertex three times
   const GBuffer gbuffer = renderGBuffer(scene, 48, 40);
   expectEveryTechniqueValid(scene, gbuffer, "with degenerate triangles");
 }
@@ -198,7 +199,7 @@ TEST(Registry, DegenerateTrianglesDoNotBreakAnyTechnique) {
 TEST(Registry, CameraInsideAnObject) {
   Scene scene = groundAndBox(Light::sphere(Vec3(0.5f, 5.0f, 0.0f), 0.5f));
   scene.camera.position = Vec3(0.0f, 1.5f, 0.0f);  // the centre of the box
-  scene.camera.lookAt = Vec3(0.3f, 1.0f, 0.2f);  // down at the floor
+  scene.camera.lookAt = Vec3(0.3f, 1.0f, 0.2f);    // down at the floor
   const GBuffer gbuffer = renderGBuffer(scene, 32, 32);
   size_t hits = 0;
   for (int y = 0; y < 32; ++y)

@@ -3,9 +3,9 @@
 // shadow (raytraced-hard), computed once per test process and cached. The paper's setup: the
 // techniques run with a 256x256 light map (map_size=256).
 // Reference samples: 64 spp (about 1 s per scene on 2 cores, paid once per test executable: ctest
-// runs each area's tests in one process, so this cache is shared by all of them). Measured on `torus`, the 64-spp reference differs from a
-// 256-spp one by RMSE8 1.3 (penumbra RMSE8 3.8): against the techniques' penumbra errors of 17 and
-// more it adds under 0.5 in quadrature, far below the margins of the thresholds.
+// runs each area's tests in one process, so this cache is shared by all of them). Measured on `torus`, the 64-spp
+// reference differs from a 256-spp one by RMSE8 1.3 (penumbra RMSE8 3.8): against the techniques' penumbra errors of 17
+// and more it adds under 0.5 in quadrature, far below the margins of the thresholds.
 #pragma once
 
 #include <map>

@@ -119,9 +119,9 @@ struct CapsuleView {
 // passes close to a far point). Every operation runs whatever the inputs and the result is
 // selected, so that a loop over capsules, or over rays, has no branch and vectorizes; both loops
 // run these operations in this order, so a ray's tau of a capsule has the same bits in either.
-[[gnu::always_inline]] inline float capsuleTau(float p0x, float p0y, float p0z, float ex, float ey, float ez, float radius,
-                                               float ox, float oy, float oz, float vx, float vy, float vz, float bScale,
-                                               float tLimit) {
+[[gnu::always_inline]] inline float capsuleTau(float p0x, float p0y, float p0z, float ex, float ey, float ez,
+                                               float radius, float ox, float oy, float oz, float vx, float vy, float vz,
+                                               float bScale, float tLimit) {
   const float wx = p0x - ox, wy = p0y - oy, wz = p0z - oz;
   const float wv = wx * vx + wy * vy + wz * vz;
   const float ev = ex * vx + ey * vy + ez * vz;
@@ -138,11 +138,12 @@ struct CapsuleView {
 }
 
 // tau of the kWidth capsules of leaf `leaf` for one ray (capsules in the vector lanes).
-[[gnu::always_inline]] inline void leafTau(const CapsuleView& entries, uint32_t leaf, const RayQuery& r, float* __restrict tau) {
+[[gnu::always_inline]] inline void leafTau(const CapsuleView& entries, uint32_t leaf, const RayQuery& r,
+                                           float* __restrict tau) {
   const CapsuleView c = capsulesFrom(entries, static_cast<size_t>(leaf) * kWidth);
   for (int j = 0; j < kWidth; ++j)
-    tau[j] = capsuleTau(c.p0x[j], c.p0y[j], c.p0z[j], c.ex[j], c.ey[j], c.ez[j], c.radius[j], r.ox, r.oy, r.oz, r.vx, r.vy, r.vz,
-                        r.bScale, r.tLimit);
+    tau[j] = capsuleTau(c.p0x[j], c.p0y[j], c.p0z[j], c.ex[j], c.ey[j], c.ez[j], c.radius[j], r.ox, r.oy, r.oz, r.vx,
+                        r.vy, r.vz, r.bScale, r.tLimit);
 }
 
 // A group of rays: each ray's query and, for the bounds, the group's anchor a, direction v0 and
@@ -152,9 +153,9 @@ struct RayGroup {
   alignas(32) float ox[kGroup], oy[kGroup], oz[kGroup], vx[kGroup], vy[kGroup], vz[kGroup];
   alignas(32) float bScale[kGroup], tLimit[kGroup], raySlack[kGroup];
   float ax, ay, az, v0x, v0y, v0z;
-  float rho;     //!< largest distance of a ray's line from a
-  float kappa;   //!< largest sin(theta_i)
-  float mu;      //!< largest |v_i - v0|
+  float rho;    //!< largest distance of a ray's line from a
+  float kappa;  //!< largest sin(theta_i)
+  float mu;     //!< largest |v_i - v0|
   float bsMin, bsMax;
   float h;       //!< largest bScale_i h_i
   float gLimit;  //!< largest tLimit_i - h_i
@@ -166,7 +167,8 @@ struct RayGroup {
 // For each of the kWidth capsule bounds `c` (a node's children, or a leaf's capsules): the group
 // bound of the top of the file where it can hold, for some ray of the group, a capsule with tau
 // below `limit`; +infinity where it cannot (or is unused: radius -infinity makes every test false).
-[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit, float* __restrict bound) {
+[[gnu::always_inline]] inline void childBounds(const CapsuleView& c, const RayGroup& g, float limit,
+                                               float* __restrict bound) {
   for (int k = 0; k < kWidth; ++k) {
     const float x0 = c.p0x[k] - g.ax, y0 = c.p0y[k] - g.ay, z0 = c.p0z[k] - g.az;
     const float ex = c.ex[k], ey = c.ey[k], ez = c.ez[k];
@@ -182,7 +184,7 @@ struct RayGroup {
     const float x1 = x0 + ex, y1 = y0 + ey, z1 = z0 + ez;
     const float y = c.radius[k] + g.slack;
     const float far = std::sqrt(std::max(x0 * x0 + y0 * y0 + z0 * z0, x1 * x1 + y1 * y1 + z1 * z1)) + y;  // >= |q - a|
-    const float along = std::max(xv, xv + ev) + y + g.mu * far;   // >= (q - a).v_i
+    const float along = std::max(xv, xv + ev) + y + g.mu * far;     // >= (q - a).v_i
     const float alongMin = std::min(xv, xv + ev) - y - g.mu * far;  // <= (q - a).v_i
     const float num = dPerp - y - g.rho - g.kappa * far;
     const float den = (along >= 0.0f ? g.bsMax : g.bsMin) * along + g.h;  // >= bScale_i t0_i
@@ -195,7 +197,8 @@ struct RayGroup {
 // Whether one of the rays [first, first + 8) of the group can find, within the bound `c` (its
 // first capsule), a capsule with tau below its minimum best[i] (each ray's own bound, the top of
 // the file). Rays in the vector lanes.
-[[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best, int first) {
+[[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best,
+                                                int first) {
   // The ball around the capsule bound: centre at its middle, radius half its length plus its own.
   const float hx = 0.5f * c.ex[0], hy = 0.5f * c.ey[0], hz = 0.5f * c.ez[0];
   const float cx = c.p0x[0] + hx, cy = c.p0y[0] + hy, cz = c.p0z[0] + hz;
@@ -234,8 +237,8 @@ struct TreeView {
 // The group of rays [first, first + count): queries (b = D t0 / A, Appendix; A -> infinity with D
 // per unit distance for a directional light) and the group's bound parameters. Unused slots
 // repeat the first ray.
-[[gnu::always_inline]] inline void makeGroup(const TreeView& view, const Ray* rays, const float* distanceToLight, int count,
-                                             RayGroup& g) {
+[[gnu::always_inline]] inline void makeGroup(const TreeView& view, const Ray* rays, const float* distanceToLight,
+                                             int count, RayGroup& g) {
   g.count = count;
   Vec3 directionSum(0.0f), originSum(0.0f);
   for (int i = 0; i < count; ++i) {
@@ -257,7 +260,8 @@ struct TreeView {
     g.vx[i] = ray.direction.x, g.vy[i] = ray.direction.y, g.vz[i] = ray.direction.z;
     g.bScale[i] = view.directional ? view.diameter : view.diameter / distanceToLight[k];
     g.tLimit[i] = view.directional ? kInfinity : distanceToLight[k];
-    const float rayMagnitude = std::max({view.sceneMagnitude, std::abs(ray.origin.x), std::abs(ray.origin.y), std::abs(ray.origin.z)});
+    const float rayMagnitude =
+        std::max({view.sceneMagnitude, std::abs(ray.origin.x), std::abs(ray.origin.y), std::abs(ray.origin.z)});
     g.raySlack[i] = kBoundSlack * rayMagnitude;
     magnitude = std::max(magnitude, rayMagnitude);
     const Vec3 w = anchor - ray.origin;
@@ -274,15 +278,15 @@ struct TreeView {
 }
 
 struct StackItem {
-  int32_t ref;  //!< >= 0 a node, < 0 the leaf ~ref
-  float bound;  //!< the child's bound when it was pushed
+  int32_t ref;           //!< >= 0 a node, < 0 the leaf ~ref
+  float bound;           //!< the child's bound when it was pushed
   int32_t parent, slot;  //!< where its bound is: child `slot` of node `parent` (-1: the root)
 };
 
 // Pushes the children of `node` whose bound is below `limit`, the smallest bound on top (read
 // first, so that the rays' minima fall early and prune more).
-[[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, int32_t parent, const RayGroup& g, float limit,
-                                                StackItem* stack, int& top) {
+[[gnu::always_inline]] inline void pushChildren(const OuterObjects::Node& node, int32_t parent, const RayGroup& g,
+                                                float limit, StackItem* stack, int& top) {
   alignas(32) float bound[kWidth];
   childBounds({node.p0x, node.p0y, node.p0z, node.ex, node.ey, node.ez, node.radius}, g, limit, bound);
   const int base = top;
@@ -314,8 +318,8 @@ struct StackItem {
   const float p0x = entries.p0x[e], p0y = entries.p0y[e], p0z = entries.p0z[e], ex = entries.ex[e], ey = entries.ey[e],
               ez = entries.ez[e], radius = entries.radius[e];
   for (int i = half; i < half + kGroup / 2; ++i) {
-    const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i], g.vz[i],
-                                 g.bScale[i], g.tLimit[i]);
+    const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i],
+                                 g.vz[i], g.bScale[i], g.tLimit[i]);
     bestEntry[i] = tau < best[i] ? e : bestEntry[i];
     best[i] = tau < best[i] ? tau : best[i];
   }
@@ -363,9 +367,11 @@ struct StackItem {
     if (item.ref >= 0) {
       if (item.parent >= 0) {  // each ray's own bound (the root has none: every ray reads it)
         const OuterObjects::Node& parent = view.nodes[item.parent];
-        const CapsuleView bound = capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
-                                               static_cast<size_t>(item.slot));
-        if (!someRayReads(bound, g, best, 0) && !(g.count > kGroup / 2 && someRayReads(bound, g, best, kGroup / 2))) continue;
+        const CapsuleView bound =
+            capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
+                         static_cast<size_t>(item.slot));
+        if (!someRayReads(bound, g, best, 0) && !(g.count > kGroup / 2 && someRayReads(bound, g, best, kGroup / 2)))
+          continue;
       }
       pushChildren(view.nodes[item.ref], item.ref, g, limit, stack, top);
       continue;
@@ -400,8 +406,9 @@ struct StackItem {
 }
 
 // s of each ray under the min combination: the falloff of its smallest tau, group by group.
-[[gnu::always_inline]] inline void minAttenuationsOver(const TreeView& view, const Ray* rays, const float* distanceToLight,
-                                                       int count, OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
+[[gnu::always_inline]] inline void minAttenuationsOver(const TreeView& view, const Ray* rays,
+                                                       const float* distanceToLight, int count, OuterFalloff falloff,
+                                                       float* s, OuterObjects::Seeds& seeds) {
   RayGroup g;
   for (int first = 0; first < count; first += kGroup) {
     const int n = std::min(kGroup, count - first);
@@ -412,8 +419,8 @@ struct StackItem {
   }
 }
 
-void minAttenuations(const TreeView& view, const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
-                     float* s, OuterObjects::Seeds& seeds) {
+void minAttenuations(const TreeView& view, const Ray* rays, const float* distanceToLight, int count,
+                     OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
   minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 
@@ -421,7 +428,8 @@ void minAttenuations(const TreeView& view, const Ray* rays, const float* distanc
 // The same compiled for 8-wide vectors, where the CPU has them: the same operations per lane (no
 // multiply-add: CMakeLists.txt builds this file with -ffp-contract=off), so the same values.
 [[gnu::target("avx2")]] void minAttenuationsAvx2(const TreeView& view, const Ray* rays, const float* distanceToLight,
-                                                 int count, OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
+                                                 int count, OuterFalloff falloff, float* s,
+                                                 OuterObjects::Seeds& seeds) {
   minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 #endif
@@ -542,7 +550,7 @@ Bound enclosingBound(const Ball* first, int count, float magnitude) {
 // The outputs of the tree build, as the OuterObjects members they fill.
 struct TreeOut {
   std::vector<OuterObjects::Node> nodes;
-  std::array<std::vector<float>, 7> entries;     //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
+  std::array<std::vector<float>, 7> entries;  //!< p0x p0y p0z ex ey ez radius, kWidth per leaf
   std::vector<int32_t> entryObject;
   std::array<std::vector<float>, 7> leafBounds;  //!< one per leaf
   size_t leaves = 0;
@@ -561,8 +569,12 @@ float halfArea(const Bounds3& box) {
 class TreeBuilder {
  public:
   TreeBuilder(const std::vector<Piece>& pieces, const Capsules& capsules, float magnitude, float margin)
-      : pieces_(pieces), capsules_(capsules), magnitude_(magnitude), order_(pieces.size()),
-        centroid_(pieces.size()), box_(pieces.size()) {
+      : pieces_(pieces),
+        capsules_(capsules),
+        magnitude_(magnitude),
+        order_(pieces.size()),
+        centroid_(pieces.size()),
+        box_(pieces.size()) {
     for (size_t p = 0; p < pieces.size(); ++p) {
       order_[p] = static_cast<uint32_t>(p);
       centroid_[p] = 0.5f * (pieces[p].a + pieces[p].b);
@@ -643,7 +655,8 @@ class TreeBuilder {
     while (count < kWidth) {
       int largest = -1;
       for (int k = 0; k < count; ++k)
-        if (runs[k].size() > static_cast<size_t>(kWidth) && (largest < 0 || halfArea(runs[k].box) > halfArea(runs[largest].box)))
+        if (runs[k].size() > static_cast<size_t>(kWidth) &&
+            (largest < 0 || halfArea(runs[k].box) > halfArea(runs[largest].box)))
           largest = k;
       if (largest < 0) break;
       const auto [left, right] = depth < kSahDepth ? split(runs[largest]) : splitAtMedian(runs[largest]);
@@ -681,7 +694,8 @@ class TreeBuilder {
     const Vec3 extent = centers.diagonal();
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
     const size_t middle = run.lo + run.size() / 2;
-    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(run.lo), order_.begin() + static_cast<std::ptrdiff_t>(middle),
+    std::nth_element(order_.begin() + static_cast<std::ptrdiff_t>(run.lo),
+                     order_.begin() + static_cast<std::ptrdiff_t>(middle),
                      order_.begin() + static_cast<std::ptrdiff_t>(run.hi),
                      [&](uint32_t a, uint32_t b) { return centroid_[a][axis] < centroid_[b][axis]; });
     Run left{run.lo, middle, {}}, right{middle, run.hi, {}};
@@ -705,7 +719,9 @@ class TreeBuilder {
       return {left, right};
     }
     const float scale = static_cast<float>(kBins) / extent[axis], lower = centers.lower[axis];
-    const auto binOf = [&](uint32_t p) { return std::min(kBins - 1, static_cast<int>((centroid_[p][axis] - lower) * scale)); };
+    const auto binOf = [&](uint32_t p) {
+      return std::min(kBins - 1, static_cast<int>((centroid_[p][axis] - lower) * scale));
+    };
     std::array<Bounds3, kBins> binBox;
     std::array<size_t, kBins> binCount{};
     for (size_t i = run.lo; i < run.hi; ++i) {
@@ -835,7 +851,8 @@ void forEachKept(const MeshEdges& edges, const Mesh& mesh, Front front, Keep kee
 
 }  // namespace
 
-OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options, EdgeCache* cache) {
+OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterObjectOptions& options,
+                           EdgeCache* cache) {
   if (!(options.lightDiameter > 0.0f) || !std::isfinite(options.lightDiameter))
     fail("parker: light diameter must be a finite number > 0, got {}", options.lightDiameter);
   directional_ = light.isDirectional();
@@ -848,7 +865,8 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   const Bounds3 bounds = scene.bounds();
   const float sceneRadius = bounds.empty() ? 1.0f : std::max(bounds.radius(), 1e-6f);
   if (!bounds.empty())
-    for (int k = 0; k < 3; ++k) sceneMagnitude_ = std::max({sceneMagnitude_, std::abs(bounds.lower[k]), std::abs(bounds.upper[k])});
+    for (int k = 0; k < 3; ++k)
+      sceneMagnitude_ = std::max({sceneMagnitude_, std::abs(bounds.lower[k]), std::abs(bounds.upper[k])});
 
   Capsules capsules;
   // Capsules: analytic spheres, then every mesh's silhouette edges.
@@ -869,14 +887,17 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3& tri = mesh.triangles[t];
       if (tri.x >= mesh.positions.size() || tri.y >= mesh.positions.size() || tri.z >= mesh.positions.size())
-        fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name, t,
-             std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
+        fail("{}: object '{}' triangle {} uses vertex index {} but the mesh has {} vertices", scene.source, object.name,
+             t, std::max({tri.x, tri.y, tri.z}), mesh.positions.size());
     }
     // Per edge (its vertices welded by position: split normals or UV seams make duplicates) the
     // faces that share it, matched again only where the mesh changed since the cache's last use.
     const MeshEdges& edges = edgeCache.edges(objectIndex, mesh);
     forEachKept(
-        edges, mesh, [&](const Vec3& p0, const Vec3& n) { return glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f; },
+        edges, mesh,
+        [&](const Vec3& p0, const Vec3& n) {
+          return glm::dot(n, directional_ ? light.direction() : lightCenter_ - p0) > 0.0f;
+        },
         [&](uint32_t a, uint32_t b) {
           const Vec3 pa = mesh.positions[a];
           capsules.add(pa, mesh.positions[b] - pa, 0.0f, index);
@@ -900,7 +921,8 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   depth_ = out.depth;
   leafCount_ = out.leaves;
   hasCapsules_ = true;
-  if (depth_ >= kMaxDepth) fail("parker: the outer objects' hierarchy is {} levels deep, more than {}", depth_ + 1, kMaxDepth);
+  if (depth_ >= kMaxDepth)
+    fail("parker: the outer objects' hierarchy is {} levels deep, more than {}", depth_ + 1, kMaxDepth);
 }
 
 void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
@@ -909,9 +931,9 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
   view.nodes = nodes_.data();
   view.root = root_;
   view.empty = !hasCapsules_;
-  view.entries = {entryP0x_.data(), entryP0y_.data(), entryP0z_.data(), entryEx_.data(),
+  view.entries = {entryP0x_.data(), entryP0y_.data(), entryP0z_.data(),   entryEx_.data(),
                   entryEy_.data(),  entryEz_.data(),  entryRadius_.data()};
-  view.leafBounds = {leafP0x_.data(), leafP0y_.data(), leafP0z_.data(), leafEx_.data(),
+  view.leafBounds = {leafP0x_.data(), leafP0y_.data(), leafP0z_.data(),   leafEx_.data(),
                      leafEy_.data(),  leafEz_.data(),  leafRadius_.data()};
   view.entryObject = entryObject_.data();
   view.directional = directional_;
@@ -924,7 +946,8 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
     Seeds none{this};
     Seeds& use = seeds ? *seeds : none;
     bool valid = use.owner == this && use.count >= 0 && use.count <= kGroup;
-    for (int k = 0; valid && k < use.count; ++k) valid = use.entry[k] >= 0 && static_cast<size_t>(use.entry[k]) < entryP0x_.size();
+    for (int k = 0; valid && k < use.count; ++k)
+      valid = use.entry[k] >= 0 && static_cast<size_t>(use.entry[k]) < entryP0x_.size();
     if (!valid) use = Seeds{this};
 #if PENUMBRA_OUTER_AVX2
     if (avx2_) {
@@ -936,7 +959,8 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
     return;
   }
   std::vector<std::pair<int32_t, float>> found;
-  for (int i = 0; i < count; ++i) s[i] = combinedAttenuation(view, rays[i], distanceToLight[i], falloff, combine, found);
+  for (int i = 0; i < count; ++i)
+    s[i] = combinedAttenuation(view, rays[i], distanceToLight[i], falloff, combine, found);
 }
 
 float OuterObjects::attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,

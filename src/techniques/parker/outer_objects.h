@@ -66,8 +66,8 @@ enum class OuterFalloff { Bernstein, Sinusoid };  //!< s = 3 tau^2 - 2 tau^3, or
 enum class OuterCombine { Min, Product, Sum };
 
 struct OuterObjectOptions {
-  float lightDiameter = 1.0f;  //!< D: world units; for a directional light, per unit distance
-  bool analyticSpheres = true; //!< objects that remember a true sphere use it instead of their mesh
+  float lightDiameter = 1.0f;   //!< D: world units; for a directional light, per unit distance
+  bool analyticSpheres = true;  //!< objects that remember a true sphere use it instead of their mesh
 };
 
 // The attenuation of the Section 3 falloff at tau (s = 0 at tau <= 0, 1 at tau >= 1).
@@ -119,8 +119,8 @@ class OuterObjects {
   // into s[i]: the per-call work is shared, and the loop over the rays runs in one function built
   // for the widest vectors the CPU has. `seeds`, when given, carries the capsules of one call's
   // minima to the next.
-  void attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff, OuterCombine combine,
-                    float* s, Seeds* seeds = nullptr) const;
+  void attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
+                    OuterCombine combine, float* s, Seeds* seeds = nullptr) const;
 
   // Objects whose analytic sphere is used (their meshes are not part of the outer objects; the
   // caller must leave them out of its inner occlusion test too).
@@ -150,7 +150,7 @@ class OuterObjects {
   Vec3 lightCenter_{0.0f};
   float diameter_ = 1.0f;
   float sceneMagnitude_ = 0.0f;  //!< the largest coordinate magnitude of the scene's bounds (rounding slack)
-  bool avx2_ = false;       //!< the per-ray loop's 8-wide build runs (same values, see outer_objects.cpp)
+  bool avx2_ = false;            //!< the per-ray loop's 8-wide build runs (same values, see outer_objects.cpp)
 
   std::vector<bool> analytic_;
   size_t analyticCount_ = 0, edgeCount_ = 0, pieceCount_ = 0, leafCount_ = 0;

@@ -35,9 +35,9 @@
 // objects' positions and triangles are the same to the bit (a 128-bit fingerprint), so that a
 // steady-state frame of a static scene under a moving light builds only the outer objects (stat
 // inner_bvh_rebuilt); the meshes' edge adjacency, also light-independent, is kept alike, and only
-// the silhouettes and the hierarchy are built again. visibility traces raytraced-hard's rays in packets of 16, one per 4 x 4
-// pixel tile, and the rays of a tile that miss every inner object walk the outer objects'
-// hierarchy as one group. Numbers: bench/parker_bench.cpp.
+// the silhouettes and the hierarchy are built again. visibility traces raytraced-hard's rays in packets of 16, one per
+// 4 x 4 pixel tile, and the rays of a tile that miss every inner object walk the outer objects' hierarchy as one group.
+// Numbers: bench/parker_bench.cpp.
 #include <algorithm>
 #include <atomic>
 #include <exception>
@@ -51,8 +51,8 @@
 #include "penumbra/error.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
-#include "techniques/parker/outer_objects.h"
 #include "rt/shadow_ray.h"
+#include "techniques/parker/outer_objects.h"
 
 namespace penumbra {
 namespace {
@@ -75,12 +75,15 @@ struct ParkerOptions {
                                      "s1) + (1 - s2)) (at least 0)"),
           {{"min", rt::OuterCombine::Min}, {"product", rt::OuterCombine::Product}, {"sum", rt::OuterCombine::Sum}});
     f.add(&ParkerOptions::analyticSpheres,
-          OptionDecl("analytic_spheres").help("objects made from a sphere primitive are the true sphere (inner radius "
-                                              "R, outer R + b) instead of their tessellated mesh"));
+          OptionDecl("analytic_spheres")
+              .help("objects made from a sphere primitive are the true sphere (inner radius "
+                    "R, outer R + b) instead of their tessellated mesh"));
     f.add(&ParkerOptions::lightDiameter,
-          OptionDecl("light_diameter").range(1e-6, 1e6).unit("world units (directional: per unit distance)").help(
-              "D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: 2 "
-              "tan(angular_diameter / 2))"));
+          OptionDecl("light_diameter")
+              .range(1e-6, 1e6)
+              .unit("world units (directional: per unit distance)")
+              .help("D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: 2 "
+                    "tan(angular_diameter / 2))"));
   }
 };
 
@@ -93,9 +96,10 @@ class ParkerTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     if (light.shape() == LightShape::Segment)
-      fail("parker: a segment light is not supported (its penumbra runs only along the segment, which an outer object "
-           "grown equally in every direction cannot give); supported: sphere, disk, rect, polygon, directional; use "
-           "heidrich for a segment light");
+      fail(
+          "parker: a segment light is not supported (its penumbra runs only along the segment, which an outer object "
+          "grown equally in every direction cannot give); supported: sphere, disk, rect, polygon, directional; use "
+          "heidrich for a segment light");
     // The paper's D: the diameter of the (roughly spherical) light.
     const float diameter = options_.lightDiameter.value_or(2.0f * light.extent());
     rt::OuterObjectOptions outerOptions;
@@ -106,8 +110,10 @@ class ParkerTechnique final : public ShadowTechnique {
     analyticIds_.clear();
     std::vector<const Object*> innerObjects;
     for (const Object& object : scene.objects) {
-      if (!rt::OuterObjects::usesAnalyticSphere(object, outerOptions)) innerObjects.push_back(&object);
-      else analyticIds_.push_back(object.id);
+      if (!rt::OuterObjects::usesAnalyticSphere(object, outerOptions))
+        innerObjects.push_back(&object);
+      else
+        analyticIds_.push_back(object.id);
     }
     std::sort(analyticIds_.begin(), analyticIds_.end());
     // The inner objects' BVH depends on the geometry alone, not on the light: kept from the last
@@ -157,7 +163,8 @@ class ParkerTechnique final : public ShadowTechnique {
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
-    if (!rays_ || !outer_ || !light_) fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
+    if (!rays_ || !outer_ || !light_)
+      fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
     const int width = gbuffer.width(), height = gbuffer.height();
     v.reset(width, height, 1.0f);
     const Light& light = *light_;
@@ -247,10 +254,10 @@ class ParkerTechnique final : public ShadowTechnique {
   std::unique_ptr<rt::OuterObjects> outer_;
   std::unique_ptr<RayScene> rays_;
   std::optional<Light> light_;
-  std::vector<int32_t> analyticIds_;  //!< ids of the objects whose analytic sphere is used, sorted
+  std::vector<int32_t> analyticIds_;           //!< ids of the objects whose analytic sphere is used, sorted
   std::vector<rt::MeshFingerprint> innerKey_;  //!< the inner objects' geometry rays_ was built from
   rt::OuterObjects::EdgeCache edgeCache_;      //!< the meshes' edge adjacency, kept while they stay the same
-  bool innerRebuilt_ = false;         //!< the last prepare built rays_ (else it kept it)
+  bool innerRebuilt_ = false;                  //!< the last prepare built rays_ (else it kept it)
   float epsilon_ = 0.0f;
   double rayCount_ = 0.0;
 };
@@ -260,7 +267,9 @@ class ParkerTechnique final : public ShadowTechnique {
 TechniqueInfo parkerTechniqueInfo() {
   TechniqueInfo info;
   info.name = "parker";
-  info.summary = "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the penumbra";
+  info.summary =
+      "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the "
+      "penumbra";
   info.source = "Parker, Shirley & Smits 1998, Single sample soft shadows";
   info.setOptions<ParkerOptions>([](const ParkerOptions& o) { return std::make_unique<ParkerTechnique>(o); });
   return info;

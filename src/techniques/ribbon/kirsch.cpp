@@ -17,19 +17,19 @@
 // occluding point to the shadowed point") and |w| the shadow width in texels. On a rounded occluder
 // that point is its top, nearer the light than the silhouette that bounds the shadow, so the fade is
 // wider than the penumbra and lights umbra pixels near the hard edge; the paper's caveat: "The
-// shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts". The shadow-width map is the inner halves of the silhouette ribbons of plm.h (distance to
-// the nearest silhouette segment, measured at texel centres, "highest penumbra limit wins") instead
-// of the paper's iterative image passes over the depth map, which estimate the same distance in whole
-// texels. Only edges on the border of their object's footprint in the map count (plm::RibbonFilter:
-// beyond the edge the map sees another object or nothing, and nothing above the edge): the paper's
+// shadow-casting surfaces, however, should satisfy a few geometric properties to prevent artifacts". The shadow-width
+// map is the inner halves of the silhouette ribbons of plm.h (distance to the nearest silhouette segment, measured at
+// texel centres, "highest penumbra limit wins") instead of the paper's iterative image passes over the depth map, which
+// estimate the same distance in whole texels. Only edges on the border of their object's footprint in the map count
+// (plm::RibbonFilter: beyond the edge the map sees another object or nothing, and nothing above the edge): the paper's
 // distance is the one to the border of the shadow, and the silhouettes inside an object's footprint
 // (a fin over the crankcase, an arm over the body, a contour behind the object's own front) border
-// no lit texel — as widths they faded the middle of an umbra to nearly 1. Both maps are read at the texel holding the pixel (no filtering), then V goes through
-// Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. A
-// blocked texel no ribbon reaches lies deeper in the shadow than any penumbra: V = 0. Lights: as plm
-// (sphere, disk, rect, polygon, directional; segments rejected).
-// Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels
-// added to every ribbon's width), illumination_table (bool).
+// no lit texel — as widths they faded the middle of an umbra to nearly 1. Both maps are read at the texel holding the
+// pixel (no filtering), then V goes through Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when
+// `illumination_table` is on. A blocked texel no ribbon reaches lies deeper in the shadow than any penumbra: V = 0.
+// Lights: as plm (sphere, disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels),
+// bias_constant (texels), bias_slope (shadow_map.h), margin (texels added to every ribbon's width), illumination_table
+// (bool).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -78,7 +78,8 @@ class KirschTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("kirsch: visibility() called before prepare()");
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      const ShadowReceiver r =
+          makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
       const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
       const plm::RibbonTexel& width = widths_(i, j);
@@ -95,7 +96,7 @@ class KirschTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> widths_;
-  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  Image<float> farthest_;     //!< prepare()'s working image, kept between calls
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 

@@ -53,12 +53,11 @@
 // large objects' penumbras, the penumbra limit depth p_i crosses over the occluder depth c, which
 // results in a highly visible erroneous shadow transition"): where the four texels do not hold one
 // ribbon (edges that are neither the same nor neighbours on one silhouette, a texel without a ribbon,
-// or b at some of them only or jumping), their parameters are not interpolated; Equation 2 is evaluated at each of them, with
-// the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four
-// values are interpolated. Interpolating c and p_i across such a jump drew the white lines across
-// umbrae and the ragged outlines of an interpolated b; the paper's remedy, clamping g and b
-// together at the transition (Fig. 7 C), leaves a hard edge there.
-// Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
+// or b at some of them only or jumping), their parameters are not interpolated; Equation 2 is evaluated at each of
+// them, with the compares of shadow_map.h (the receiver's tangent plane at the texel centre), and the four values are
+// interpolated. Interpolating c and p_i across such a jump drew the white lines across umbrae and the ragged outlines
+// of an interpolated b; the paper's remedy, clamping g and b together at the transition (Fig. 7 C), leaves a hard edge
+// there. Approximations: exact along one straight edge under a disk light (up to float rounding, the depth
 // rasterization and the bias); one occluder per shadow-map ray (the first penumbra wins, Sec. 3);
 // corners are rounded (the ribbon of a segment ends in a half disk); where an occluder is thinner
 // than a texel (a sharp corner) the map sees what lies under it and the shadow there is lost; near a
@@ -86,10 +85,10 @@
 
 #include "penumbra/error.h"
 #include "penumbra/light_profile.h"
-#include "techniques/mesh_edges.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "raster/rasterizer.h"
+#include "techniques/mesh_edges.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
@@ -98,8 +97,10 @@ namespace plm {
 float emitterRadius(const Light& light, const char* technique) {
   switch (light.shape()) {
     case LightShape::Sphere:
-    case LightShape::Disk: return light.radius();
-    case LightShape::Directional: return std::tan(0.5f * light.angularDiameter());
+    case LightShape::Disk:
+      return light.radius();
+    case LightShape::Directional:
+      return std::tan(0.5f * light.angularDiameter());
     case LightShape::Rect:
     case LightShape::Polygon: {
       // The disk of equal area: Newell's area of the (planar, convex) polygon.
@@ -108,11 +109,13 @@ float emitterRadius(const Light& light, const char* technique) {
       for (size_t i = 0; i < v.size(); ++i) n += glm::cross(v[i], v[(i + 1) % v.size()]);
       return std::sqrt(0.5f * glm::length(n) / kPi);
     }
-    case LightShape::Segment: break;
+    case LightShape::Segment:
+      break;
   }
-  fail("{}: a {} light is not supported (it has no width across its axis, so no disk stands for it); supported: "
-       "sphere, disk, rect, polygon, directional",
-       technique, toString(light.shape()));
+  fail(
+      "{}: a {} light is not supported (it has no width across its axis, so no disk stands for it); supported: "
+      "sphere, disk, rect, polygon, directional",
+      technique, toString(light.shape()));
 }
 
 Space makeSpace(const LightMap& map, const Light& light, const char* technique) {
@@ -145,8 +148,8 @@ constexpr float kBelowEdge = 1e-5f;
 // Vertex ids are the adjacency's welded ids (the first vertex at a position).
 struct SilhouetteMesh {
   std::vector<Vec3> normals, centroids;  //!< per kept triangle
-  std::vector<uint32_t> a, b;        //!< per edge: welded end points, a < b
-  std::vector<uint32_t> firstUse;    //!< per edge, and one past the last: its uses in the two arrays below
+  std::vector<uint32_t> a, b;            //!< per edge: welded end points, a < b
+  std::vector<uint32_t> firstUse;        //!< per edge, and one past the last: its uses in the two arrays below
   std::vector<uint32_t> useTriangle, useOpposite;  //!< per use: the kept triangle, its third (welded) vertex
 
   void build(const Mesh& mesh, const MeshEdges& edges) {
@@ -195,7 +198,7 @@ struct SilhouetteMesh {
 };
 
 struct EdgeCache::Impl {
-  MeshEdgeCache adjacency;  //!< per object index, the mesh's edge adjacency
+  MeshEdgeCache adjacency;                            //!< per object index, the mesh's edge adjacency
   std::vector<std::optional<SilhouetteMesh>> meshes;  //!< per object index, built from it
   // silhouetteEdges' working storage, kept so that the next light refills it rather than faulting
   // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
@@ -340,14 +343,15 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   size_t base = 0;
   for (const Object& object : scene.objects) {
     const Mesh& mesh = object.mesh;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const Vec3 l = map.lsFromWs(mesh.positions[i]);
-        clip[base + i] = map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
-                                          : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z);
-        lsZ[base + i] = l.z;
-      }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i < r.end(); ++i) {
+            const Vec3 l = map.lsFromWs(mesh.positions[i]);
+            clip[base + i] = map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
+                                              : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z);
+            lsZ[base + i] = l.z;
+          }
+        });
     base += mesh.positions.size();
   }
   far.reset(map.size, map.size, space.zetaNone);
@@ -373,8 +377,9 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
   });
 }
 
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
-                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out) {
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
+                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
+                      Image<RibbonTexel>& out) {
   out.reset(mapSize, mapSize, RibbonTexel{});
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
@@ -425,8 +430,8 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
     const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
     Box box{std::max(0, static_cast<int>(std::floor(lo.x))), std::max(0, static_cast<int>(std::floor(lo.y))),
-            std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))), std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))),
-            half};
+            std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))),
+            std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
     boxes[k] = box;
     if (box.i0 > box.i1 || box.j0 > box.j1) continue;
     for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
@@ -509,15 +514,18 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const __m128 vAqy = _mm_set1_ps(aqy), vBy = _mm_set1_ps(by), vInvLength2 = _mm_set1_ps(invLength2);
             const __m128 outX = _mm_set1_ps(e.outward.x), outY = _mm_set1_ps(e.outward.y);
             const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
-            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB), dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
+            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB),
+                         dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
             const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
             const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
             const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
             for (; m + 4 <= count; m += 4) {
-              const __m128 qx = _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
+              const __m128 qx =
+                  _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
               const __m128 aqx = _mm_sub_ps(qx, ax);
               const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
-              const __m128 u = _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
+              const __m128 u =
+                  _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
               const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
               const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
               const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
@@ -525,13 +533,16 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
               const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
               const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
-              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero), _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
+              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero),
+                                             _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
               const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
               const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
               const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
               // outer ? wantOuter : wantInner (one of the two at least is wanted)
-              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
-              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted), _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
+              const __m128 sideWanted =
+                  _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
+              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
+                                             _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
               _mm_storeu_ps(spanU + m, u);
               _mm_storeu_ps(spanC + m, c);
               _mm_storeu_ps(spanDistance + m, distance);
@@ -575,7 +586,8 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
             const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
             const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
-            if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId) continue;
+            if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId)
+              continue;
             if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
             if (const Image<float>* top = filter.topDepth) {
               // Depths as zeta; an empty texel (infinite depth) lies below everything.
@@ -597,9 +609,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
 namespace {
 
 struct PlmOptions {
-  int mapSize = 1024;         //!< texels per side
-  DepthBias bias;             //!< of the compares with g, c and b (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every ribbon's half-width
+  int mapSize = 1024;             //!< texels per side
+  DepthBias bias;                 //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;      //!< added to every ribbon's half-width
   bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
 
   static void describe(OptionFields<PlmOptions>& f) {
@@ -715,7 +727,8 @@ class PlmTechnique final : public ShadowTechnique {
       // A surface that faces away from the light's centre is never the one the map holds at its
       // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
       // the compare: the bias would only lift it above the surface that covers it.
-      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f) r.bias = 0.0f;
+      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f)
+        r.bias = 0.0f;
       // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
       const float fs = r.s - 0.5f, ft = r.t - 0.5f;
       const float is = std::floor(fs), it = std::floor(ft);
@@ -820,7 +833,8 @@ class PlmTechnique final : public ShadowTechnique {
     const int n = map_.size;
     Vec2 pattern[kProfileSamples];
     for (int q = 0; q < kProfileSamples; ++q)
-      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid, (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
+      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
+                        (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t k = range.begin(); k < range.end(); ++k) {
         const int i = texels[k] % n, j = texels[k] / n;
@@ -845,7 +859,8 @@ class PlmTechnique final : public ShadowTechnique {
           if (!(depth > map_.lsDepth(i, j) + lift)) continue;
           const float probeDepth = depth - lift;
           if (!(probeDepth > 0.0f)) continue;
-          const float l = std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+          const float l =
+              std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
           const float predicted = options_.illuminationTable ? table_(l) : l;
           // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
           if (!(predicted * kProfileSamples >= kProfileMinDeficit)) continue;
@@ -862,7 +877,8 @@ class PlmTechnique final : public ShadowTechnique {
           int seen = 0;
           for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
           const float expected = predicted * kProfileSamples;
-          if (static_cast<float>(seen) < kProfileFraction * expected && expected - static_cast<float>(seen) >= kProfileMinDeficit) {
+          if (static_cast<float>(seen) < kProfileFraction * expected &&
+              expected - static_cast<float>(seen) >= kProfileMinDeficit) {
             texel.b = space_.zeta(probeDepth);
             break;
           }
@@ -875,19 +891,19 @@ class PlmTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
-  std::optional<Light> light_;      //!< the light of the last prepare()
+  std::optional<Light> light_;  //!< the light of the last prepare()
   Image<PlmTexel> limits_;
-  Image<float> g_;                  //!< limits_' g alone, for the lit fast path
-  Image<uint8_t> footprint2x2_;     //!< kFootprint* of the 2x2 texels whose top-left this is
+  Image<float> g_;               //!< limits_' g alone, for the lit fast path
+  Image<uint8_t> footprint2x2_;  //!< kFootprint* of the 2x2 texels whose top-left this is
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
   Image<plm::RibbonTexel> ribbons_;
-  std::vector<plm::Edge> edges_;    //!< the silhouette edges, which visibility() asks for neighbours
+  std::vector<plm::Edge> edges_;  //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
-  std::unique_ptr<RayScene> rays_;  //!< findLowerLimits' BVH of the scene
+  std::unique_ptr<RayScene> rays_;        //!< findLowerLimits' BVH of the scene
   std::vector<MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
-  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  plm::EdgeCache edgeCache_;              //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 
 }  // namespace
@@ -895,7 +911,8 @@ class PlmTechnique final : public ShadowTechnique {
 TechniqueInfo plmTechniqueInfo() {
   TechniqueInfo info;
   info.name = "plm";
-  info.summary = "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
+  info.summary =
+      "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
   info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
   info.setOptions<PlmOptions>([](const PlmOptions& o) { return std::make_unique<PlmTechnique>(o); });
   return info;

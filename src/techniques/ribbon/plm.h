@@ -65,8 +65,8 @@ namespace penumbra::plm {
 struct Space {
   bool orthographic = true;
   float zetaNear = 0.0f, zetaFar = 1.0f;  //!< zeta of the map's depth range
-  float zetaNone = 2.0f;    //!< stands for "nothing here": deeper than anything in the map, finite
-  float ratePerTexel = 1.0f;  //!< s r: zeta of penumbra-limit depth per texel of horizontal distance
+  float zetaNone = 2.0f;                  //!< stands for "nothing here": deeper than anything in the map, finite
+  float ratePerTexel = 1.0f;              //!< s r: zeta of penumbra-limit depth per texel of horizontal distance
   // zeta of a light-space depth: z (orthographic) or -1 / z (perspective).
   float zeta(float lsDepth) const { return orthographic ? lsDepth : -1.0f / lsDepth; }
   float lsDepth(float zeta) const { return orthographic ? zeta : -1.0f / zeta; }
@@ -80,9 +80,9 @@ float emitterRadius(const Light& light, const char* technique);
 Space makeSpace(const LightMap& map, const Light& light, const char* technique);
 
 struct Edge {
-  Vec2 a, b;            //!< projected end points, map texels
+  Vec2 a, b;  //!< projected end points, map texels
   float zetaA = 0.0f, zetaB = 0.0f;
-  Vec2 outward{0.0f};   //!< unit normal of the segment in the map, towards the outer side
+  Vec2 outward{0.0f};  //!< unit normal of the segment in the map, towards the outer side
   int32_t objectId = kNoObject;
   // Side (+1 outer, -1 inner) of the texels beyond each end, whose nearest point is the end point:
   // +1 at a convex corner of the silhouette, -1 at a concave one (the corner's other edge decides),
@@ -118,11 +118,11 @@ inline constexpr float kRibbonBorderTexels = 1.5f;
 enum class RibbonSides { Both, Outer, Inner };
 
 struct RibbonTexel {
-  float c = 0.0f;       //!< zeta of the winning edge at its nearest point
-  float w = 0.0f;       //!< signed distance to it, texels, + outside the silhouette
+  float c = 0.0f;              //!< zeta of the winning edge at its nearest point
+  float w = 0.0f;              //!< signed distance to it, texels, + outside the silhouette
   float priority = kInfinity;  //!< kInfinity: no ribbon covers this texel
   int32_t objectId = kNoObject;
-  int32_t edge = -1;    //!< index of the winning edge in the list given to rasterizeRibbons
+  int32_t edge = -1;  //!< index of the winning edge in the list given to rasterizeRibbons
   bool covered() const { return priority != kInfinity; }
 };
 
@@ -158,8 +158,9 @@ struct RibbonFilter {
 inline constexpr float kHiddenProbeTexels = 1.5f;
 
 // Into `out`, which keeps its storage where it is large enough.
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides, float marginTexels,
-                      const RibbonFilter& filter, const Image<float>& farthest, Image<RibbonTexel>& out);
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
+                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
+                      Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm
 
@@ -171,7 +172,8 @@ inline OptionDecl ribbonMarginOption() {
 }
 inline OptionDecl illuminationTableOption() {
   return OptionDecl("illumination_table")
-      .help("map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A table for the "
-            "light's profile (disk lights; identity for rect, polygon)");
+      .help(
+          "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A table for the "
+          "light's profile (disk lights; identity for rect, polygon)");
 }
 }  // namespace penumbra

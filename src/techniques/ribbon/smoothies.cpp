@@ -22,12 +22,11 @@
 // raised object's own penumbra, and kept by depth it covered the strips of every lower object
 // around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's penumbra);
 // with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden
-// from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at the texel holding the pixel (no filtering:
-// the 2003 hardware filtered no float textures), then V goes through Appendix A's table of Lawlor
-// 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm (sphere, disk,
-// rect, polygon, directional; segments rejected).
-// Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels
-// added to every strip's width), illumination_table (bool).
+// from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at
+// the texel holding the pixel (no filtering: the 2003 hardware filtered no float textures), then V goes through
+// Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm (sphere,
+// disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels), bias_constant (texels),
+// bias_slope (shadow_map.h), margin (texels added to every strip's width), illumination_table (bool).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -69,13 +68,15 @@ class SmoothiesTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
-                          plm::RibbonSides::Outer, options_.marginTexels, plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
+                          plm::RibbonSides::Outer, options_.marginTexels,
+                          plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("smoothies: visibility() called before prepare()");
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      const ShadowReceiver r =
+          makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       if (!r.inMap) return 1.0f;
       if (hardShadow(map_, r) == 0.0f) return 0.0f;
       const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
@@ -92,7 +93,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> smoothies_;
-  Image<float> farthest_;  //!< prepare()'s working image, kept between calls
+  Image<float> farthest_;     //!< prepare()'s working image, kept between calls
   plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 

@@ -49,8 +49,8 @@ inline int32_t texelKey(const float* depth, const int32_t* id, const float* js, 
 // The smallest key of texels [s0, s1] of one row: the vectorized inner loop of the search.
 template <bool kInner, bool kIdTest, bool kJitter>
 int32_t rowMinKey(const float* __restrict depth, const int32_t* __restrict id, const float* __restrict js,
-                  const float* __restrict jt, int s0, int s1, float ps, float tc, float pt, float zRow,
-                  float dzds, int32_t objectId, float r2) {
+                  const float* __restrict jt, int s0, int s1, float ps, float tc, float pt, float zRow, float dzds,
+                  int32_t objectId, float r2) {
   int32_t best = kNoKey;
   for (int s = s0; s <= s1; ++s) {
     const int32_t key = texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, ps, tc, pt, zRow, dzds, objectId, r2);
@@ -152,7 +152,8 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
         const float zRow = kInner ? q.zLayer + q.dzdt * (tc - q.t) : q.zLayer;
         int32_t key = kNoKey;
         if (!tiled || gridded) {
-          key = rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2);
+          key = rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, q.s, tc, q.t, zRow, q.dzds, q.objectId,
+                                                    r2);
         } else {
           // Runs of tiles that may qualify, each scanned in one vectorized loop.
           int runStart = -1;
@@ -172,7 +173,8 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
         }
         if (key != kNoKey && (key < bestKey || (key == bestKey && t < hit.t))) {
           int s = s0;
-          while (texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2) != key)
+          while (texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2) !=
+                 key)
             ++s;
           bestKey = key;
           hit.found = true;
@@ -184,7 +186,8 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
     }
     const bool canUp = up >= tLo, canDown = down <= tHi;
     if (!canUp && !canDown) break;
-    if (canUp && (!canDown || std::abs(static_cast<float>(up) + 0.5f - q.t) <= std::abs(static_cast<float>(down) + 0.5f - q.t)))
+    if (canUp &&
+        (!canDown || std::abs(static_cast<float>(up) + 0.5f - q.t) <= std::abs(static_cast<float>(down) + 0.5f - q.t)))
       t = up--;
     else
       t = down++;
@@ -214,8 +217,10 @@ SearchHit searchScalar(const SearchMap& map, const SearchQuery& q) {
   const int n = map.size;
   const float r2 = q.radius * q.radius;
   const float reach = q.radius + map.maxJitter + 1.0f;
-  const int tLo = std::max(0, static_cast<int>(std::floor(q.t - reach))), tHi = std::min(n - 1, static_cast<int>(std::ceil(q.t + reach)));
-  const int sLo = std::max(0, static_cast<int>(std::floor(q.s - reach))), sHi = std::min(n - 1, static_cast<int>(std::ceil(q.s + reach)));
+  const int tLo = std::max(0, static_cast<int>(std::floor(q.t - reach))),
+            tHi = std::min(n - 1, static_cast<int>(std::ceil(q.t + reach)));
+  const int sLo = std::max(0, static_cast<int>(std::floor(q.s - reach))),
+            sHi = std::min(n - 1, static_cast<int>(std::ceil(q.s + reach)));
   for (int t = tLo; t <= tHi; ++t) {
     for (int s = sLo; s <= sHi; ++s) {
       const size_t i = static_cast<size_t>(t) * n + s;
@@ -245,7 +250,8 @@ SearchHit searchScalar(const SearchMap& map, const SearchQuery& q) {
 }
 
 float texelJitter(int s, int t, int axis, float amplitude) {
-  const uint32_t h = hashCombine(hashCombine(static_cast<uint64_t>(s), static_cast<uint64_t>(t)), static_cast<uint64_t>(axis) + 0x5bd1e995u);
+  const uint32_t h = hashCombine(hashCombine(static_cast<uint64_t>(s), static_cast<uint64_t>(t)),
+                                 static_cast<uint64_t>(axis) + 0x5bd1e995u);
   const float u = static_cast<float>(h >> 8) * (1.0f / 16777216.0f);  // [0, 1)
   return amplitude * (2.0f * u - 1.0f);
 }
@@ -335,9 +341,12 @@ Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLay
       const Vec2 a = vertices[k] * scale;
       const Vec2 e = vertices[(k + 1) % count] * scale - a;
       const float cx = -orientation * e.y, rest = orientation * (e.x * (y - a.y) + e.y * a.x);
-      if (cx > 0.0f) xLo = std::max(xLo, -rest / cx);
-      else if (cx < 0.0f) xHi = std::min(xHi, -rest / cx);
-      else if (rest < 0.0f) return false;
+      if (cx > 0.0f)
+        xLo = std::max(xLo, -rest / cx);
+      else if (cx < 0.0f)
+        xHi = std::min(xHi, -rest / cx);
+      else if (rest < 0.0f)
+        return false;
     }
     if (!(xLo <= xHi)) return false;
     i0 = static_cast<int>(std::ceil(s + xLo - 0.5f));
@@ -380,8 +389,10 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
       const int32_t id = map.objectId(s, t);
       minDepth[k] = std::min(minDepth[k], d);
       maxDepth[k] = std::max(maxDepth[k], d);
-      if (!seen[k]) objectId[k] = id;
-      else if (objectId[k] != id) objectId[k] = kMixedTile;
+      if (!seen[k])
+        objectId[k] = id;
+      else if (objectId[k] != id)
+        objectId[k] = kMixedTile;
       seen[k] = 1;
     }
 }
@@ -392,14 +403,14 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
 struct BrabecTechnique::Pixel {
   enum Class : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
   uint8_t cls = Miss;
-  int32_t key = kNoObject;       //!< interpolation id: the blocker's when blocked, the receiver's otherwise
-  int32_t objectId = kNoObject;  //!< the receiver's own id (P'_ID)
-  float s = 0.0f, t = 0.0f;      //!< P' in map coordinates, texels
-  float lsDepth = 0.0f;          //!< P'z, world units
-  float zLayer = 0.0f;           //!< P'z less the bias: the searches' depth layer
+  int32_t key = kNoObject;         //!< interpolation id: the blocker's when blocked, the receiver's otherwise
+  int32_t objectId = kNoObject;    //!< the receiver's own id (P'_ID)
+  float s = 0.0f, t = 0.0f;        //!< P' in map coordinates, texels
+  float lsDepth = 0.0f;            //!< P'z, world units
+  float zLayer = 0.0f;             //!< P'z less the bias: the searches' depth layer
   float dzds = 0.0f, dzdt = 0.0f;  //!< receiver plane's depth change per texel, world units
-  float texelWorld = 1.0f;       //!< texelWorldSize(P'z)
-  float blockerDepth = 0.0f;     //!< depth of the texel over P when blocked
+  float texelWorld = 1.0f;         //!< texelWorldSize(P'z)
+  float blockerDepth = 0.0f;       //!< depth of the texel over P when blocked
 };
 
 BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(options) {
@@ -409,12 +420,15 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
     for (const auto& [name, value] : {std::pair{"r_scale", options.rScale}, std::pair{"r_bias", options.rBias},
                                       std::pair{"r_shrink", options.rShrink}})
       if (!value) missing += missing.empty() ? name : std::string(", ") + name;
-    fail("brabec: r_scale, r_bias and r_shrink are the paper's knobs and replace the physically derived r_max "
-         "together; give all three or none (missing: {})",
-         missing);
+    fail(
+        "brabec: r_scale, r_bias and r_shrink are the paper's knobs and replace the physically derived r_max "
+        "together; give all three or none (missing: {})",
+        missing);
   }
-  if (!(options.meet >= 0.0f && options.meet <= 1.0f)) fail("brabec: meet = {} is not valid: expected a float in [0, 1]", options.meet);
-  if (options.maxRadius < 1) fail("brabec: max_radius = {} is not valid: expected an int >= 1 (texels)", options.maxRadius);
+  if (!(options.meet >= 0.0f && options.meet <= 1.0f))
+    fail("brabec: meet = {} is not valid: expected a float in [0, 1]", options.meet);
+  if (options.maxRadius < 1)
+    fail("brabec: max_radius = {} is not valid: expected an int >= 1 (texels)", options.maxRadius);
   if (!(options.interpolateMaxStep >= 0.0f && options.interpolateMaxStep <= 1.0f))
     fail("brabec: interpolate_max_step = {} is not valid: expected a float in [0, 1]", options.interpolateMaxStep);
   if (!(options.interpolateMaxAngle >= 0.0f && options.interpolateMaxAngle <= 180.0f))
@@ -508,9 +522,12 @@ float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) con
   if (raised) *raised = false;
   switch (p.cls) {
     case Pixel::Miss:
-    case Pixel::OutOfMap: return 1.0f;
-    case Pixel::BackFacing: return 0.0f;
-    default: break;
+    case Pixel::OutOfMap:
+      return 1.0f;
+    case Pixel::BackFacing:
+      return 0.0f;
+    default:
+      break;
   }
   const bool inner = p.cls == Pixel::Blocked;
   const bool physical = !options_.rScale;
@@ -823,7 +840,9 @@ std::vector<std::pair<std::string, double>> BrabecTechnique::stats() const {
 TechniqueInfo brabecTechniqueInfo() {
   TechniqueInfo info;
   info.name = "brabec";
-  info.summary = "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer penumbra";
+  info.summary =
+      "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer "
+      "penumbra";
   info.source = "Brabec & Seidel 2002, Single sample soft shadows using depth maps";
   info.setOptions<BrabecOptions>([](const BrabecOptions& o) { return std::make_unique<BrabecTechnique>(o); });
   return info;

@@ -83,8 +83,8 @@
 // criteria alone leave about four times the error of (1) and (2) together, for a few percent more
 // searched pixels (tests/techniques/shadow_map/brabec_test.cpp checks the interpolated pass against
 // the exhaustive one). Different blocker ids at the borders (the paper's other cue) add nothing once
-// (2) is in: a change of blocker turns the direction. Option `interpolate_max_step` (default 1: off) also refines a group whose border V
-// differ by more than the step.
+// (2) is in: a change of blocker turns the direction. Option `interpolate_max_step` (default 1: off) also refines a
+// group whose border V differ by more than the step.
 //
 // Jitter (Sec. 4.3): texel positions offset by up to `jitter` texels in s and t, a deterministic hash
 // of the texel. Units: map coordinates and radii in texels, depths in world units.
@@ -135,24 +135,24 @@
 namespace penumbra {
 
 struct BrabecOptions {
-  int mapSize = 1024;            //!< light depth/id map, texels per side (the paper: 256 for 512x512 images)
-  DepthBias bias;                //!< of the hard test and of the searches' depth layer
-  float meet = 0.5f;             //!< V on the hard-shadow edge, where inner and outer penumbra meet
-  std::optional<float> rScale;   //!< paper: search radius per world unit of |z|, texels / world unit
-  std::optional<float> rBias;    //!< paper: search radius at z = 0, texels
-  std::optional<float> rShrink;  //!< paper: r_max factor per world unit of depth difference, 1 / world unit
-  int maxRadius = 96;            //!< hard cap of the search radius, texels (see the file comment)
-  bool interpolate = true;       //!< Sec. 4.3 adaptive 4x4 block interpolation
+  int mapSize = 1024;               //!< light depth/id map, texels per side (the paper: 256 for 512x512 images)
+  DepthBias bias;                   //!< of the hard test and of the searches' depth layer
+  float meet = 0.5f;                //!< V on the hard-shadow edge, where inner and outer penumbra meet
+  std::optional<float> rScale;      //!< paper: search radius per world unit of |z|, texels / world unit
+  std::optional<float> rBias;       //!< paper: search radius at z = 0, texels
+  std::optional<float> rShrink;     //!< paper: r_max factor per world unit of depth difference, 1 / world unit
+  int maxRadius = 96;               //!< hard cap of the search radius, texels (see the file comment)
+  bool interpolate = true;          //!< Sec. 4.3 adaptive 4x4 block interpolation
   float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more
   bool interpolateKinks = true;  //!< also refine across the kinks of V (r = r_max, ridges of r); see the file comment
   float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees
-  float jitter = 0.0f;           //!< texel position jitter amplitude, texels
-  bool idTest = true;            //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
-  bool scalarSearch = false;     //!< use the scalar oracle search (tests)
-  bool accelerate = true;        //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
-  bool coverageBound = true;     //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
-  int coverageMinTexels = 32;    //!< coverage bound: smallest footprint applied at, texels (segment: samples)
-  int coverageSamples = 256;     //!< coverage bound: most texels counted per footprint (wider: a sparser lattice)
+  float jitter = 0.0f;                //!< texel position jitter amplitude, texels
+  bool idTest = true;                 //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
+  bool scalarSearch = false;          //!< use the scalar oracle search (tests)
+  bool accelerate = true;             //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
+  bool coverageBound = true;   //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
+  int coverageMinTexels = 32;  //!< coverage bound: smallest footprint applied at, texels (segment: samples)
+  int coverageSamples = 256;   //!< coverage bound: most texels counted per footprint (wider: a sparser lattice)
 
   static void describe(OptionFields<BrabecOptions>& f) {
     using O = BrabecOptions;
@@ -160,55 +160,81 @@ struct BrabecOptions {
     f.nest(&O::bias);
     f.add(&O::meet, OptionDecl("meet").range(0, 1).help(
                         "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)"));
-    f.add(&O::rScale, OptionDecl("r_scale").range(0, 1e6).unit("texels per world unit").help(
-                          "paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
-                          "(give r_scale, r_bias and r_shrink together)"));
+    f.add(&O::rScale,
+          OptionDecl("r_scale")
+              .range(0, 1e6)
+              .unit("texels per world unit")
+              .help("paper's knob: search radius r_scale |z| + r_bias; auto derives r_max from the light's size "
+                    "(give r_scale, r_bias and r_shrink together)"));
     f.add(&O::rBias, OptionDecl("r_bias").range(0, 1e6).unit("texels").help(
                          "paper's knob: search radius at depth 0 (with r_scale and r_shrink)"));
-    f.add(&O::rShrink, OptionDecl("r_shrink").range(0, 1e6).unit("1 / world unit").help(
-                           "paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
-                           "(with r_scale and r_bias)"));
-    f.add(&O::maxRadius,
-          OptionDecl("max_radius").range(1, 1024).unit("texels").help(
-              "hard cap of the search radius: bounds the cost of a pixel (it grows with the radius squared) when the "
-              "nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds the widest "
-              "physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)"));
-    f.add(&O::interpolate, OptionDecl("interpolate").help(
-                               "adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel"));
-    f.add(&O::interpolateMaxStep, OptionDecl("interpolate_max_step").range(0, 1).help(
-                                      "also search the middle of a group whose border V differ by more than this; 1 = off"));
+    f.add(&O::rShrink,
+          OptionDecl("r_shrink")
+              .range(0, 1e6)
+              .unit("1 / world unit")
+              .help("paper's knob: r_max = search radius * r_shrink * depth difference once a texel is found "
+                    "(with r_scale and r_bias)"));
+    f.add(
+        &O::maxRadius,
+        OptionDecl("max_radius")
+            .range(1, 1024)
+            .unit("texels")
+            .help(
+                "hard cap of the search radius: bounds the cost of a pixel (it grows with the radius squared) when the "
+                "nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds the widest "
+                "physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)"));
+    f.add(&O::interpolate,
+          OptionDecl("interpolate").help("adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel"));
+    f.add(&O::interpolateMaxStep,
+          OptionDecl("interpolate_max_step")
+              .range(0, 1)
+              .help("also search the middle of a group whose border V differ by more than this; 1 = off"));
     f.add(&O::interpolateKinks,
-          OptionDecl("interpolate_kinks").help(
-              "also search the middle of a group across a kink of V: one border at the end of the penumbra (r >= "
-              "r_max) and the other not, or the borders' nearest texels in directions more than "
-              "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria"));
+          OptionDecl("interpolate_kinks")
+              .help("also search the middle of a group across a kink of V: one border at the end of the penumbra (r >= "
+                    "r_max) and the other not, or the borders' nearest texels in directions more than "
+                    "interpolate_max_angle apart (a ridge of the distance field); false = the paper's criteria"));
     f.add(&O::interpolateMaxAngle,
-          OptionDecl("interpolate_max_angle").range(0, 180).unit("degrees").help(
-              "interpolate_kinks: largest angle between the directions from the two borders to the texels their "
-              "searches found"));
-    f.add(&O::accelerate, OptionDecl("accelerate").help(
-                              "tile summary and local search radius: change the cost, never V; false runs the plain "
-                              "Sec. 4.2 search (for measuring what they save)"));
-    f.add(&O::jitter, OptionDecl("jitter").range(0, 0.5).unit("texels").help(
-                          "jitter of the texel positions the distances are measured to (Sec. 4.3), deterministic; 0 = off"));
+          OptionDecl("interpolate_max_angle")
+              .range(0, 180)
+              .unit("degrees")
+              .help("interpolate_kinks: largest angle between the directions from the two borders to the texels their "
+                    "searches found"));
+    f.add(&O::accelerate,
+          OptionDecl("accelerate")
+              .help("tile summary and local search radius: change the cost, never V; false runs the plain "
+                    "Sec. 4.2 search (for measuring what they save)"));
+    f.add(&O::jitter,
+          OptionDecl("jitter").range(0, 0.5).unit("texels").help(
+              "jitter of the texel positions the distances are measured to (Sec. 4.3), deterministic; 0 = off"));
     f.add(&O::idTest, OptionDecl("id_test").help(
                           "object-id test of the searches (Sec. 3.2); false shows the self-shadowing of Fig. 3"));
-    f.add(&O::coverageBound,
-          OptionDecl("coverage_bound").help(
-              "our extension, not the paper's: V is at least 1 - f, f the fraction of the texels in the light's "
-              "footprint at the blocker's silhouette depth (its shape scaled to the penumbra width there) that block "
-              "the receiver; lightens the dark blob of an occluder smaller than the light (see "
-              "docs/small-occluders.md); false = the paper's V"));
-    f.add(&O::coverageMinTexels,
-          OptionDecl("coverage_min_texels").range(1, 1e6).unit("texels").help(
-              "coverage_bound: smallest footprint (texels; samples along a segment light) the bound is applied at; "
-              "smaller footprints cannot resolve the covered fraction (contact shadows, small maps). 32: measured on "
-              "the corpus, teapots and the built-in scenes, see docs/small-occluders.md"));
-    f.add(&O::coverageSamples,
-          OptionDecl("coverage_samples").range(16, 1e6).unit("texels").help(
-              "coverage_bound: most texels counted per footprint; a wider footprint is counted on a lattice of every "
-              "k-th texel in s and t. 256 resolves the covered fraction to about one 8-bit step; measured: RMSE8 "
-              "within 0.1 of the full count on every scene and light of docs/small-occluders.md"));
+    f.add(
+        &O::coverageBound,
+        OptionDecl("coverage_bound")
+            .help(
+                "our extension, not the paper's: V is at least 1 - f, f the fraction of the texels in the light's "
+                "footprint at the blocker's silhouette depth (its shape scaled to the penumbra width there) that block "
+                "the receiver; lightens the dark blob of an occluder smaller than the light (see "
+                "docs/small-occluders.md); false = the paper's V"));
+    f.add(
+        &O::coverageMinTexels,
+        OptionDecl("coverage_min_texels")
+            .range(1, 1e6)
+            .unit("texels")
+            .help(
+                "coverage_bound: smallest footprint (texels; samples along a segment light) the bound is applied at; "
+                "smaller footprints cannot resolve the covered fraction (contact shadows, small maps). 32: measured on "
+                "the corpus, teapots and the built-in scenes, see docs/small-occluders.md"));
+    f.add(
+        &O::coverageSamples,
+        OptionDecl("coverage_samples")
+            .range(16, 1e6)
+            .unit("texels")
+            .help(
+                "coverage_bound: most texels counted per footprint; a wider footprint is counted on a lattice of every "
+                "k-th texel in s and t. 256 resolves the covered fraction to about one 8-bit step; measured: RMSE8 "
+                "within 0.1 of the full count on every scene and light of docs/small-occluders.md"));
   }
 };
 
@@ -227,10 +253,10 @@ struct SearchMap {
   const int32_t* objectId = nullptr;
   const float* jitterS = nullptr;  //!< size*size offsets added to texel centres' s, or null
   const float* jitterT = nullptr;
-  float maxJitter = 0.0f;          //!< bound of |jitter|, texels
+  float maxJitter = 0.0f;  //!< bound of |jitter|, texels
   int tilesPerRow = 0;
-  const float* tileMinDepth = nullptr;  //!< per tile: nearest depth
-  const float* tileMaxDepth = nullptr;  //!< per tile: farthest depth (kInfinity if a texel is empty)
+  const float* tileMinDepth = nullptr;    //!< per tile: nearest depth
+  const float* tileMaxDepth = nullptr;    //!< per tile: farthest depth (kInfinity if a texel is empty)
   const int32_t* tileObjectId = nullptr;  //!< per tile: the id all its texels share, or kMixedTile
 };
 
@@ -239,14 +265,14 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
                 std::vector<int32_t>& objectId, int& tilesPerRow);
 
 struct SearchQuery {
-  float s = 0.0f, t = 0.0f;   //!< P' in map coordinates, not rounded
-  float zLayer = 0.0f;        //!< depth layer: P'z minus the bias, world units
-  float dzds = 0.0f;          //!< inner search: receiver plane's depth change per texel along s, world units
-  float dzdt = 0.0f;          //!< ... along t
+  float s = 0.0f, t = 0.0f;  //!< P' in map coordinates, not rounded
+  float zLayer = 0.0f;       //!< depth layer: P'z minus the bias, world units
+  float dzds = 0.0f;         //!< inner search: receiver plane's depth change per texel along s, world units
+  float dzdt = 0.0f;         //!< ... along t
   int32_t objectId = kNoObject;
-  bool inner = false;         //!< search a lit texel of P's object (true) or a blocker (false)
+  bool inner = false;  //!< search a lit texel of P's object (true) or a blocker (false)
   bool idTest = true;
-  float radius = 0.0f;        //!< texels; texels at distance < radius qualify
+  float radius = 0.0f;  //!< texels; texels at distance < radius qualify
 };
 
 struct SearchHit {

@@ -39,7 +39,8 @@ class HardShadowTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("hard: visibility() called before prepare()");
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      return hardShadow(map_, makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
+      return hardShadow(map_,
+                        makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
     });
   }
 
@@ -52,7 +53,8 @@ TechniqueInfo hardTechniqueInfo() {
   info.name = "hard";
   info.summary = "shadow map from the light's centre sample, one depth compare per pixel (hard shadow)";
   info.source = "Williams 1978 (baseline)";
-  info.setOptions<HardShadowOptions>([](const HardShadowOptions& o) { return std::make_unique<HardShadowTechnique>(o); });
+  info.setOptions<HardShadowOptions>(
+      [](const HardShadowOptions& o) { return std::make_unique<HardShadowTechnique>(o); });
   return info;
 }
 

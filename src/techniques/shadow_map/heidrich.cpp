@@ -342,9 +342,12 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
           double sLo = -1e30, sHi = 1e30;
           bool empty = false;
           for (int c = 0; c < 3; ++c) {
-            if (alpha[c] > 0.0) sLo = std::max(sLo, (kEdge - beta[c]) / alpha[c]);
-            else if (alpha[c] < 0.0) sHi = std::min(sHi, (kEdge - beta[c]) / alpha[c]);
-            else empty = empty || beta[c] < kEdge;
+            if (alpha[c] > 0.0)
+              sLo = std::max(sLo, (kEdge - beta[c]) / alpha[c]);
+            else if (alpha[c] < 0.0)
+              sHi = std::min(sHi, (kEdge - beta[c]) / alpha[c]);
+            else
+              empty = empty || beta[c] < kEdge;
           }
           if (empty || !(sLo <= sHi)) continue;
           const int iBegin = std::max(0, static_cast<int>(std::ceil(sLo - 0.5)));
@@ -458,10 +461,12 @@ Footprint footprint(int n, const ShadowReceiver& r) {
   const float fs0 = std::floor(sc), ft0 = std::floor(tc);
   const float ws = sc - fs0, wt = tc - ft0;
   const int i0 = static_cast<int>(fs0), j0 = static_cast<int>(ft0);
-  const size_t ia = static_cast<size_t>(std::clamp(i0, 0, n - 1)), ib = static_cast<size_t>(std::clamp(i0 + 1, 0, n - 1));
-  const size_t ja = static_cast<size_t>(std::clamp(j0, 0, n - 1)), jb = static_cast<size_t>(std::clamp(j0 + 1, 0, n - 1));
+  const size_t ia = static_cast<size_t>(std::clamp(i0, 0, n - 1)),
+               ib = static_cast<size_t>(std::clamp(i0 + 1, 0, n - 1));
+  const size_t ja = static_cast<size_t>(std::clamp(j0, 0, n - 1)),
+               jb = static_cast<size_t>(std::clamp(j0 + 1, 0, n - 1));
   const size_t stride = static_cast<size_t>(n);
-  return Footprint{ja * stride + ia, ja * stride + ib, jb * stride + ia, jb * stride + ib,
+  return Footprint{ja * stride + ia,          ja * stride + ib, jb * stride + ia, jb * stride + ib,
                    (1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
 }
 
@@ -471,8 +476,8 @@ float lookupLit(const Image<TwoChannelTexel>& m, const ShadowReceiver& r) {
   const Footprint f = footprint(m.width(), r);
   const TwoChannelTexel* t = m.data();
   auto value = [](float v) { return v >= 0.0f ? v : kLitShare; };
-  return f.w00 * value(t[f.i00].visibility) + f.w10 * value(t[f.i10].visibility) +
-         f.w01 * value(t[f.i01].visibility) + f.w11 * value(t[f.i11].visibility);
+  return f.w00 * value(t[f.i00].visibility) + f.w10 * value(t[f.i10].visibility) + f.w01 * value(t[f.i01].visibility) +
+         f.w11 * value(t[f.i11].visibility);
 }
 
 // The visibility channel in the penumbra (the other sample point is hidden): bilinear over covered
@@ -506,7 +511,8 @@ float lookupBehind(const Image<Vec2>& m, const ShadowReceiver& r) {
   // A skin seen nearly edge-on from this map (its occluder end, where the occluder vertices' depths
   // jump from row to row) gives unrelated values in neighbouring texels: no bound there.
   float lo = 1.0f, hi = 0.0f;
-  for (const auto& [i, w] : {std::pair{f.i00, w00}, std::pair{f.i10, w10}, std::pair{f.i01, w01}, std::pair{f.i11, w11}})
+  for (const auto& [i, w] :
+       {std::pair{f.i00, w00}, std::pair{f.i10, w10}, std::pair{f.i01, w01}, std::pair{f.i11, w11}})
     if (w > 0.0f) {
       lo = std::min(lo, t[i].x);
       hi = std::max(hi, t[i].x);
@@ -542,9 +548,10 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
 void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   prepared_ = false;  // a failed prepare() leaves nothing for visibility() to use
   if (light.shape() != LightShape::Segment)
-    fail("heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "
-         "(\"type\": \"segment\" with end points a and b)",
-         toString(light.shape()));
+    fail(
+        "heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "
+        "(\"type\": \"segment\" with end points a and b)",
+        toString(light.shape()));
   const int k = options_.subdivisions;
   const auto samples = static_cast<size_t>(k + 1);
   // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps

@@ -19,21 +19,25 @@
 namespace penumbra {
 
 struct HeidrichOptions {
-  int mapSize = 1024;        //!< texels per side of each sample point's shadow and visibility map
-  int subdivisions = 1;      //!< k: sub-segments of the light (k + 1 sample points)
+  int mapSize = 1024;          //!< texels per side of each sample point's shadow and visibility map
+  int subdivisions = 1;        //!< k: sub-segments of the light (k + 1 sample points)
   float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth
-  DepthBias bias;            //!< depth-compare bias of the shadow-map channel (shadow_map.h)
+  DepthBias bias;              //!< depth-compare bias of the shadow-map channel (shadow_map.h)
 
   static void describe(OptionFields<HeidrichOptions>& f) {
     f.add(&HeidrichOptions::mapSize, mapSizeOption());
     f.add(&HeidrichOptions::subdivisions,
-          OptionDecl("subdivisions").range(1, 64).unit("sub-segments").help(
-              "k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); raise it "
-              "where part of the light shows between occluders that hide both end points"));
+          OptionDecl("subdivisions")
+              .range(1, 64)
+              .unit("sub-segments")
+              .help("k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); raise it "
+                    "where part of the light shows between occluders that hide both end points"));
     f.add(&HeidrichOptions::edgeThreshold,
-          OptionDecl("edge_threshold").range(0.01, 1000).unit("texels").help(
-              "smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel at its "
-              "depth"));
+          OptionDecl("edge_threshold")
+              .range(0.01, 1000)
+              .unit("texels")
+              .help("smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel at its "
+                    "depth"));
     f.nest(&HeidrichOptions::bias);
   }
 };
@@ -131,13 +135,13 @@ class HeidrichTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
 
   HeidrichOptions options_;
-  bool prepared_ = false;                //!< the maps below are whole (a failed prepare() clears it)
-  std::vector<LightMap> maps_;           //!< sample point j's shadow map (depth channel)
+  bool prepared_ = false;       //!< the maps below are whole (a failed prepare() clears it)
+  std::vector<LightMap> maps_;  //!< sample point j's shadow map (depth channel)
   std::vector<Image<heidrich::TwoChannelTexel>> visibility_;  //!< 2q + e: map of sub-segment q's end e
-  std::vector<Image<Vec2>> behind_;      //!< 2q + e: the skins behind the surface sub-segment q's end e sees
-  std::vector<Vec3> wsSamples_;          //!< sample point j in world space
-  bool sharedFrame_ = false;      //!< every map has map 0's axes (always, unless the light points at the scene)
-  std::vector<Vec3> lsOffsets_;   //!< map j's origin in map 0's light space
+  std::vector<Image<Vec2>> behind_;  //!< 2q + e: the skins behind the surface sub-segment q's end e sees
+  std::vector<Vec3> wsSamples_;      //!< sample point j in world space
+  bool sharedFrame_ = false;         //!< every map has map 0's axes (always, unless the light points at the scene)
+  std::vector<Vec3> lsOffsets_;      //!< map j's origin in map 0's light space
   // prepare()'s working storage, kept so that a new light or scene costs passes over memory rather
   // than fresh pages (which dominated prepare on machines with costly page faults).
   struct Scratch {

@@ -26,16 +26,17 @@
 namespace penumbra {
 
 struct MultisampleOptions {
-  int mapSize = 1024;   //!< texels per side of each light map
-  int samples = 16;     //!< light samples = shadow maps
-  uint32_t seed = 1;    //!< selects the stratified sample pattern
-  DepthBias bias;       //!< depth-compare bias (shadow_map.h)
+  int mapSize = 1024;  //!< texels per side of each light map
+  int samples = 16;    //!< light samples = shadow maps
+  uint32_t seed = 1;   //!< selects the stratified sample pattern
+  DepthBias bias;      //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<MultisampleOptions>& f) {
     f.add(&MultisampleOptions::mapSize, mapSizeOption());
     f.add(&MultisampleOptions::samples, OptionDecl("samples").range(1, 1024).unit("samples").help(
                                             "light samples, one shadow map each (CMJ-stratified over the emitter)"));
-    f.add(&MultisampleOptions::seed, OptionDecl("seed").range(0, 4294967295.0).help("selects the stratified sample pattern"));
+    f.add(&MultisampleOptions::seed,
+          OptionDecl("seed").range(0, 4294967295.0).help("selects the stratified sample pattern"));
     f.nest(&MultisampleOptions::bias);
   }
 };
@@ -103,7 +104,8 @@ class MultisampleTechnique final : public ShadowTechnique {
       const Vec3& p = gbuffer.wsPosition(x, y);
       const Vec3& n = gbuffer.wsGeometricNormal(x, y);
       float sum = 0.0f;
-      for (size_t k = 0; k < maps_.size(); ++k) sum += weights_[k] * hardShadow(maps_[k], makeReceiver(maps_[k], p, n, options_.bias));
+      for (size_t k = 0; k < maps_.size(); ++k)
+        sum += weights_[k] * hardShadow(maps_[k], makeReceiver(maps_[k], p, n, options_.bias));
       return std::min(sum, 1.0f);  // the normalized weights can sum to 1 + rounding
     });
   }
@@ -118,7 +120,8 @@ TechniqueInfo multisampleTechniqueInfo() {
   info.name = "multisample";
   info.summary = "N hard shadow maps from N stratified light samples, averaged";
   info.source = "baseline (Lawlor 2006's \"16 samples\" row)";
-  info.setOptions<MultisampleOptions>([](const MultisampleOptions& o) { return std::make_unique<MultisampleTechnique>(o); });
+  info.setOptions<MultisampleOptions>(
+      [](const MultisampleOptions& o) { return std::make_unique<MultisampleTechnique>(o); });
   return info;
 }
 

@@ -51,7 +51,8 @@ class PcfTechnique final : public ShadowTechnique {
     if (map_.size == 0) fail("pcf: visibility() called before prepare()");
     const float width = static_cast<float>(options_.kernel);
     forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+      const ShadowReceiver r =
+          makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
       return r.inMap ? pcfBox(map_, r, r.s, r.t, width) : 1.0f;
     });
   }

@@ -69,33 +69,43 @@
 namespace penumbra {
 
 struct PcssOptions {
-  int mapSize = 1024;                //!< texels per side of the light map
-  int blockerSamples = 16;           //!< taps of the blocker search
-  int filterSamples = 32;            //!< taps of the PCF filter
-  std::optional<float> lightSize;    //!< light radius, world units (directional: tan of the half angle); empty = Light::extent() (segment, rect: as the map sees it, file comment)
-  bool rotate = true;                //!< rotate the sample disks per pixel by a hash
-  float bilinearMaxRadius = 4.0f;    //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel)
-  DepthBias bias;                    //!< depth-compare bias (shadow_map.h)
+  int mapSize = 1024;              //!< texels per side of the light map
+  int blockerSamples = 16;         //!< taps of the blocker search
+  int filterSamples = 32;          //!< taps of the PCF filter
+  std::optional<float> lightSize;  //!< light radius, world units (directional: tan of the half angle); empty =
+                                   //!< Light::extent() (segment, rect: as the map sees it, file comment)
+  bool rotate = true;              //!< rotate the sample disks per pixel by a hash
+  float bilinearMaxRadius = 4.0f;  //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel)
+  DepthBias bias;                  //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<PcssOptions>& f) {
     f.add(&PcssOptions::mapSize, mapSizeOption());
-    f.add(&PcssOptions::blockerSamples, OptionDecl("blocker_samples").range(1, 1024).unit("samples").help(
-                                            "taps of the blocker search (Vogel disk)"));
+    f.add(&PcssOptions::blockerSamples,
+          OptionDecl("blocker_samples").range(1, 1024).unit("samples").help("taps of the blocker search (Vogel disk)"));
     f.add(&PcssOptions::filterSamples,
-          OptionDecl("filter_samples").range(1, 1024).unit("samples").help(
-              "taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"));
-    f.add(&PcssOptions::lightSize,
-          OptionDecl("light_size").range(1e-6, 1e6).unit("world units").help(
-              "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its "
-              "half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or "
-              "filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)"));
-    f.add(&PcssOptions::rotate, OptionDecl("rotate").help(
-                                    "rotate the sample disks per pixel by a hash (noise instead of banding); segment and "
-                                    "rect lights keep their orientation"));
+          OptionDecl("filter_samples")
+              .range(1, 1024)
+              .unit("samples")
+              .help("taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"));
+    f.add(
+        &PcssOptions::lightSize,
+        OptionDecl("light_size")
+            .range(1e-6, 1e6)
+            .unit("world units")
+            .help(
+                "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its "
+                "half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or "
+                "filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)"));
+    f.add(
+        &PcssOptions::rotate,
+        OptionDecl("rotate").help("rotate the sample disks per pixel by a hash (noise instead of banding); segment and "
+                                  "rect lights keep their orientation"));
     f.add(&PcssOptions::bilinearMaxRadius,
-          OptionDecl("bilinear_max_radius").range(0, kMaxShadowMapSize).unit("texels").help(
-              "filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "
-              "nearest-texel compare per tap (8192: always bilinear)"));
+          OptionDecl("bilinear_max_radius")
+              .range(0, kMaxShadowMapSize)
+              .unit("texels")
+              .help("filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "
+                    "nearest-texel compare per tap (8192: always bilinear)"));
     f.nest(&PcssOptions::bias);
   }
 };
@@ -178,7 +188,8 @@ class PcssTechnique final : public ShadowTechnique {
       "frac_no_search", "frac_search_only", "frac_filter_bilinear", "frac_filter_nearest", "frac_clamped_to_map"};
 
   float pixelVisibility(const GBuffer& gbuffer, int x, int y, std::array<int64_t, kPathCount + 1>& counts) const {
-    const ShadowReceiver r = makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+    const ShadowReceiver r =
+        makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
     if (!r.inMap || !(r.lsDepth > zMin_)) {
       ++counts[kNoSearch];
       return 1.0f;
@@ -188,10 +199,12 @@ class PcssTechnique final : public ShadowTechnique {
     // In texels: the world radius at the receiver's depth over the texel size there.
     const float searchRadius = searchScale_ * (zr - zMin_) / r.texelWorld;
     // The disks turn per pixel; a segment's line and a rect's pattern keep the light's orientation.
-    const Vec2 rotation = lineDirection_            ? *lineDirection_
+    const Vec2 rotation = lineDirection_                      ? *lineDirection_
                           : !rectPatterns_ && options_.rotate ? rotations_(x, y)
                                                               : Vec2(1.0f, 0.0f);
-    const std::vector<Vec2>& blockerPattern = lineDirection_ ? blockerLine_ : rectPatterns_ ? blockerRect_ : blockerDisk_;
+    const std::vector<Vec2>& blockerPattern = lineDirection_  ? blockerLine_
+                                              : rectPatterns_ ? blockerRect_
+                                                              : blockerDisk_;
     const std::vector<Vec2>& filterPattern = lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
     counts[kClamped] += searchRadius > maxRadius;
     const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerPattern, rotation);
@@ -224,7 +237,8 @@ class PcssTechnique final : public ShadowTechnique {
   static std::vector<Vec2> linePattern(int n) {
     std::vector<Vec2> pattern(static_cast<size_t>(std::max(n, 0)));
     for (int i = 0; i < n; ++i)
-      pattern[static_cast<size_t>(i)] = Vec2((2.0f * static_cast<float>(i) + 1.0f) / static_cast<float>(n) - 1.0f, 0.0f);
+      pattern[static_cast<size_t>(i)] =
+          Vec2((2.0f * static_cast<float>(i) + 1.0f) / static_cast<float>(n) - 1.0f, 0.0f);
     return pattern;
   }
 

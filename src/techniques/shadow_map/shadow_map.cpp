@@ -3,9 +3,9 @@
 
 #include <algorithm>
 #include <array>
-#include <utility>
 #include <bit>
 #include <cmath>
+#include <utility>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -86,7 +86,8 @@ std::vector<Vec2> vogelDisk(int n) {
 }
 
 Vec2 pixelRotation(int x, int y) {
-  const uint32_t h = hashCombine(static_cast<uint64_t>(static_cast<uint32_t>(x)), static_cast<uint64_t>(static_cast<uint32_t>(y)));
+  const uint32_t h =
+      hashCombine(static_cast<uint64_t>(static_cast<uint32_t>(x)), static_cast<uint64_t>(static_cast<uint32_t>(y)));
   const float angle = static_cast<float>(h) * (2.0f * kPi / 4294967296.0f);
   return Vec2(std::cos(angle), std::sin(angle));
 }
@@ -94,9 +95,8 @@ Vec2 pixelRotation(int x, int y) {
 PixelRotations::PixelRotations() : table_(kCount) {
   std::array<std::pair<uint32_t, int>, kCount> cells;
   for (int cell = 0; cell < kCount; ++cell)
-    cells[static_cast<size_t>(cell)] = {hashCombine(static_cast<uint64_t>(cell & (kTile - 1)),
-                                                    static_cast<uint64_t>(cell >> kTileBits)),
-                                         cell};
+    cells[static_cast<size_t>(cell)] = {
+        hashCombine(static_cast<uint64_t>(cell & (kTile - 1)), static_cast<uint64_t>(cell >> kTileBits)), cell};
   std::sort(cells.begin(), cells.end());  // ties (none in practice) broken by the cell: deterministic
   for (int k = 0; k < kCount; ++k) {
     const float angle = static_cast<float>(k) * (2.0f * kPi / static_cast<float>(kCount));
@@ -246,8 +246,8 @@ bool cpuHasAvx512() {
 
 // Taps [0, 16) of p: each tap's compare threshold and its texel's depth (+inf outside the map).
 [[gnu::target("avx512f")]] inline void nearestTaps16(const DepthTexels& map, const ShadowReceiver& r,
-                                                      float radiusTexels, const Vec2* p, const Vec2& rotation,
-                                                      bool diskInsideMap, __m512& threshold, __m512& depth) {
+                                                     float radiusTexels, const Vec2* p, const Vec2& rotation,
+                                                     bool diskInsideMap, __m512& threshold, __m512& depth) {
   static_assert(sizeof(Vec2) == 2 * sizeof(float));
   const __m512 lo = _mm512_loadu_ps(&p[0].x), hi = _mm512_loadu_ps(&p[8].x);
   const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);

@@ -64,10 +64,13 @@ struct DepthBias {
 
   static void describe(OptionFields<DepthBias>& f) {
     f.add(&DepthBias::constantTexels,
-          OptionDecl("bias_constant").range(0, 64).unit("texels").help(
-              "constant depth bias, in world sizes of one texel at the receiver's depth"));
-    f.add(&DepthBias::slope, OptionDecl("bias_slope").range(0, 64).help(
-                                 "slope-scaled depth bias: multiplies the receiver's depth change per texel"));
+          OptionDecl("bias_constant")
+              .range(0, 64)
+              .unit("texels")
+              .help("constant depth bias, in world sizes of one texel at the receiver's depth"));
+    f.add(&DepthBias::slope, OptionDecl("bias_slope")
+                                 .range(0, 64)
+                                 .help("slope-scaled depth bias: multiplies the receiver's depth change per texel"));
   }
 };
 
@@ -201,8 +204,8 @@ inline DepthTexels depthTexels(const LightMap& map) {
 }
 
 struct BlockerSearch {
-  int blockers = 0;         //!< samples that found a blocker
-  float meanDepth = 0.0f;   //!< mean light-space depth of those blockers (0 when none)
+  int blockers = 0;        //!< samples that found a blocker
+  float meanDepth = 0.0f;  //!< mean light-space depth of those blockers (0 when none)
 };
 
 // PCSS blocker search: the texels under the disk `pattern` (unit-disk offsets) rotated by

@@ -28,21 +28,27 @@ class ConvexPartsTechnique final : public ShadowTechnique {
       for (const auto& entry : instances_[k]->timings().passes) {
         // A named element, not a structured binding: lambdas capture bindings only from C++20 compilers
         // newer than Debian's clang (make fuzz).
-        auto it = std::find_if(sum.passes.begin(), sum.passes.end(), [&](const auto& p) { return p.first == entry.first; });
-        if (it == sum.passes.end()) sum.add(entry.first, entry.second);
-        else it->second += entry.second;
+        auto it =
+            std::find_if(sum.passes.begin(), sum.passes.end(), [&](const auto& p) { return p.first == entry.first; });
+        if (it == sum.passes.end())
+          sum.add(entry.first, entry.second);
+        else
+          it->second += entry.second;
       }
     return sum;
   }
 
   std::vector<std::pair<std::string, double>> stats() const override {
-    if (prepared_ <= 1) return instances_.empty() ? std::vector<std::pair<std::string, double>>{} : instances_[0]->stats();
+    if (prepared_ <= 1)
+      return instances_.empty() ? std::vector<std::pair<std::string, double>>{} : instances_[0]->stats();
     std::vector<std::pair<std::string, double>> sum;
     for (size_t k = 0; k < prepared_; ++k)
       for (const auto& entry : instances_[k]->stats()) {
         auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& p) { return p.first == entry.first; });
-        if (it == sum.end()) sum.push_back(entry);
-        else it->second += entry.second;
+        if (it == sum.end())
+          sum.push_back(entry);
+        else
+          it->second += entry.second;
       }
     sum.emplace_back("light_parts", static_cast<double>(prepared_));
     return sum;
@@ -71,7 +77,8 @@ class ConvexPartsTechnique final : public ShadowTechnique {
     while (instances_.size() < lights.size()) instances_.push_back(make_());
     const size_t count = lights.size();
     for (size_t k = 0; k < count; ++k) {
-      instances_[k]->setProgressCallback([this, k, count](double f) { reportProgress((static_cast<double>(k) + f) / count); });
+      instances_[k]->setProgressCallback(
+          [this, k, count](double f) { reportProgress((static_cast<double>(k) + f) / count); });
       instances_[k]->prepare(scene, lights[k]);
     }
     prepared_ = count;
@@ -113,7 +120,8 @@ class ConvexPartsTechnique final : public ShadowTechnique {
 
 }  // namespace
 
-std::unique_ptr<ShadowTechnique> overConvexParts(std::string name, std::function<std::unique_ptr<ShadowTechnique>()> make) {
+std::unique_ptr<ShadowTechnique> overConvexParts(std::string name,
+                                                 std::function<std::unique_ptr<ShadowTechnique>()> make) {
   return std::make_unique<ConvexPartsTechnique>(std::move(name), std::move(make));
 }
 

@@ -25,6 +25,7 @@
 namespace penumbra {
 
 // `make` builds one instance of the technique (called once per piece, as needed).
-std::unique_ptr<ShadowTechnique> overConvexParts(std::string name, std::function<std::unique_ptr<ShadowTechnique>()> make);
+std::unique_ptr<ShadowTechnique> overConvexParts(std::string name,
+                                                 std::function<std::unique_ptr<ShadowTechnique>()> make);
 
 }  // namespace penumbra

@@ -81,7 +81,8 @@ std::vector<uint32_t> firstVertexAtSamePosition(const std::vector<Vec3>& positio
   std::sort(sorted.begin(), sorted.end());  // by position, then index: each run starts at its first vertex
   std::vector<uint32_t> first(n);
   for (size_t r = 0; r < n; ++r)
-    first[sorted[r].second] = (r > 0 && sorted[r].first == sorted[r - 1].first) ? first[sorted[r - 1].second] : sorted[r].second;
+    first[sorted[r].second] =
+        (r > 0 && sorted[r].first == sorted[r - 1].first) ? first[sorted[r - 1].second] : sorted[r].second;
   return first;
 }
 
@@ -133,7 +134,8 @@ MeshTopology weldAndDrop(const Mesh& mesh) {
     const Vec3 p0 = m.positions[m.triangles[0].x];
     for (size_t t = 0; t < m.triangles.size() && m.planar; ++t) {
       m.planar = std::abs(glm::dot(m.faceNormals[t], n0)) > 1.0f - 1e-5f;
-      for (int i = 0; i < 3; ++i) m.planar = m.planar && std::abs(glm::dot(m.positions[m.triangles[t][i]] - p0, n0)) <= 1e-5f * scale;
+      for (int i = 0; i < 3; ++i)
+        m.planar = m.planar && std::abs(glm::dot(m.positions[m.triangles[t][i]] - p0, n0)) <= 1e-5f * scale;
     }
   }
   return m;
@@ -263,7 +265,8 @@ MeshTopology occluderTopology(const Mesh& mesh) {
     std::vector<std::pair<uint32_t, uint8_t>> at;  // (component, forward after flip) of one edge's half-edges
     for (size_t g = 0; g < groups; ++g) {
       at.clear();
-      for (size_t i = groupStart[g]; i < groupStart[g + 1]; ++i) at.push_back({component[half[i].t], forwardAfterFlip(half[i])});
+      for (size_t i = groupStart[g]; i < groupStart[g + 1]; ++i)
+        at.push_back({component[half[i].t], forwardAfterFlip(half[i])});
       std::sort(at.begin(), at.end());
       for (size_t i = 0; i < at.size();) {
         size_t j = i;
@@ -347,8 +350,10 @@ MeshTopology occluderTopology(const Mesh& mesh) {
     solidAt.clear();
     for (size_t h = groupStart[g]; h < groupStart[g + 1]; ++h) {
       const HalfEdge& e = half[h];
-      if (solid[component[e.t]]) solidAt.push_back({component[e.t], h});
-      else shell.push_back({0.0, e.t, e.k, e.forward});
+      if (solid[component[e.t]])
+        solidAt.push_back({component[e.t], h});
+      else
+        shell.push_back({0.0, e.t, e.k, e.forward});
     }
     // Solids: each component's two half-edges here, which run opposite ways (step 3).
     std::sort(solidAt.begin(), solidAt.end());
@@ -376,8 +381,9 @@ MeshTopology occluderTopology(const Mesh& mesh) {
         const double angle = std::atan2(glm::dot(r, e2), glm::dot(r, e1));
         shell[s].angle = std::isfinite(angle) ? angle : 0.0;
       }
-      std::sort(shell.begin(), shell.end(),
-                [](const ShellSide& x, const ShellSide& y) { return std::tie(x.angle, x.i, x.k) < std::tie(y.angle, y.i, y.k); });
+      std::sort(shell.begin(), shell.end(), [](const ShellSide& x, const ShellSide& y) {
+        return std::tie(x.angle, x.i, x.k) < std::tie(y.angle, y.i, y.k);
+      });
     }
     // The sector from shell[s] to shell[s + 1] (increasing angle, turning about u -> v) is faced by
     // the side of shell[s] that runs u -> v and the side of shell[s + 1] that runs v -> u. A
@@ -435,9 +441,11 @@ std::vector<std::vector<SilhouetteEdge>> silhouetteRings(const MeshTopology& top
       uint32_t& c = cursor[v];
       while (c < start[v + 1] && used[out[c]]) ++c;
       if (c == start[v + 1])
-        fail("silhouette: the boundary does not close at vertex {} ({:.4g}, {:.4g}, {:.4g}): the topology is not a closed "
-             "oriented surface (build it with occluderTopology)", v,
-             topology.positions[v].x, topology.positions[v].y, topology.positions[v].z);
+        fail(
+            "silhouette: the boundary does not close at vertex {} ({:.4g}, {:.4g}, {:.4g}): the topology is not a "
+            "closed "
+            "oriented surface (build it with occluderTopology)",
+            v, topology.positions[v].x, topology.positions[v].y, topology.positions[v].z);
       current = out[c];
     }
     rings.push_back(std::move(ring));

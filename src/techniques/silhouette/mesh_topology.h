@@ -61,26 +61,26 @@ namespace penumbra {
 inline constexpr uint32_t kNoNeighbour = 0xffffffffu;
 
 struct MeshTopology {
-  std::vector<Vec3> positions;             //!< welded, world space
-  std::vector<glm::uvec3> triangles;       //!< into positions; degenerate ones dropped
+  std::vector<Vec3> positions;        //!< welded, world space
+  std::vector<glm::uvec3> triangles;  //!< into positions; degenerate ones dropped
   //! neighbours[t][k]: the triangle across edge (triangles[t][k], triangles[t][(k+1)%3]), or kNoNeighbour
   std::vector<std::array<uint32_t, 3>> neighbours;
-  std::vector<Vec3> faceNormals;           //!< unit, from the winding
-  size_t droppedDegenerate = 0;            //!< degenerate triangles of the input that were dropped
-  size_t droppedDuplicates = 0;            //!< occluderTopology: triangles repeating another's corners
+  std::vector<Vec3> faceNormals;  //!< unit, from the winding
+  size_t droppedDegenerate = 0;   //!< degenerate triangles of the input that were dropped
+  size_t droppedDuplicates = 0;   //!< occluderTopology: triangles repeating another's corners
   // The surface's defects (buildMeshTopology: of the mesh as given; occluderTopology: after
   // dropping duplicates, before repair).
-  size_t boundaryEdges = 0;                //!< edges with one triangle (holes)
-  size_t nonManifoldEdges = 0;             //!< edges with more than two triangles
-  size_t inconsistentEdges = 0;            //!< edges whose two triangles run the same way along it
-  bool planar = false;                     //!< every triangle lies in one plane
+  size_t boundaryEdges = 0;      //!< edges with one triangle (holes)
+  size_t nonManifoldEdges = 0;   //!< edges with more than two triangles
+  size_t inconsistentEdges = 0;  //!< edges whose two triangles run the same way along it
+  bool planar = false;           //!< every triangle lies in one plane
   // occluderTopology only:
-  size_t surfaceTriangles = 0;             //!< triangles [0, surfaceTriangles): the surface, each once
-  std::vector<uint32_t> copyOf;            //!< triangle surfaceTriangles + i is the reverse of copyOf[i] (shells)
-  size_t flippedTriangles = 0;             //!< surface triangles wound against the input (repaired, or a solid turned outwards)
-  size_t solidComponents = 0;              //!< closed components used once
-  size_t shellComponents = 0;              //!< components doubled into shells
-  bool twoSidedSheet = false;              //!< planar and all shell: cannot shadow itself
+  size_t surfaceTriangles = 0;   //!< triangles [0, surfaceTriangles): the surface, each once
+  std::vector<uint32_t> copyOf;  //!< triangle surfaceTriangles + i is the reverse of copyOf[i] (shells)
+  size_t flippedTriangles = 0;   //!< surface triangles wound against the input (repaired, or a solid turned outwards)
+  size_t solidComponents = 0;    //!< closed components used once
+  size_t shellComponents = 0;    //!< components doubled into shells
+  bool twoSidedSheet = false;    //!< planar and all shell: cannot shadow itself
 
   size_t vertexCount() const { return positions.size(); }
   size_t triangleCount() const { return triangles.size(); }

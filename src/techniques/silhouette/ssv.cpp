@@ -140,19 +140,26 @@ struct SsvOptions {
 
   static void describe(OptionFields<SsvOptions>& f) {
     f.add(&SsvOptions::integration,
-          OptionDecl("integration").help("visible fraction from the visibility curves: slicing (variable "
-                                         "quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)"),
+          OptionDecl("integration")
+              .help("visible fraction from the visibility curves: slicing (variable "
+                    "quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)"),
           {{"slicing", Integration::Slicing}, {"8x8", Integration::Fixed8}, {"16x16", Integration::Fixed16}});
     f.add(&SsvOptions::mergeTolerance,
-          OptionDecl("merge_tolerance").range(0, 0.25).unit("fraction of the light's side").help(
-              "slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)"));
-    f.add(&SsvOptions::grid, OptionDecl("grid").range(1, 1024).unit("cells per side").help(
-                                 "resolution of the light-space (direction from the light's centre) grid that bins the "
-                                 "edge shadows"));
+          OptionDecl("merge_tolerance")
+              .range(0, 0.25)
+              .unit("fraction of the light's side")
+              .help("slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)"));
+    f.add(&SsvOptions::grid,
+          OptionDecl("grid")
+              .range(1, 1024)
+              .unit("cells per side")
+              .help("resolution of the light-space (direction from the light's centre) grid that bins the "
+                    "edge shadows"));
     f.add(&SsvOptions::areaEdgeVisibility,
-          OptionDecl("edge_visibility").help("visible fraction past one edge shadow: linear between its front and "
-                                             "back planes (the thesis, Section 3.3) or the exact area of the light "
-                                             "past the edge's line"),
+          OptionDecl("edge_visibility")
+              .help("visible fraction past one edge shadow: linear between its front and "
+                    "back planes (the thesis, Section 3.3) or the exact area of the light "
+                    "past the edge's line"),
           {{"linear", false}, {"area", true}});
   }
 };
@@ -161,11 +168,11 @@ constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping 
 
 // One silhouette edge and the fixed part of its edge shadow (light space).
 struct Edge {
-  Vec3 a, b;             //!< endpoints, light space (b is the next edge's a)
-  Vec2 uA, uB;           //!< directions from the light's centre
-  uint8_t axis = 0;      //!< quantized direction (3.2.3.1): the light-square axis (0: x, 1: y) nearest to its normal
-  bool degenerate = false;   //!< seen end-on from the centre: no direction of its own
-  bool inFront = true;       //!< some part lies in front of the light's plane
+  Vec3 a, b;                //!< endpoints, light space (b is the next edge's a)
+  Vec2 uA, uB;              //!< directions from the light's centre
+  uint8_t axis = 0;         //!< quantized direction (3.2.3.1): the light-square axis (0: x, 1: y) nearest to its normal
+  bool degenerate = false;  //!< seen end-on from the centre: no direction of its own
+  bool inFront = true;      //!< some part lies in front of the light's plane
   uint32_t ring = 0;
 };
 
@@ -176,7 +183,8 @@ struct Ring {
   bool crossesLightPlane = false;  //!< some vertex is not in front of the light
   int32_t objectId = 0;
   uint32_t group = 0;  //!< index into Side::groups
-  Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring (its hard shadow from the centre lies inside)
+  Vec2 uLower{kInfinity},
+      uUpper{-kInfinity};  //!< u-space box of the ring (its hard shadow from the centre lies inside)
   float zMin = kInfinity, zMax = 0.0f;
 };
 
@@ -396,8 +404,8 @@ class SsvTechnique final : public ShadowTechnique {
     if (anyStraddled) addRings(side, o, ls, silhouetteRings(m, boundaryEdges(m, straddled)), true, true);
   }
 
-  void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls, const std::vector<std::vector<SilhouetteEdge>>& rings,
-                bool umbra, bool straddled = false) const {
+  void addRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls,
+                const std::vector<std::vector<SilhouetteEdge>>& rings, bool umbra, bool straddled = false) const {
     auto uOf = [&](const Vec3& p) {
       const float z = std::max(p.z, zNear_);
       return Vec2(p.x / z, p.y / z);
@@ -492,13 +500,15 @@ class SsvTechnique final : public ShadowTechnique {
     for (int k = 0; k < 2; ++k) {
       for (const float bound : {0.0f, 1.0f}) {
         const float num = bound == 0.0f ? a[k] : 1.0f - a[k];  // distance inside this side
-        const float den = bound == 0.0f ? -d[k] : d[k];         // rate of leaving through it
+        const float den = bound == 0.0f ? -d[k] : d[k];        // rate of leaving through it
         if (den == 0.0f) {
           if (num < 0.0f) return false;
         } else {
           const float t = num / den;
-          if (den > 0.0f) t1 = std::min(t1, t);
-          else t0 = std::max(t0, t);
+          if (den > 0.0f)
+            t1 = std::min(t1, t);
+          else
+            t0 = std::max(t0, t);
         }
       }
     }
@@ -771,7 +781,8 @@ class SsvTechnique final : public ShadowTechnique {
     const size_t c = s.curve.size();
     for (size_t i = 0; i < c; ++i) {
       const Vec2 &u = s.curve[i], &v = s.curve[(i + 1) % c];
-      if (u.y == v.y || std::max(u.x, v.x) <= 0.0f || std::max(u.y, v.y) <= 0.0f || std::min(u.y, v.y) >= 1.0f) continue;
+      if (u.y == v.y || std::max(u.x, v.x) <= 0.0f || std::max(u.y, v.y) <= 0.0f || std::min(u.y, v.y) >= 1.0f)
+        continue;
       s.pieces.push_back({u, v, r.group});
     }
     return centreWinding;
@@ -840,8 +851,10 @@ class SsvTechnique final : public ShadowTechnique {
           lo = 1;
           while (lo < hi) {
             const size_t mid = (lo + hi) / 2;
-            if (crossing(piece.a, piece.b, Vec2(s.cx[mid], y)) != 0) lo = mid + 1;
-            else hi = mid;
+            if (crossing(piece.a, piece.b, Vec2(s.cx[mid], y)) != 0)
+              lo = mid + 1;
+            else
+              hi = mid;
           }
           s.events.push_back({static_cast<uint32_t>(lo), piece.a.y <= y ? 1 : -1});
         }
@@ -930,8 +943,10 @@ class SsvTechnique final : public ShadowTechnique {
           if (cuts[i] - cuts[n - 1] > tolerance) cuts[n++] = cuts[i];
         cuts.resize(n);
         if (cuts.back() < 1.0f) {
-          if (n > 1 && 1.0f - cuts.back() <= tolerance) cuts.back() = 1.0f;
-          else cuts.push_back(1.0f);
+          if (n > 1 && 1.0f - cuts.back() <= tolerance)
+            cuts.back() = 1.0f;
+          else
+            cuts.push_back(1.0f);
         }
       };
       merge(s.xs);
@@ -963,7 +978,8 @@ class SsvTechnique final : public ShadowTechnique {
   // visibility past one infinite edge), by clipping the polygon: O(L).
   static float visibleBeyondLine(const LightPlane& plane, const Vec2& m, float offset) {
     std::array<Vec2, kMaxLightVertices + 2> clipped;
-    const int n = clipHalfPlane(plane.vertices.data(), static_cast<int>(plane.vertices.size()), clipped.data(), m, offset);
+    const int n =
+        clipHalfPlane(plane.vertices.data(), static_cast<int>(plane.vertices.size()), clipped.data(), m, offset);
     float twice = 0.0f;
     for (int i = 0; i < n; ++i) {
       const Vec2 &a = clipped[i], &b = clipped[(i + 1) % n];
@@ -989,7 +1005,9 @@ class SsvTechnique final : public ShadowTechnique {
 TechniqueInfo ssvTechniqueInfo() {
   TechniqueInfo info;
   info.name = "ssv";
-  info.summary = "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its fewest convex parts)";
+  info.summary =
+      "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its "
+      "fewest convex parts)";
   info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
   info.setOptions<SsvOptions>([](const SsvOptions& o) {
     // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).

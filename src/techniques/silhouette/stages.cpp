@@ -14,10 +14,13 @@ namespace silhouette {
 
 LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back) {
   if (light.shape() != LightShape::Rect && light.shape() != LightShape::Polygon)
-    fail("{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, hexagon, ...)",
-         technique, toString(light.shape()), technique);
+    fail(
+        "{}: a {} light is not supported; {} needs a planar convex polygonal light: rect or polygon (triangle, quad, "
+        "hexagon, ...)",
+        technique, toString(light.shape()), technique);
   if (!light.convex())
-    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique, technique);
+    fail("{}: the polygon light is concave; {} runs on its convex parts (Light::convexParts), one at a time", technique,
+         technique);
   const std::vector<Vec3>& ws = light.vertices();
   if (ws.size() > static_cast<size_t>(kMaxLightVertices))
     fail("{}: the polygon light has {} vertices; at most {} are supported", technique, ws.size(), kMaxLightVertices);
@@ -128,8 +131,8 @@ void UGrid::build(const Vec2& lower, const Vec2& upper, int resolution, const st
 }
 
 void UGrid::buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
-                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
-                           const std::vector<uint32_t>& keys) {
+                           const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear,
+                           const std::vector<float>& cellFar, const std::vector<uint32_t>& keys) {
   res_ = resolution;
   lower_ = lower;
   scale_ = gridScale(lower, upper, res_);
@@ -212,8 +215,8 @@ bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, 
   return lower.x <= upper.x;
 }
 
-std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
-                                   int resolution) {
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower,
+                                   const Vec2& upper, int resolution) {
   const Vec2 scale = gridScale(lower, upper, resolution);
   std::vector<float> deepest(size_t(resolution) * resolution, 0.0f);
   for (int y = 0; y < gbuffer.height(); ++y)

@@ -24,8 +24,8 @@
 
 #include "penumbra/gbuffer.h"
 #include "penumbra/light.h"
-#include "techniques/silhouette/mesh_topology.h"
 #include "penumbra/scene.h"
+#include "techniques/silhouette/mesh_topology.h"
 
 namespace penumbra {
 class RayScene;
@@ -37,11 +37,11 @@ inline constexpr int kMaxLightVertices = 32;
 
 struct LightPlane {
   Vec3 wsOrigin{0.0f};
-  Frame lsFrame;                  //!< axes of light space in world space
-  std::vector<Vec2> vertices;    //!< the polygon in light space (z = 0), counter-clockwise in (x, y)
+  Frame lsFrame;               //!< axes of light space in world space
+  std::vector<Vec2> vertices;  //!< the polygon in light space (z = 0), counter-clockwise in (x, y)
   float area = 0.0f;
-  float extent = 0.0f;           //!< R: the largest distance of a vertex from the centre
-  Vec2 lower{0.0f}, upper{0.0f}; //!< bounding rectangle in (x, y)
+  float extent = 0.0f;            //!< R: the largest distance of a vertex from the centre
+  Vec2 lower{0.0f}, upper{0.0f};  //!< bounding rectangle in (x, y)
 
   Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // min / max of dot(v, dir) over the light's vertices.
@@ -60,13 +60,14 @@ struct LightPlane {
 // so does a concave polygon (the techniques get its convex parts: convex_parts.h).
 // Planar lights emit from both faces: `back` gives the light space of the other face (z reversed),
 // for receivers behind the light's plane.
-LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique, bool back = false);
+LightPlane makeLightPlane(const Light& light, const Bounds3& sceneBounds, std::string_view technique,
+                          bool back = false);
 
 struct Occluder {
   int32_t objectId = 0;
   std::string name;
-  MeshTopology topology;          //!< world space
-  bool sheet = false;             //!< a two-sided planar sheet (cannot shadow itself)
+  MeshTopology topology;  //!< world space
+  bool sheet = false;     //!< a two-sided planar sheet (cannot shadow itself)
 };
 
 // An occluder's vertex positions and face normals in the light space of one face of the light.
@@ -118,8 +119,8 @@ class UGrid {
   // for a cell without receivers. Items with equal consecutive `keys` are listed once per cell, as
   // their key (empty keys: the item's index).
   void buildInfluence(const Vec2& lower, const Vec2& upper, int resolution, const std::vector<Vec2>& itemLower,
-                      const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear, const std::vector<float>& cellFar,
-                      const std::vector<uint32_t>& keys);
+                      const std::vector<Vec2>& itemUpper, const std::vector<float>& itemNear,
+                      const std::vector<float>& cellFar, const std::vector<uint32_t>& keys);
   // The items of the cell holding u ([begin, end) into items()); empty outside the grid.
   std::pair<const uint32_t*, const uint32_t*> cell(const Vec2& u) const;
   // The cell holding u, or -1 outside the grid.
@@ -139,8 +140,8 @@ bool anyReceiverBehind(const GBuffer& gbuffer, const LightPlane& plane);
 bool receiverRange(const GBuffer& gbuffer, const LightPlane& plane, float zMin, Vec2& lower, Vec2& upper);
 // cellFar of UGrid::buildInfluence for a grid of `resolution` cells over [lower, upper]: R / the
 // deepest receiver (z > zMin) in each cell, +infinity where there is none.
-std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower, const Vec2& upper,
-                                   int resolution);
+std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& plane, float zMin, const Vec2& lower,
+                                   const Vec2& upper, int resolution);
 
 // The object that hides the light's centre from G-buffer pixel (x, y) (kNoObject: none): one ray,
 // offset and clipped as raytraced-hard's. ssv and wedges trace it only where their silhouettes

@@ -25,10 +25,10 @@
 // be). The facets of a shell that face the centre are its front sides in one place and its back
 // sides in another (a sphere with a hole, wound outwards: the outside of its upper half, the
 // inside of its lower half), and where the shell encloses space (that sphere, an open box) both
-// layers cover the same part of the light: added, the coverage would count that part twice. So the silhouette is taken per layer, the solids', the shells' front sides' and their
-// back sides', and an object's coverage is its solids' plus the larger of its two shell layers'.
-// Two layers of one object that cover different parts of the light from p (two separate open
-// pieces, one seen from each side) are then counted as the larger one only.
+// layers cover the same part of the light: added, the coverage would count that part twice. So the silhouette is taken
+// per layer, the solids', the shells' front sides' and their back sides', and an object's coverage is its solids' plus
+// the larger of its two shell layers'. Two layers of one object that cover different parts of the light from p (two
+// separate open pieces, one seen from each side) are then counted as the larger one only.
 //
 // Other choices: each ring is clipped as a closed polygon to z < z_p (1 - 1e-4) (only occluder parts
 // nearer to the light than p can occlude it) and to the light's plane. Where the ring passes beyond
@@ -100,7 +100,7 @@ struct WedgeRing {
   uint8_t layer = 0;      //!< 0: solids; shells: 1 the front sides, 2 the back sides
   bool sheet = false;
   Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
-  float zMin = kInfinity;                        //!< its smallest depth there
+  float zMin = kInfinity;                      //!< its smallest depth there
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
@@ -116,9 +116,12 @@ struct WedgesOptions {
   int grid = 64;  //!< cells per side of the light-space binning grid
 
   static void describe(OptionFields<WedgesOptions>& f) {
-    f.add(&WedgesOptions::grid, OptionDecl("grid").range(1, 1024).unit("cells per side").help(
-                                    "resolution of the light-space (direction from the light's centre) grid that bins "
-                                    "the silhouette rings"));
+    f.add(&WedgesOptions::grid,
+          OptionDecl("grid")
+              .range(1, 1024)
+              .unit("cells per side")
+              .help("resolution of the light-space (direction from the light's centre) grid that bins "
+                    "the silhouette rings"));
   }
 };
 
@@ -168,7 +171,8 @@ class WedgesTechnique final : public ShadowTechnique {
         near.push_back(side.plane.extent / r.zMin);
       }
       // A ring's region of influence: its hard shadow (its box) and its edges' penumbrae (stages.h).
-      side.grid.buildInfluence(lower, upper, grid_, lo, hi, near, receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, grid_), {});
+      side.grid.buildInfluence(lower, upper, grid_, lo, hi, near,
+                               receiverCellFar(gbuffer, side.plane, zNear_, lower, upper, grid_), {});
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       std::vector<Vec3> clipped, tmp;
@@ -204,7 +208,8 @@ class WedgesTechnique final : public ShadowTechnique {
       const MeshTopology& m = o.topology;
       // Facets facing the light's centre (the origin of light space): the single silhouette.
       std::vector<uint8_t> facing(m.triangles.size());
-      for (size_t t = 0; t < m.triangles.size(); ++t) facing[t] = glm::dot(ls.normals[t], -ls.positions[m.triangles[t].x]) > 0.0f;
+      for (size_t t = 0; t < m.triangles.size(); ++t)
+        facing[t] = glm::dot(ls.normals[t], -ls.positions[m.triangles[t].x]) > 0.0f;
       std::vector<uint8_t> shell(m.triangles.size(), 0);
       for (size_t i = 0; i < m.copyOf.size(); ++i) shell[m.copyOf[i]] = shell[m.surfaceTriangles + i] = 1;
       for (uint8_t layer = 0; layer < 3; ++layer) {
@@ -241,8 +246,8 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
   template <typename Blocker>
-  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped, std::vector<Vec3>& tmp,
-                     Blocker& blocker) const {
+  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped,
+                     std::vector<Vec3>& tmp, Blocker& blocker) const {
     if (!side.binned || !(p.z > zNear_)) return 1.0f;
     const auto [begin, end] = side.grid.cell(Vec2(p.x / p.z, p.y / p.z));
     const float zMax = p.z * (1.0f - 1e-4f);
@@ -290,8 +295,10 @@ class WedgesTechnique final : public ShadowTechnique {
         const Vec2 b = i + 1 < n ? projectFrom(p, clipped[i + 1]) : first;
         // Rings run counter-clockwise seen from the centre, clockwise in (x, y): negate.
         covered -= clippedFanArea(side.plane.vertices, a, b);
-        if (a.y <= 0.0f) winding += (b.y > 0.0f && a.x * b.y - a.y * b.x > 0.0f) ? 1 : 0;
-        else winding -= (b.y <= 0.0f && a.x * b.y - a.y * b.x < 0.0f) ? 1 : 0;
+        if (a.y <= 0.0f)
+          winding += (b.y > 0.0f && a.x * b.y - a.y * b.x > 0.0f) ? 1 : 0;
+        else
+          winding -= (b.y <= 0.0f && a.x * b.y - a.y * b.x < 0.0f) ? 1 : 0;
         a = b;
       }
       // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
@@ -323,7 +330,9 @@ class WedgesTechnique final : public ShadowTechnique {
 TechniqueInfo wedgesTechniqueInfo() {
   TechniqueInfo info;
   info.name = "wedges";
-  info.summary = "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a concave polygonal light in its fewest convex parts)";
+  info.summary =
+      "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a "
+      "concave polygonal light in its fewest convex parts)";
   info.source = "baseline in Rouf 2007 (Assarsson & Akenine-Moeller 2003)";
   info.setOptions<WedgesOptions>([](const WedgesOptions& o) {
     // A concave light runs as its convex parts, V combined by area (convex_parts.h).

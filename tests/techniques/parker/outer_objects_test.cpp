@@ -19,8 +19,8 @@
 #include "penumbra/error.h"
 #include "penumbra/primitives.h"
 #include "penumbra/sampling.h"
-#include "techniques/parker/outer_objects.h"
 #include "rt/rt_test_scenes.h"
+#include "techniques/parker/outer_objects.h"
 
 namespace penumbra {
 namespace {
@@ -102,11 +102,14 @@ double oracleS(const OracleScene& o, const glm::dvec3& origin, const glm::dvec3&
                rt::OuterCombine combine) {
   std::vector<double> objectTau(static_cast<size_t>(o.objects), INFINITY);
   for (const Capsule& c : o.capsules)
-    objectTau[static_cast<size_t>(c.object)] = std::min(objectTau[static_cast<size_t>(c.object)], oracleTau(c, origin, v, toLight, bScale));
+    objectTau[static_cast<size_t>(c.object)] =
+        std::min(objectTau[static_cast<size_t>(c.object)], oracleTau(c, origin, v, toLight, bScale));
   double s = 1.0;
   for (double tau : objectTau) {
     const double si = tau <= 0.0 ? 0.0 : oracleFalloff(tau);
-    s = combine == rt::OuterCombine::Min ? std::min(s, si) : combine == rt::OuterCombine::Product ? s * si : s - (1.0 - si);
+    s = combine == rt::OuterCombine::Min       ? std::min(s, si)
+        : combine == rt::OuterCombine::Product ? s * si
+                                               : s - (1.0 - si);
   }
   return std::max(0.0, s);
 }
@@ -135,7 +138,8 @@ std::vector<float> attenuations(const rt::OuterObjects& outer, const TestRays& t
   std::vector<float> s(t.rays.size());
   for (size_t i = 0; i < t.rays.size(); i += 16) {
     const int count = static_cast<int>(std::min<size_t>(16, t.rays.size() - i));
-    outer.attenuations(t.rays.data() + i, t.toLight.data() + i, count, rt::OuterFalloff::Bernstein, combine, s.data() + i, seeds);
+    outer.attenuations(t.rays.data() + i, t.toLight.data() + i, count, rt::OuterFalloff::Bernstein, combine,
+                       s.data() + i, seeds);
   }
   return s;
 }
@@ -172,7 +176,9 @@ void expectOracle(const Light& light, float diameter, double bScaleTimesDistance
     EXPECT_LT(worst, 1e-5);
     // One ray at a time, the same bits.
     for (size_t i = 0; i < s.size(); i += 7)
-      EXPECT_EQ(outer.attenuation(t.rays[i].origin, t.rays[i].direction, t.toLight[i], rt::OuterFalloff::Bernstein, combine), s[i]);
+      EXPECT_EQ(
+          outer.attenuation(t.rays[i].origin, t.rays[i].direction, t.toLight[i], rt::OuterFalloff::Bernstein, combine),
+          s[i]);
     // Coherent groups: the rays sorted along x then z, so that each group of 16 covers a small
     // patch of the ground, as parker's 4 x 4 pixel tiles do; the same bits.
     std::vector<size_t> order(t.rays.size());
@@ -288,9 +294,9 @@ TEST(OuterObjects, SilhouettesAreMatchedByPosition) {
     for (const glm::uvec3& t : second.triangles) pair.triangles.push_back(t + glm::uvec3(base));
   }
   const std::pair<const char*, Mesh> meshes[] = {{"split box", makeBox(Vec3(1.0f, 0.4f, 0.6f))},
-                                                  {"shared box", shared},
-                                                  {"sphere", makeSphere(0.6f, 24, 12)},
-                                                  {"touching boxes", pair}};
+                                                 {"shared box", shared},
+                                                 {"sphere", makeSphere(0.6f, 24, 12)},
+                                                 {"touching boxes", pair}};
   const TestRays t = groundRays(light, 1500);
   for (const auto& [label, base] : meshes) {
     SCOPED_TRACE(label);
@@ -350,9 +356,10 @@ TEST(OuterObjects, AnySpacingKeepsTheHierarchyShallow) {
   const std::vector<float> s = attenuations(outer, t, rt::OuterCombine::Min);
   double worst = 0.0;
   for (size_t i = 0; i < s.size(); ++i)
-    worst = std::max(worst, std::abs(static_cast<double>(s[i]) - oracleS(o, glm::dvec3(t.rays[i].origin), glm::dvec3(t.rays[i].direction),
-                                                                       t.toLight[i], 1.6 / static_cast<double>(t.toLight[i]),
-                                                                       rt::OuterCombine::Min)));
+    worst =
+        std::max(worst, std::abs(static_cast<double>(s[i]) -
+                                 oracleS(o, glm::dvec3(t.rays[i].origin), glm::dvec3(t.rays[i].direction), t.toLight[i],
+                                         1.6 / static_cast<double>(t.toLight[i]), rt::OuterCombine::Min)));
   EXPECT_LT(worst, 1e-5);
 }
 
@@ -361,7 +368,8 @@ TEST(OuterObjects, AnySpacingKeepsTheHierarchyShallow) {
 // changed is matched again.
 TEST(OuterObjects, EdgeCacheMatchesAMeshOnlyWhenItChanged) {
   OracleScene o = makeOracleScene();
-  const Light first = Light::sphere(Vec3(0.5f, 7.0f, -0.3f), 0.8f), second = Light::sphere(Vec3(-1.0f, 5.0f, 1.0f), 0.6f);
+  const Light first = Light::sphere(Vec3(0.5f, 7.0f, -0.3f), 0.8f),
+              second = Light::sphere(Vec3(-1.0f, 5.0f, 1.0f), 0.6f);
   rt::OuterObjectOptions options;
   options.lightDiameter = 1.6f;
   options.analyticSpheres = false;  // every object a mesh

@@ -1,9 +1,9 @@
-// Tests of `parker` (src/techniques/parker/parker.cpp, src/techniques/parker/outer_objects.cpp): Parker, Shirley and Smits
-// 1998, "Single Sample Soft Shadows". Checked against the Appendix's formulas evaluated here by
-// hand (spheres in closed form, triangle edges by brute-force sampling), against the paper's stated
-// properties (penumbra width zero at contact and growing with the distance from the occluder, no
-// light leak between touching objects, min / product / sum combination over every grazed object),
-// against raytraced-hard (the inner objects give its hard shadow) and against the reference.
+// Tests of `parker` (src/techniques/parker/parker.cpp, src/techniques/parker/outer_objects.cpp): Parker, Shirley and
+// Smits 1998, "Single Sample Soft Shadows". Checked against the Appendix's formulas evaluated here by hand (spheres in
+// closed form, triangle edges by brute-force sampling), against the paper's stated properties (penumbra width zero at
+// contact and growing with the distance from the occluder, no light leak between touching objects, min / product / sum
+// combination over every grazed object), against raytraced-hard (the inner objects give its hard shadow) and against
+// the reference.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -383,10 +383,10 @@ TEST(Parker, PenumbraWidthIsZeroAtContactAndGrowsLinearly) {
     widths.push_back(c.width());
   }
   // Measured widths 0.0095, 0.0382, 0.0767, 0.1543 world units: proportional to r.
-  EXPECT_LT(widths[0], 0.1f * widths[3]);               // zero at the foot: measured 0.062
-  EXPECT_NEAR(widths[2] / widths[1], 2.0f, 0.2f);       // linear: measured 2.007
-  EXPECT_NEAR(widths[3] / widths[2], 2.0f, 0.2f);       // measured 2.012
-  EXPECT_NEAR(widths[0] / widths[1], 0.25f, 0.05f);     // measured 0.250
+  EXPECT_LT(widths[0], 0.1f * widths[3]);            // zero at the foot: measured 0.062
+  EXPECT_NEAR(widths[2] / widths[1], 2.0f, 0.2f);    // linear: measured 2.007
+  EXPECT_NEAR(widths[3] / widths[2], 2.0f, 0.2f);    // measured 2.012
+  EXPECT_NEAR(widths[0] / widths[1], 0.25f, 0.05f);  // measured 0.250
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -424,8 +424,7 @@ struct SceneErrors {
 };
 SceneErrors sceneErrors(const std::string& name, const std::vector<std::string>& keyValues = {}) {
   const ::penumbra::testing::ShadowTestScene& s = shadowTestScene(name);
-  return {errorAgainstReference(runTechnique("parker", s, keyValues), s),
-          errorAgainstReference(s.hardTruth, s)};
+  return {errorAgainstReference(runTechnique("parker", s, keyValues), s), errorAgainstReference(s.hardTruth, s)};
 }
 
 // The paper's penumbra lies wholly outside the hard shadow (the inner object is the object itself)
@@ -474,10 +473,10 @@ TEST(Parker, AnalyticAndTessellatedSpheresAgree) {
 // profile.
 struct ProfileErrors {
   double parker = 0.0, none = 0.0, hard = 0.0;  //!< RMSE8 against the reference
-  int hardShadow = 0;        //!< points in the hard shadow (raytraced-hard 0)
-  int parkerUmbraLeaks = 0;  //!< of those, points where parker is not 0
+  int hardShadow = 0;                           //!< points in the hard shadow (raytraced-hard 0)
+  int parkerUmbraLeaks = 0;                     //!< of those, points where parker is not 0
   float minTruthInHardShadow = 1.0f;
-  int darker = 0;            //!< points where parker is below the truth by more than 0.02
+  int darker = 0;  //!< points where parker is below the truth by more than 0.02
   int points = 0;
 };
 ProfileErrors profileErrors(const Scene& scene, const Light& light, const GBuffer& g) {
@@ -539,7 +538,8 @@ TEST(Parker, TeapotsUnderTheirWideLightAreTooDarkByDesign) {
   if (!std::filesystem::exists("/usr/share/assimp/models/Collada/teapots.DAE"))
     GTEST_SKIP() << "Debian's assimp-testmodels is not installed";
   const Scene scene = loadScene("teapots");
-  const ProfileErrors e = profileErrors(scene, scene.lights.at(0), groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.1f), Vec3(2.0f, 0.0f, 0.1f), 201));
+  const ProfileErrors e =
+      profileErrors(scene, scene.lights.at(0), groundLineGBuffer(Vec3(-2.0f, 0.0f, 0.1f), Vec3(2.0f, 0.0f, 0.1f), 201));
   // Measured: the hard shadow covers 13 points, where the truth is at least 0.771 (the teapots
   // hide under a quarter of the light); parker is 0 there and darker than the truth at all 201
   // points. RMSE8 parker 168.2, no shadow 26.9, raytraced-hard 55.1 (over the whole 256 x 256
@@ -574,7 +574,8 @@ TEST(Parker, SupportsEveryLightShapeButTheSegment) {
     for (float x : v) penumbra += x > 0.0f && x < 1.0f;
     EXPECT_GT(penumbra, 2);
   }
-  const Scene scene = makeScene({groundObject(), sphereObject(1, c, 0.4f)}, Light::segment(Vec3(-1, 5, 0), Vec3(1, 5, 0)));
+  const Scene scene =
+      makeScene({groundObject(), sphereObject(1, c, 0.4f)}, Light::segment(Vec3(-1, 5, 0), Vec3(1, 5, 0)));
   auto t = createTechnique("parker");
   try {
     t->prepare(scene, scene.lights[0]);
@@ -665,8 +666,10 @@ TEST(Parker, SceneFilesKeepTrueSpheres) {
   // Every vertex of the tessellation lies on the true sphere.
   for (const Vec3& p : kept.objects[0].mesh.positions) EXPECT_NEAR(glm::length(p - Vec3(1, 2, 3)), 1.0f, 1e-5f);
   // Uneven scale makes an ellipsoid: only a mesh.
-  EXPECT_FALSE(load(R"({"name": "e", "primitive": {"type": "sphere", "radius": 0.5}, "transform": {"scale": [1, 2, 1]}})")
-                   .objects[0].sphere.has_value());
+  EXPECT_FALSE(
+      load(R"({"name": "e", "primitive": {"type": "sphere", "radius": 0.5}, "transform": {"scale": [1, 2, 1]}})")
+          .objects[0]
+          .sphere.has_value());
   EXPECT_FALSE(load(R"({"name": "b", "primitive": {"type": "box", "size": 1}})").objects[0].sphere.has_value());
   // The writer keeps it.
   const Scene back = parseScene(sceneToJson(kept), "x.json");
@@ -679,7 +682,8 @@ TEST(Parker, SceneFilesKeepTrueSpheres) {
   EXPECT_EQ(count, 5);
   // analytic_sphere is the writer's, beside an inline mesh in world space.
   try {
-    load(R"({"name": "s", "primitive": {"type": "box", "size": 1}, "analytic_sphere": {"center": [0, 0, 0], "radius": 1}})");
+    load(
+        R"({"name": "s", "primitive": {"type": "box", "size": 1}, "analytic_sphere": {"center": [0, 0, 0], "radius": 1}})");
     FAIL() << "analytic_sphere without inline geometry must be rejected";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("x.json: objects[0].analytic_sphere"), std::string::npos) << e.what();
@@ -688,4 +692,3 @@ TEST(Parker, SceneFilesKeepTrueSpheres) {
 
 }  // namespace
 }  // namespace penumbra
-

@@ -55,12 +55,14 @@ Scene meshScene(const std::string& mesh, const std::string& transform, const std
   if (it == parsed.end()) {
     const std::filesystem::path path = kTestModels / mesh;
     if (!std::filesystem::exists(path))
-      throw Error(path.string() + " is missing: install Debian's test models with `sudo apt-get install assimp-testmodels`");
+      throw Error(path.string() +
+                  " is missing: install Debian's test models with `sudo apt-get install assimp-testmodels`");
     std::string lights;
     for (const char* l : kLights) lights += std::string(lights.empty() ? "" : ", ") + l;
     const std::string text = R"({"camera": )" + camera + R"(, "lights": [)" + lights +
                              R"(], "objects": [{"name": "ground", "primitive": {"type": "plane", "size": 8}},
-                                 {"name": "model", "mesh": ")" + path.string() + R"(", "transform": )" + transform + "}]}";
+                                 {"name": "model", "mesh": ")" +
+                             path.string() + R"(", "transform": )" + transform + "}]}";
     it = parsed.emplace(mesh, parseScene(text, mesh + ".json")).first;
   }
   Scene scene = it->second;
@@ -119,7 +121,8 @@ float median3x3(const Image<float>& v, int x, int y) {
   float values[9];
   int n = 0;
   for (int j = -1; j <= 1; ++j)
-    for (int i = -1; i <= 1; ++i) values[n++] = v(std::clamp(x + i, 0, v.width() - 1), std::clamp(y + j, 0, v.height() - 1));
+    for (int i = -1; i <= 1; ++i)
+      values[n++] = v(std::clamp(x + i, 0, v.width() - 1), std::clamp(y + j, 0, v.height() - 1));
   std::nth_element(values, values + 4, values + 9);
   return values[4];
 }
@@ -137,7 +140,8 @@ Measured measure(const SceneSetup& s, const Image<float>& v) {
     for (int x = 0; x < v.width(); ++x) {
       if (!s.mask(x, y)) continue;
       if (s.reference(x, y) < 0.05f && v(x, y) > 0.5f) ++m.leaks;
-      if (std::abs(v(x, y) - median3x3(v, x, y)) > 0.25f && std::abs(s.reference(x, y) - median3x3(s.reference, x, y)) < 0.05f)
+      if (std::abs(v(x, y) - median3x3(v, x, y)) > 0.25f &&
+          std::abs(s.reference(x, y) - median3x3(s.reference, x, y)) < 0.05f)
         ++m.speckle;
     }
   return m;
@@ -148,8 +152,8 @@ Measured measure(const SceneSetup& s, const std::string& technique) {
 }
 
 void print(const std::string& what, const std::string& technique, const Measured& m) {
-  std::printf("[ measured ] %-28s %-9s RMSE8 %5.2f  leaks %4zu  speckle %4zu\n", what.c_str(), technique.c_str(), m.rmse8, m.leaks,
-              m.speckle);
+  std::printf("[ measured ] %-28s %-9s RMSE8 %5.2f  leaks %4zu  speckle %4zu\n", what.c_str(), technique.c_str(),
+              m.rmse8, m.leaks, m.speckle);
 }
 
 // The helpers count what they should: a lit pixel in the reference's umbra is a leak, an isolated
@@ -176,7 +180,8 @@ TEST(PlmRealScenes, LeakAndSpeckleCountsOnAHandMadeImage) {
 // penumbrae and the white lines across their umbrae are speckle; plm has less of it than hard's
 // stair-stepped outlines, no more umbra leaks, and under half its error.
 TEST(PlmRealScenes, CrowdedAtASmallSizeHasNoSpikesOrLines) {
-  const SceneSetup& s = setup("crowded", [] { return loadScene("crowded"); }, kMeshImageSize);
+  const SceneSetup& s = setup(
+      "crowded", [] { return loadScene("crowded"); }, kMeshImageSize);
   const Measured plm = measure(s, "plm"), hard = measure(s, "hard");
   print("crowded 160^2", "plm", plm);
   print("crowded 160^2", "hard", hard);
@@ -205,8 +210,8 @@ TEST(PlmRealScenes, SphereOccluderUnderASphereLightKeepsItsInnerPenumbra) {
   ASSERT_GT(n, 500u);
   const Measured plmCounts = measure(s, plm), hard = measure(s, "hard");
   const double meanPlm = sumPlm / static_cast<double>(n), meanReference = sumReference / static_cast<double>(n);
-  std::printf("[ measured ] sphere occluder: mean V inside the hard shadow, plm %.3f, reference %.3f (%zu px)\n", meanPlm,
-              meanReference, n);
+  std::printf("[ measured ] sphere occluder: mean V inside the hard shadow, plm %.3f, reference %.3f (%zu px)\n",
+              meanPlm, meanReference, n);
   EXPECT_NEAR(meanPlm, meanReference, 0.05);
   print("sphere occluder 128^2", "plm", plmCounts);
   print("sphere occluder 128^2", "hard", hard);
@@ -220,7 +225,8 @@ TEST(PlmRealScenes, SphereOccluderUnderASphereLightKeepsItsInnerPenumbra) {
 TEST(PlmRealScenes, WusonUnderEachLightBeatsHardWithoutLeaksOrSpeckle) {
   for (int light = 0; light < 4; ++light) {
     const std::string what = std::string("WusonOBJ ") + kLightNames[light];
-    const SceneSetup& s = setup(what, [light] { return wusonScene(light); }, kMeshImageSize);
+    const SceneSetup& s = setup(
+        what, [light] { return wusonScene(light); }, kMeshImageSize);
     const Measured plm = measure(s, "plm"), hard = measure(s, "hard");
     print(what, "plm", plm);
     print(what, "hard", hard);
@@ -241,7 +247,8 @@ TEST(PlmRealScenes, WusonUnderEachLightBeatsHardWithoutLeaksOrSpeckle) {
 TEST(PlmRealScenes, CylinderEngineBeatsHardWithLessSpeckle) {
   for (int light : {0, 3}) {
     const std::string what = std::string("2CylinderEngine ") + kLightNames[light];
-    const SceneSetup& s = setup(what, [light] { return engineScene(light); }, kMeshImageSize);
+    const SceneSetup& s = setup(
+        what, [light] { return engineScene(light); }, kMeshImageSize);
     const Measured plm = measure(s, "plm"), hard = measure(s, "hard");
     print(what, "plm", plm);
     print(what, "hard", hard);
@@ -263,8 +270,10 @@ TEST(PlmRealScenes, CylinderEngineBeatsHardWithLessSpeckle) {
 TEST(PlmRealScenes, KirschAndSmoothiesStayNearHardOnRealMeshes) {
   for (int model = 0; model < 2; ++model) {
     const std::string what = model == 0 ? "WusonOBJ rect" : "2CylinderEngine rect";
-    const SceneSetup& s = model == 0 ? setup(what, [] { return wusonScene(0); }, kMeshImageSize)
-                                : setup(what, [] { return engineScene(0); }, kMeshImageSize);
+    const SceneSetup& s = model == 0 ? setup(
+                                           what, [] { return wusonScene(0); }, kMeshImageSize)
+                                     : setup(
+                                           what, [] { return engineScene(0); }, kMeshImageSize);
     const Measured kirsch = measure(s, "kirsch"), smoothies = measure(s, "smoothies"), hard = measure(s, "hard");
     print(what, "kirsch", kirsch);
     print(what, "smoothies", smoothies);
@@ -284,7 +293,8 @@ TEST(PlmRealScenes, KirschAndSmoothiesStayNearHardOnRealMeshes) {
 // Its strips are as wide as the widest penumbra in the map; kept by depth, a raised object's strip
 // would cover the lower objects' strips around it and their fades would vanish (smoothies.cpp).
 TEST(PlmRealScenes, SmoothiesFadesOutsideEveryHardShadowOnCrowded) {
-  const SceneSetup& s = setup("crowded", [] { return loadScene("crowded"); }, kMeshImageSize);
+  const SceneSetup& s = setup(
+      "crowded", [] { return loadScene("crowded"); }, kMeshImageSize);
   const Image<float> smoothies = runTechnique("smoothies", s.scene, s.gbuffer);
   const Image<float> hardTruth = runTechnique("raytraced-hard", s.scene, s.gbuffer);
   size_t outer = 0, faded = 0;

@@ -93,7 +93,8 @@ double halfContour(const GBuffer& g, const Image<float>& v) {
 }
 
 TEST(Plm, QuarterTexelMoveOfTheOccluderMovesTheHalfContourAQuarterTexel) {
-  const float texel = renderLightMap(straightEdgeScene(kEdgeX), straightEdgeScene(kEdgeX).lights[0], 32).texelWorldSize(0.0f);
+  const float texel =
+      renderLightMap(straightEdgeScene(kEdgeX), straightEdgeScene(kEdgeX).lights[0], 32).texelWorldSize(0.0f);
   const int n = 2001;
   for (float start : {0.0f, 0.1f, 0.6f}) {  // start positions within a texel
     const float x0 = -0.5f + start * texel;
@@ -109,8 +110,8 @@ TEST(Plm, TriangleSceneIsSoftAndCloseToTheReference) {
   const auto& s = shadowTestScene("triangle");
   const ErrorStats plm = errorAgainstReference(runTechnique("plm", s, {"map_size=32"}), s);
   const ErrorStats hard = errorAgainstReference(runTechnique("hard", s, {"map_size=32"}), s);
-  std::printf("[ measured ] triangle at 32^2: plm %.2f (penumbra %.2f), hard %.2f (penumbra %.2f)\n", plm.rmse8, plm.penumbraRmse8,
-              hard.rmse8, hard.penumbraRmse8);
+  std::printf("[ measured ] triangle at 32^2: plm %.2f (penumbra %.2f), hard %.2f (penumbra %.2f)\n", plm.rmse8,
+              plm.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   // Measured at 32^2: plm 5.2 (penumbra 12.6), hard 24.2 (penumbra 93.6); Lawlor's Fig. 10: 9.0.
   EXPECT_LT(plm.rmse8, 9.0);
   EXPECT_LT(plm.penumbraRmse8, 0.5 * hard.penumbraRmse8);
@@ -121,8 +122,8 @@ TEST(Plm, SphereLightThroughThePerspectiveTransform) {
   const ErrorStats plm = errorAgainstReference(runTechnique("plm", s, {"map_size=256"}), s);
   const ErrorStats hard = errorAgainstReference(runTechnique("hard", s, {"map_size=256"}), s);
   const ErrorStats pcf = errorAgainstReference(runTechnique("pcf", s, {"map_size=256"}), s);
-  std::printf("[ measured ] crowded at 256^2: plm %.2f (penumbra %.2f), hard %.2f, pcf %.2f\n", plm.rmse8, plm.penumbraRmse8,
-              hard.rmse8, pcf.rmse8);
+  std::printf("[ measured ] crowded at 256^2: plm %.2f (penumbra %.2f), hard %.2f, pcf %.2f\n", plm.rmse8,
+              plm.penumbraRmse8, hard.rmse8, pcf.rmse8);
   // Measured: plm 7.7 (penumbra 18.9), hard 28.5, pcf (3x3) 15.2. What is left of plm's error is
   // mostly where several occluders' penumbrae overlap along one map ray (the hole of the raised
   // torus), one penumbra per ray being the method's stated limit (Sec. 3).
@@ -140,7 +141,8 @@ TEST(Plm, RefusesSegmentLightsNamingTheShape) {
     FAIL() << "a segment light must be refused";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("segment"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("directional"), std::string::npos) << "names the supported shapes: " << e.what();
+    EXPECT_NE(std::string(e.what()).find("directional"), std::string::npos)
+        << "names the supported shapes: " << e.what();
   }
 }
 

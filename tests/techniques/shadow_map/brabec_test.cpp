@@ -185,8 +185,8 @@ Quality measure(const char* name, const std::vector<std::string>& params) {
   q.brabec = errorAgainstReference(runTechnique("brabec", s, params), s);
   q.rtHard = errorAgainstReference(s.hardTruth, s);
   q.hard = errorAgainstReference(runTechnique("hard", s, {"map_size=256"}), s);
-  std::printf("[brabec] %s %s: RMSE8 %.2f, penumbra RMSE8 %.2f | raytraced-hard %.2f / %.2f | hard %.2f / %.2f\n",
-              name, params.empty() ? "defaults" : params.front().c_str(), q.brabec.rmse8, q.brabec.penumbraRmse8,
+  std::printf("[brabec] %s %s: RMSE8 %.2f, penumbra RMSE8 %.2f | raytraced-hard %.2f / %.2f | hard %.2f / %.2f\n", name,
+              params.empty() ? "defaults" : params.front().c_str(), q.brabec.rmse8, q.brabec.penumbraRmse8,
               q.rtHard.rmse8, q.rtHard.penumbraRmse8, q.hard.rmse8, q.hard.penumbraRmse8);
   return q;
 }
@@ -247,11 +247,12 @@ TEST(Brabec, InterpolationStaysWithinOneRmse8OfTheExhaustiveSearchOnCrowded) {
     const ErrorStats ex = errorAgainstReference(vx, s), in = errorAgainstReference(vi, s);
     const ErrorStats between = compareVisibility(vi, vx, s.mask), paper = compareVisibility(vp, vx, s.mask);
     const ErrorStats stepped = compareVisibility(vs, vx, s.mask);
-    std::printf("[brabec] crowded map %d: RMSE8 exhaustive %.3f, interpolated %.3f; interpolated vs exhaustive: "
-                "RMSE8 %.3f (max %.3f), the paper's criteria alone %.3f (max %.3f), with interpolate_max_step 1/16 "
-                "%.3f; searched %.3f / %.3f / %.3f / %.3f\n",
-                mapSize, ex.rmse8, in.rmse8, between.rmse8, between.maxAbsError, paper.rmse8, paper.maxAbsError,
-                stepped.rmse8, fExhaustive, fInterpolated, fPaper, fStepped);
+    std::printf(
+        "[brabec] crowded map %d: RMSE8 exhaustive %.3f, interpolated %.3f; interpolated vs exhaustive: "
+        "RMSE8 %.3f (max %.3f), the paper's criteria alone %.3f (max %.3f), with interpolate_max_step 1/16 "
+        "%.3f; searched %.3f / %.3f / %.3f / %.3f\n",
+        mapSize, ex.rmse8, in.rmse8, between.rmse8, between.maxAbsError, paper.rmse8, paper.maxAbsError, stepped.rmse8,
+        fExhaustive, fInterpolated, fPaper, fStepped);
     // Pixel by pixel, the bound is 1.0. Measured 0.61 and 0.59 (maps 256 and 1024; max 0.125
     // and 0.100); 0.8 keeps a margin below the bound. The paper's criteria alone: 2.2 and 2.5 (max
     // 0.3, linear interpolation across the kinks of V), so the kink criteria are what meets it.
@@ -287,8 +288,8 @@ struct ScanLine {
 float edgeWidth(const ShadowTestScene& s, const Image<float>& v, const ScanLine& line) {
   const GBuffer& g = s.gbuffer;
   const int w = g.width(), h = g.height();
-  const Mat4 clipFromWs = s.scene.camera.clipFromCamera(static_cast<float>(w) / h, 0.01f, 100.0f) *
-                              s.scene.camera.cameraFromWs();
+  const Mat4 clipFromWs =
+      s.scene.camera.clipFromCamera(static_cast<float>(w) / h, 0.01f, 100.0f) * s.scene.camera.cameraFromWs();
   float lastDark = -1.0f;
   for (float d = 0.0f; d <= line.length; d += 0.005f) {
     const Vec3 p = line.wsStart + d * line.wsDirection;
@@ -318,9 +319,10 @@ TEST(Brabec, ContactHardeningOnCrowded) {
   const Image<float> v = runTechnique("brabec", s);
   const float refLow = edgeWidth(s, s.reference, low), refHigh = edgeWidth(s, s.reference, high);
   const float brabecLow = edgeWidth(s, v, low), brabecHigh = edgeWidth(s, v, high);
-  std::printf("[brabec] 10-90%% edge widths (world units): sphere on the floor %.3f (reference %.3f), high torus %.3f "
-              "(reference %.3f)\n",
-              brabecLow, refLow, brabecHigh, refHigh);
+  std::printf(
+      "[brabec] 10-90%% edge widths (world units): sphere on the floor %.3f (reference %.3f), high torus %.3f "
+      "(reference %.3f)\n",
+      brabecLow, refLow, brabecHigh, refHigh);
   ASSERT_GT(refLow, 0.0f);
   ASSERT_GT(refHigh, 0.0f);
   ASSERT_GT(brabecLow, 0.0f);
@@ -415,9 +417,10 @@ TEST(Brabec, ObjectIdTestKeepsATiltedPlaneLit) {
   const auto [lit3, physicalWithIds] = darkened(physical);
   physical.idTest = false;
   const auto [lit4, physicalWithoutIds] = darkened(physical);
-  std::printf("[brabec] tilted plane: %zu pixels fully lit in the reference; darkened: paper knobs with ids %zu, "
-              "without %zu; physical r_max with ids %zu, without %zu\n",
-              lit, paperWithIds, paperWithoutIds, physicalWithIds, physicalWithoutIds);
+  std::printf(
+      "[brabec] tilted plane: %zu pixels fully lit in the reference; darkened: paper knobs with ids %zu, "
+      "without %zu; physical r_max with ids %zu, without %zu\n",
+      lit, paperWithIds, paperWithoutIds, physicalWithIds, physicalWithoutIds);
   ASSERT_GT(lit, 5000u);
   // With ids only pixels next to the occluder's shadow (where brabec's penumbra is a bit wider than
   // the true one) may be darker. Measured 2.6% and 1.2%.
@@ -477,9 +480,10 @@ TEST(Brabec, InnerAndOuterPenumbraMeetOnTheHardEdge) {
       EXPECT_LE(inner, meet + 1e-6f) << x << "," << y;
       EXPECT_GE(outer, meet - 1e-6f) << x << "," << y;
     });
-    std::printf("[brabec] straight edge, meet %.1f: %d edge pixel pairs, max |V - meet| %.3f (reference: max "
-                "|V - 0.5| %.3f)\n",
-                meet, edges, worst, worstReference);
+    std::printf(
+        "[brabec] straight edge, meet %.1f: %d edge pixel pairs, max |V - meet| %.3f (reference: max "
+        "|V - 0.5| %.3f)\n",
+        meet, edges, worst, worstReference);
     ASSERT_GT(edges, 100);
     // Pixel centres lie up to a pixel (~0.04 world units along the floor) from the edge, where V
     // changes by ~0.13 (penumbra half-width 0.16); the reference adds its noise. Measured max 0.115
@@ -722,11 +726,12 @@ BoundComparison compareBound(const Scene& scene, int lightIndex, int size) {
   c.minDifference = 1.0f;
   for (size_t i = 0; i < on.size(); ++i)
     c.minDifference = std::min(c.minDifference, onExhaustive[i] - offExhaustive[i]);
-  std::printf("[brabec] %s light %d (%s), %dx%d: RMSE8 %.2f -> %.2f, umbra leaks %zu -> %zu, too dark %.2f%% -> %.3f%% "
-              "of the mask (deficit %.4f -> %.5f)\n",
-              scene.name.c_str(), lightIndex, std::string(toString(light.shape())).c_str(), size, size, c.off.rmse8,
-              c.on.rmse8, c.off.umbraLeaks, c.on.umbraLeaks, 100.0 * c.darkOff.fraction, 100.0 * c.darkOn.fraction,
-              c.darkOff.deficit, c.darkOn.deficit);
+  std::printf(
+      "[brabec] %s light %d (%s), %dx%d: RMSE8 %.2f -> %.2f, umbra leaks %zu -> %zu, too dark %.2f%% -> %.3f%% "
+      "of the mask (deficit %.4f -> %.5f)\n",
+      scene.name.c_str(), lightIndex, std::string(toString(light.shape())).c_str(), size, size, c.off.rmse8, c.on.rmse8,
+      c.off.umbraLeaks, c.on.umbraLeaks, 100.0 * c.darkOff.fraction, 100.0 * c.darkOn.fraction, c.darkOff.deficit,
+      c.darkOn.deficit);
   return c;
 }
 

@@ -30,7 +30,8 @@ Image<uint8_t> nearHardEdge(const ShadowTestScene& s, int radius) {
     for (int x = 0; x + 1 < w; ++x) {
       if (!s.mask(x, y)) continue;
       const bool v = s.hardTruth(x, y) > 0.5f;
-      if ((s.mask(x + 1, y) && (s.hardTruth(x + 1, y) > 0.5f) != v) || (s.mask(x, y + 1) && (s.hardTruth(x, y + 1) > 0.5f) != v))
+      if ((s.mask(x + 1, y) && (s.hardTruth(x + 1, y) > 0.5f) != v) ||
+          (s.mask(x, y + 1) && (s.hardTruth(x, y + 1) > 0.5f) != v))
         edge(x, y) = 1;
     }
   for (int y = 0; y < h; ++y)
@@ -43,8 +44,8 @@ Image<uint8_t> nearHardEdge(const ShadowTestScene& s, int radius) {
 }
 
 struct HardAgreement {
-  size_t farLit = 0, acne = 0;        //!< mask pixels lit in the exact shadow, away from edges; of those shadowed
-  size_t farShadow = 0, leaks = 0;    //!< ... in the exact shadow, away from edges; of those lit
+  size_t farLit = 0, acne = 0;             //!< mask pixels lit in the exact shadow, away from edges; of those shadowed
+  size_t farShadow = 0, leaks = 0;         //!< ... in the exact shadow, away from edges; of those lit
   size_t edgeTooDark = 0, edgeTooLit = 0;  //!< disagreements near the edges, by side
 };
 

@@ -23,13 +23,13 @@
 #include <string>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <tbb/global_control.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "penumbra/error.h"
+#include "penumbra/metrics.h"
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
-#include "penumbra/metrics.h"
 #include "penumbra/reference.h"
 #include "penumbra/scene_io.h"
 #include "techniques/shadow_map/heidrich.h"
@@ -65,8 +65,8 @@ Scene stripScene(const std::vector<Strip>& strips) {
     transformMesh(m, glm::translate(Mat4(1.0f), Vec3(0.5f * (s.x0 + s.x1), kOccluderHeight, 0.0f)));
     scene.objects.push_back(makeObject(id++, std::move(m)));
   }
-  scene.lights.push_back(Light::segment(Vec3(-kLightHalfLength, kLightHeight, 0.0f),
-                                        Vec3(kLightHalfLength, kLightHeight, 0.0f)));
+  scene.lights.push_back(
+      Light::segment(Vec3(-kLightHalfLength, kLightHeight, 0.0f), Vec3(kLightHalfLength, kLightHeight, 0.0f)));
   scene.camera.position = Vec3(0.0f, 7.0f, 6.0f);
   scene.camera.lookAt = Vec3(0.0f);
   return scene;
@@ -132,8 +132,8 @@ TEST(Heidrich, StraightEdgeGivesTheExactLinearPenumbra) {
   const std::vector<Strip> edge = {{-3.5f, 0.0f}};
   HeidrichOptions o;
   const LineError e = lineError(edge, o);
-  std::printf("[heidrich] straight edge, map 1024: max |V - exact| = %.4f (%.2f/255) at x = %.3f, RMSE8 %.2f\n",
-              e.max, 255.0 * e.max, e.maxAt, e.rmse8);
+  std::printf("[heidrich] straight edge, map 1024: max |V - exact| = %.4f (%.2f/255) at x = %.3f, RMSE8 %.2f\n", e.max,
+              255.0 * e.max, e.maxAt, e.rmse8);
   EXPECT_LE(e.max, 2.0 / 255.0);
   // A hard shadow in its place is off by up to 1/2 (and is what the depth channel alone gives).
   GBuffer g;
@@ -154,8 +154,8 @@ Scene convexScene(bool sphere, float xCentre = 0.0f) {
   Mesh m = sphere ? makeSphere(0.5f, 96, 48) : makeBox(Vec3(0.8f));
   transformMesh(m, glm::translate(Mat4(1.0f), Vec3(xCentre, sphere ? 1.0f : 0.8f, 0.0f)));
   scene.objects.push_back(makeObject(1, std::move(m)));
-  scene.lights.push_back(Light::segment(Vec3(-kLightHalfLength, kLightHeight, 0.0f),
-                                        Vec3(kLightHalfLength, kLightHeight, 0.0f)));
+  scene.lights.push_back(
+      Light::segment(Vec3(-kLightHalfLength, kLightHeight, 0.0f), Vec3(kLightHalfLength, kLightHeight, 0.0f)));
   scene.camera.position = Vec3(0.0f, 4.0f, 4.0f);
   scene.camera.lookAt = Vec3(0.0f, 0.6f, 0.0f);
   return scene;
@@ -219,8 +219,9 @@ LineStats lineStats(const ScanLine& l, double x0, double x1) {
 TEST(Heidrich, BoxOverAPlaneMatchesTheReferenceOnBothEdgesStretches) {
   const ScanLine l = convexScanLine(false);
   const LineStats top = lineStats(l, 0.45, 0.95), bottom = lineStats(l, 0.31, 0.39), all = lineStats(l, 0.0, 1.5);
-  std::printf("[heidrich] box scan line: T stretch RMSE8 %.2f max %.3f | B stretch RMSE8 %.2f max %.3f | all RMSE8 %.2f\n",
-              top.rmse8, top.max, bottom.rmse8, bottom.max, all.rmse8);
+  std::printf(
+      "[heidrich] box scan line: T stretch RMSE8 %.2f max %.3f | B stretch RMSE8 %.2f max %.3f | all RMSE8 %.2f\n",
+      top.rmse8, top.max, bottom.rmse8, bottom.max, all.rmse8);
   EXPECT_LT(top.max, 0.03);
   EXPECT_LT(bottom.max, 0.045);
   EXPECT_LT(all.rmse8, 7.5);
@@ -348,12 +349,13 @@ TEST(Heidrich, LinearSceneAgainstRayTracedSamples) {
   rt10.visibility(s.gbuffer, v10);
   const ErrorStats ray10 = rmse(v10);
   const ErrorStats rtHard = rmse(s.hardTruth);
-  std::printf("[heidrich] linear (RMSE8 / penumbra RMSE8): heidrich k=1 %.2f / %.2f | k=2 %.2f / %.2f | "
-              "k=4 %.2f / %.2f | ray traced 10 spp %.2f / %.2f | multisample 2 %.2f / %.2f | "
-              "multisample 10 %.2f / %.2f | raytraced-hard %.2f / %.2f\n",
-              k1.rmse8, k1.penumbraRmse8, k2.rmse8, k2.penumbraRmse8, k4.rmse8, k4.penumbraRmse8, ray10.rmse8,
-              ray10.penumbraRmse8, ms2.rmse8, ms2.penumbraRmse8, ms10.rmse8, ms10.penumbraRmse8, rtHard.rmse8,
-              rtHard.penumbraRmse8);
+  std::printf(
+      "[heidrich] linear (RMSE8 / penumbra RMSE8): heidrich k=1 %.2f / %.2f | k=2 %.2f / %.2f | "
+      "k=4 %.2f / %.2f | ray traced 10 spp %.2f / %.2f | multisample 2 %.2f / %.2f | "
+      "multisample 10 %.2f / %.2f | raytraced-hard %.2f / %.2f\n",
+      k1.rmse8, k1.penumbraRmse8, k2.rmse8, k2.penumbraRmse8, k4.rmse8, k4.penumbraRmse8, ray10.rmse8,
+      ray10.penumbraRmse8, ms2.rmse8, ms2.penumbraRmse8, ms10.rmse8, ms10.penumbraRmse8, rtHard.rmse8,
+      rtHard.penumbraRmse8);
   // Two samples: better than two hard shadows averaged and than the exact hard shadow.
   EXPECT_LT(k1.rmse8, 0.7 * ms2.rmse8);
   EXPECT_LT(k1.rmse8, 0.5 * rtHard.rmse8);
@@ -382,10 +384,12 @@ TEST(Heidrich, LinearSceneAgainstRayTracedSamples) {
 // sphere + cube 9.94 / 40.46, cylinder + torus 17.50 / 54.17.
 TEST(Heidrich, LinearSceneByObjectGroup) {
   const Scene linear = loadScene("linear");
-  for (const std::vector<std::string>& group : {std::vector<std::string>{"ground", "sphere", "cube"}, std::vector<std::string>{"ground", "cylinder"},
-                                                std::vector<std::string>{"ground", "torus"}, std::vector<std::string>{"ground", "cylinder", "torus"}}) {
+  for (const std::vector<std::string>& group :
+       {std::vector<std::string>{"ground", "sphere", "cube"}, std::vector<std::string>{"ground", "cylinder"},
+        std::vector<std::string>{"ground", "torus"}, std::vector<std::string>{"ground", "cylinder", "torus"}}) {
     Scene scene = linear;
-    std::erase_if(scene.objects, [&](const Object& o) { return std::find(group.begin(), group.end(), o.name) == group.end(); });
+    std::erase_if(scene.objects,
+                  [&](const Object& o) { return std::find(group.begin(), group.end(), o.name) == group.end(); });
     ASSERT_EQ(scene.objects.size(), group.size());
     const GBuffer g = renderGBuffer(scene, testing::kShadowTestImageSize, testing::kShadowTestImageSize);
     const Image<uint8_t> mask = errorMask(g, scene.lights.at(0));
@@ -402,8 +406,8 @@ TEST(Heidrich, LinearSceneByObjectGroup) {
     const ErrorStats ray10 = compareVisibility(ray(10, 7), truth, mask);
     std::string name = group[1];
     for (size_t i = 2; i < group.size(); ++i) name += " + " + group[i];
-    std::printf("[heidrich] linear, %s: heidrich k=1 %.2f / %.2f | k=4 %.2f / %.2f | ray traced 10 spp %.2f / %.2f\n", name.c_str(), k1.rmse8,
-                k1.penumbraRmse8, k4.rmse8, k4.penumbraRmse8, ray10.rmse8, ray10.penumbraRmse8);
+    std::printf("[heidrich] linear, %s: heidrich k=1 %.2f / %.2f | k=4 %.2f / %.2f | ray traced 10 spp %.2f / %.2f\n",
+                name.c_str(), k1.rmse8, k1.penumbraRmse8, k4.rmse8, k4.penumbraRmse8, ray10.rmse8, ray10.penumbraRmse8);
     if (name == "sphere + cube") {
       EXPECT_LT(k1.rmse8, ray10.rmse8) << "the slides' claim, on convex occluders";
       EXPECT_LT(k1.rmse8, 3.6);
@@ -533,8 +537,8 @@ TEST(HeidrichStages, SharedFrameReceiverMatchesMakeReceiver) {
         const Vec3& p = s.gbuffer.wsPosition(x, y);
         const Vec3& n = s.gbuffer.wsGeometricNormal(x, y);
         const ShadowReceiver expected = makeReceiver(map, p, n, o.bias);
-        const ShadowReceiver shared = heidrich::receiverInMap(
-            map, map0.lsFromWs(p) - map0.lsFromWs(map.wsOrigin), map0.lsFrame.toLocal(n), o.bias);
+        const ShadowReceiver shared = heidrich::receiverInMap(map, map0.lsFromWs(p) - map0.lsFromWs(map.wsOrigin),
+                                                              map0.lsFrame.toLocal(n), o.bias);
         ASSERT_EQ(shared.inMap, expected.inMap) << x << " " << y;
         if (!expected.inMap) continue;
         EXPECT_NEAR(shared.s, expected.s, 1e-3f);
@@ -636,8 +640,7 @@ TEST(HeidrichStages, SteepFaceBesideAFlatOneGivesNoSkin) {
 
 TEST(Heidrich, RejectsEveryLightButASegmentNamingIt) {
   const std::vector<Light> lights = {
-      Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f),
-      Light::disk(Vec3(0.0f, 5.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
+      Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f), Light::disk(Vec3(0.0f, 5.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
       Light::rect(Vec3(0.0f, 5.0f, 0.0f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.3f)),
       Light::polygon({Vec3(0.0f, 5.0f, 0.0f), Vec3(0.5f, 5.0f, 0.8f), Vec3(1.0f, 5.0f, 0.0f)}),
       Light::directional(Vec3(0.1f, 1.0f, 0.0f), radians(5.0f))};

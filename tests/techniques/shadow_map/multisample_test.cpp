@@ -64,8 +64,8 @@ TEST(Multisample, RectLightIsSampledOnTheEmitter) {
   reference.visibility(s.gbuffer, s.reference);
   const ErrorStats multi = errorAgainstReference(runTechnique("multisample", s, {"map_size=256"}), s);
   const ErrorStats hard = errorAgainstReference(runTechnique("hard", s, {"map_size=256"}), s);
-  std::printf("[ measured ] torus with a rect light: multisample RMSE8 %.2f, penumbra %.2f (hard %.2f, %.2f)\n", multi.rmse8,
-              multi.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
+  std::printf("[ measured ] torus with a rect light: multisample RMSE8 %.2f, penumbra %.2f (hard %.2f, %.2f)\n",
+              multi.rmse8, multi.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   EXPECT_LT(multi.penumbraRmse8, 0.5 * hard.penumbraRmse8);
   EXPECT_LT(multi.rmse8, 0.6 * hard.rmse8);
 }

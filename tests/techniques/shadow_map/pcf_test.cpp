@@ -62,8 +62,9 @@ TEST(Pcf, BlurFollowsTheKernelNotTheOccluderDistance) {
       widths[k][line] = transitionWidth(v);
     }
   }
-  std::printf("[ measured ] pcf transition widths (samples of 0.005): kernel 3: low %d high %d; kernel 9: low %d high %d\n",
-              widths[0][0], widths[0][1], widths[1][0], widths[1][1]);
+  std::printf(
+      "[ measured ] pcf transition widths (samples of 0.005): kernel 3: low %d high %d; kernel 9: low %d high %d\n",
+      widths[0][0], widths[0][1], widths[1][0], widths[1][1]);
   EXPECT_GT(widths[1][0], 2 * widths[0][0]);  // the blur grows with the kernel ...
   EXPECT_GT(widths[0][0], 0);
   for (int k = 0; k < 2; ++k) EXPECT_LT(widths[k][1], 2 * widths[k][0]);  // ... but not with the occluder's height

@@ -44,8 +44,10 @@ TEST(Pcss, ErrorAgainstReference) {
     EXPECT_GT(hard.rmse8, 1.6 * pcss.rmse8) << expected.scene;
     EXPECT_GT(hard.penumbraRmse8, 2.0 * pcss.penumbraRmse8) << expected.scene;
     // Deterministic: the same input gives the same bits.
-    EXPECT_EQ(std::vector<float>(v.begin(), v.end()),
-              [&] { const Image<float> w = runTechnique("pcss", s, {"map_size=256"}); return std::vector<float>(w.begin(), w.end()); }());
+    EXPECT_EQ(std::vector<float>(v.begin(), v.end()), [&] {
+      const Image<float> w = runTechnique("pcss", s, {"map_size=256"});
+      return std::vector<float>(w.begin(), w.end());
+    }());
   }
 }
 
@@ -80,8 +82,8 @@ Widths contactWidths(const std::string& technique, const std::vector<std::string
 TEST(Pcss, ContactHardening) {
   const Widths pcss = contactWidths("pcss", {"map_size=256"});
   const Widths reference = contactWidths("reference", {"spp=256"});
-  std::printf("[ measured ] transition widths (samples of 0.005): pcss low %d high %d; reference low %d high %d\n", pcss.low,
-              pcss.high, reference.low, reference.high);
+  std::printf("[ measured ] transition widths (samples of 0.005): pcss low %d high %d; reference low %d high %d\n",
+              pcss.low, pcss.high, reference.low, reference.high);
   ASSERT_GT(reference.high, 4 * reference.low);  // the scene does what this test assumes
   EXPECT_GT(pcss.low, 0);
   EXPECT_GT(pcss.high, 3 * pcss.low);
@@ -117,8 +119,10 @@ TEST(Pcss, DirectionalLightUsesTheOrthographicVariant) {
   const ErrorStats pcss = testing::errorAgainstReference(testing::runTechnique("pcss", s, {"map_size=256"}), s);
   const ErrorStats multi = testing::errorAgainstReference(testing::runTechnique("multisample", s, {"map_size=256"}), s);
   const ErrorStats hard = testing::errorAgainstReference(testing::runTechnique("hard", s, {"map_size=256"}), s);
-  std::printf("[ measured ] torus under a 10-degree sun: pcss RMSE8 %.2f, penumbra %.2f; multisample %.2f, %.2f; hard %.2f, %.2f\n",
-              pcss.rmse8, pcss.penumbraRmse8, multi.rmse8, multi.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
+  std::printf(
+      "[ measured ] torus under a 10-degree sun: pcss RMSE8 %.2f, penumbra %.2f; multisample %.2f, %.2f; hard %.2f, "
+      "%.2f\n",
+      pcss.rmse8, pcss.penumbraRmse8, multi.rmse8, multi.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   EXPECT_LT(pcss.penumbraRmse8, 0.5 * hard.penumbraRmse8);
   EXPECT_LT(multi.penumbraRmse8, 0.5 * hard.penumbraRmse8);
 }
@@ -146,8 +150,8 @@ BlockerSearch oracleSearch(const LightMap& m, const ShadowReceiver& r, float rad
   return b;
 }
 
-double oraclePcf(const LightMap& m, const ShadowReceiver& r, float radius, const std::vector<Vec2>& disk, const Vec2& rot,
-                 bool bilinear) {
+double oraclePcf(const LightMap& m, const ShadowReceiver& r, float radius, const std::vector<Vec2>& disk,
+                 const Vec2& rot, bool bilinear) {
   double sum = 0.0;
   for (const Vec2& p : disk) {
     const float ox = radius * (p.x * rot.x - p.y * rot.y), oy = radius * (p.x * rot.y + p.y * rot.x);
@@ -188,7 +192,8 @@ TEST(Pcss, DiskKernelsMatchScalarLoopsOnTheCrowdedMap) {
         EXPECT_NEAR(fast.meanDepth, slow.meanDepth, 1e-5f * slow.meanDepth) << x << "," << y;
         blocked += fast.blockers > 0;
         EXPECT_NEAR(pcfDisk(m, r, radius, disk, rot), oraclePcf(m, r, radius, disk, rot, true), 1e-5) << x << "," << y;
-        EXPECT_EQ(pcfDiskNearest(m, r, radius, disk, rot), static_cast<float>(oraclePcf(m, r, radius, disk, rot, false)))
+        EXPECT_EQ(pcfDiskNearest(m, r, radius, disk, rot),
+                  static_cast<float>(oraclePcf(m, r, radius, disk, rot, false)))
             << x << "," << y;
         ++checked;
       }
@@ -208,8 +213,8 @@ TEST(Pcss, NearestTapsForWideFiltersCostLittleQuality) {
     const ErrorStats mixed = testing::errorAgainstReference(testing::runTechnique("pcss", s, {"map_size=1024"}), s);
     const ErrorStats bilinear = testing::errorAgainstReference(
         testing::runTechnique("pcss", s, {"map_size=1024", "bilinear_max_radius=8192"}), s);
-    std::printf("[ measured ] %s pcss map 1024: RMSE8 %.2f, penumbra %.2f; all bilinear %.2f, %.2f\n", name, mixed.rmse8,
-                mixed.penumbraRmse8, bilinear.rmse8, bilinear.penumbraRmse8);
+    std::printf("[ measured ] %s pcss map 1024: RMSE8 %.2f, penumbra %.2f; all bilinear %.2f, %.2f\n", name,
+                mixed.rmse8, mixed.penumbraRmse8, bilinear.rmse8, bilinear.penumbraRmse8);
     EXPECT_LT(mixed.rmse8, bilinear.rmse8 + 0.5) << name;
     EXPECT_LT(mixed.penumbraRmse8, bilinear.penumbraRmse8 + 1.5) << name;
   }

@@ -64,7 +64,8 @@ TEST(ShadowMap, PcfBoxIsTheCoveredFractionOfAHalfPlane) {
 TEST(ShadowMap, ReceiverPlaneMatchesATiltedPlaneExactlyInAnOrthoMap) {
   LightMap m = orthoMap(64);
   // A plane at 60 degrees to the light's axis through (0, 0, 20), rendered into the map analytically.
-  const Vec3 n = glm::normalize(Vec3(std::sin(radians(60.0f)) * 0.8f, std::sin(radians(60.0f)) * 0.6f, -std::cos(radians(60.0f))));
+  const Vec3 n =
+      glm::normalize(Vec3(std::sin(radians(60.0f)) * 0.8f, std::sin(radians(60.0f)) * 0.6f, -std::cos(radians(60.0f))));
   const Vec3 p0(0.0f, 0.0f, 20.0f);
   auto planeDepth = [&](float x, float y) { return (glm::dot(n, p0) - n.x * x - n.y * y) / n.z; };
   for (int j = 0; j < m.size; ++j)

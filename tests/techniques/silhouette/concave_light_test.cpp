@@ -32,7 +32,9 @@ using testing::groundLineGBuffer;
 // The L of `concave`: the square [-0.6, 0.6]^2 (x, z) at height 4 without its +x +z quarter.
 Light lLight() { return loadScene("concave").lights.at(4); }
 
-double overlap1D(double a0, double a1, double b0, double b1) { return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)); }
+double overlap1D(double a0, double a1, double b0, double b1) {
+  return std::max(0.0, std::min(a1, b1) - std::max(a0, b0));
+}
 
 // Lit fraction of the L (bar [-0.6, 0.6] x [-0.6, 0] plus arm [-0.6, 0] x [0, 0.6]) where the light
 // plane is hidden for x < s (edge along z) or z < s (edge along x).
@@ -67,7 +69,8 @@ TEST(ConcaveLight, SsvAndWedgesAreExactUnderAStraightEdgeParallelToTheLsSides) {
     const Vec3 a = alongZ ? Vec3(-1.0f, 0.0f, 0.05f) : Vec3(0.05f, 0.0f, -1.0f);
     const Vec3 b = alongZ ? Vec3(1.2f, 0.0f, 0.05f) : Vec3(0.05f, 0.0f, 1.2f);
     const GBuffer g = groundLineGBuffer(a, b, 221);
-    for (const std::vector<std::string>& kv : {std::vector<std::string>{}, std::vector<std::string>{"edge_visibility=area"}}) {
+    for (const std::vector<std::string>& kv :
+         {std::vector<std::string>{}, std::vector<std::string>{"edge_visibility=area"}}) {
       for (const char* name : {"ssv", "wedges"}) {
         if (std::string(name) == "wedges" && !kv.empty()) continue;
         const Image<float> v = testing::runTechnique(name, scene, g, kv);
@@ -80,8 +83,8 @@ TEST(ConcaveLight, SsvAndWedgesAreExactUnderAStraightEdgeParallelToTheLsSides) {
           minV = std::min(minV, double(v(i, 0)));
           maxV = std::max(maxV, double(v(i, 0)));
         }
-        std::printf("[ measured ] L under a straight edge (%s), %s %s: max |V - exact| %.4f\n", alongZ ? "along z" : "along x", name,
-                    kv.empty() ? "" : kv[0].c_str(), maxErr);
+        std::printf("[ measured ] L under a straight edge (%s), %s %s: max |V - exact| %.4f\n",
+                    alongZ ? "along z" : "along x", name, kv.empty() ? "" : kv[0].c_str(), maxErr);
         EXPECT_LT(maxErr, 0.01) << name;  // the plate's 0.002 thickness and float rounding
         EXPECT_EQ(minV, 0.0f) << name;    // the line runs from the umbra ...
         EXPECT_EQ(maxV, 1.0f) << name;    // ... to full light
@@ -103,7 +106,8 @@ TEST(ConcaveLight, PartsAreCombinedByAreaAndAConvexLightIsNotSplit) {
     Image<float> v;
     technique->visibility(g, v);
     const auto stats = technique->stats();
-    EXPECT_NE(std::find(stats.begin(), stats.end(), std::pair<std::string, double>{"light_parts", 2.0}), stats.end()) << name;
+    EXPECT_NE(std::find(stats.begin(), stats.end(), std::pair<std::string, double>{"light_parts", 2.0}), stats.end())
+        << name;
     // Each part alone, then their mean weighted by area, in the order convex_parts.cpp sums them.
     std::vector<Image<float>> vs;
     std::vector<double> areas;
@@ -152,10 +156,11 @@ TEST(ConcaveLight, LShapedLightOnConcaveAgainstTheReference) {
   };
   const ErrorStats ssv = measure("ssv"), ssvArea = measure("ssv", {"edge_visibility=area"}), wedges = measure("wedges");
   const ErrorStats pcss = measure("pcss"), hard = measure("raytraced-hard");
-  std::printf("[ measured ] concave, L light: RMSE8 / penumbra RMSE8: ssv %.2f / %.2f, ssv edge_visibility=area %.2f / %.2f, "
-              "wedges %.2f / %.2f, pcss %.2f / %.2f, raytraced-hard %.2f / %.2f\n",
-              ssv.rmse8, ssv.penumbraRmse8, ssvArea.rmse8, ssvArea.penumbraRmse8, wedges.rmse8, wedges.penumbraRmse8, pcss.rmse8,
-              pcss.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
+  std::printf(
+      "[ measured ] concave, L light: RMSE8 / penumbra RMSE8: ssv %.2f / %.2f, ssv edge_visibility=area %.2f / %.2f, "
+      "wedges %.2f / %.2f, pcss %.2f / %.2f, raytraced-hard %.2f / %.2f\n",
+      ssv.rmse8, ssv.penumbraRmse8, ssvArea.rmse8, ssvArea.penumbraRmse8, wedges.rmse8, wedges.penumbraRmse8,
+      pcss.rmse8, pcss.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   // Thresholds about 1.1 x the measured values: ssv 4.54 / 8.34, edge_visibility=area 2.10 / 3.88,
   // wedges 4.98 / 9.47 (pcss 13.24 / 23.15, raytraced-hard 35.48 / 67.79). ssv is below wedges
   // here, unlike under the square light of the same scene (ssv_test.cpp): wedges' error lies on the

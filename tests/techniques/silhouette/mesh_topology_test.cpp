@@ -71,7 +71,8 @@ void expectRingsClose(const MeshTopology& m, const std::vector<uint8_t>& inSet, 
 }
 
 // Segment p -> q crosses triangle (a, b, c) (Moeller-Trumbore, in double).
-bool segmentCrosses(const glm::dvec3& p, const glm::dvec3& q, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+bool segmentCrosses(const glm::dvec3& p, const glm::dvec3& q, const glm::dvec3& a, const glm::dvec3& b,
+                    const glm::dvec3& c) {
   const glm::dvec3 d = q - p, e1 = b - a, e2 = c - a;
   const glm::dvec3 h = glm::cross(d, e2);
   const double det = glm::dot(e1, h);
@@ -90,7 +91,8 @@ bool segmentCrosses(const glm::dvec3& p, const glm::dvec3& q, const glm::dvec3& 
 // projected from `eye` onto the plane y = 0, must wind around a point q of that plane exactly when
 // the segment eye -> q crosses a triangle of the input mesh; an all-shell topology winds once per
 // triangle crossed. Checked on a grid of points (offset so no segment grazes an edge).
-void expectSilhouetteWindsAroundShadow(const Mesh& mesh, const MeshTopology& m, const Vec3& eye, const std::string& what) {
+void expectSilhouetteWindsAroundShadow(const Mesh& mesh, const MeshTopology& m, const Vec3& eye,
+                                       const std::string& what) {
   const std::vector<SilhouetteEdge> edges = boundaryEdges(m, facing(m, eye));
   const glm::dvec3 e(eye);
   auto project = [&](const Vec3& x) {
@@ -106,13 +108,15 @@ void expectSilhouetteWindsAroundShadow(const Mesh& mesh, const MeshTopology& m, 
       for (const SilhouetteEdge& s : edges) {
         const glm::dvec2 a = project(m.positions[s.a]), b = project(m.positions[s.b]);
         const double side = (b.x - a.x) * (q.y - a.y) - (q.x - a.x) * (b.y - a.y);
-        if (a.y <= q.y) winding += (b.y > q.y && side > 0.0) ? 1 : 0;
-        else winding -= (b.y <= q.y && side < 0.0) ? 1 : 0;
+        if (a.y <= q.y)
+          winding += (b.y > q.y && side > 0.0) ? 1 : 0;
+        else
+          winding -= (b.y <= q.y && side < 0.0) ? 1 : 0;
       }
       int crossed = 0;
       for (const glm::uvec3& t : mesh.triangles)
-        crossed += segmentCrosses(e, glm::dvec3(q.x, 0.0, q.y), glm::dvec3(mesh.positions[t.x]), glm::dvec3(mesh.positions[t.y]),
-                                  glm::dvec3(mesh.positions[t.z]));
+        crossed += segmentCrosses(e, glm::dvec3(q.x, 0.0, q.y), glm::dvec3(mesh.positions[t.x]),
+                                  glm::dvec3(mesh.positions[t.y]), glm::dvec3(mesh.positions[t.z]));
       ++checked;
       hidden += crossed > 0;
       wrong += (winding != 0) != (crossed > 0);
@@ -129,7 +133,8 @@ void expectUsableOccluder(const Mesh& mesh, const std::string& what) {
   const MeshTopology m = occluderTopology(mesh);
   expectClosedOriented(m, what);
   ASSERT_EQ(m.surfaceTriangles + m.copyOf.size(), m.triangleCount()) << what;
-  for (const Vec3& eye : {Vec3(0.3f, 5.0f, 0.2f), Vec3(5.0f, 6.0f, 7.0f), Vec3(-4.0f, -3.0f, 1.0f), Vec3(0.1f, 0.2f, 0.3f)})
+  for (const Vec3& eye :
+       {Vec3(0.3f, 5.0f, 0.2f), Vec3(5.0f, 6.0f, 7.0f), Vec3(-4.0f, -3.0f, 1.0f), Vec3(0.1f, 0.2f, 0.3f)})
     expectRingsClose(m, facing(m, eye), what + " (facing a point)");
   uint32_t state = 12345u;
   for (int trial = 0; trial < 20; ++trial) {

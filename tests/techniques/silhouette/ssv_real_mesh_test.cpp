@@ -25,13 +25,13 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "techniques/silhouette/mesh_topology.h"
 #include "penumbra/metrics.h"
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
 #include "penumbra/reference.h"
 #include "penumbra/scene_io.h"
 #include "techniques/shadow_map_fixture.h"
+#include "techniques/silhouette/mesh_topology.h"
 
 namespace penumbra {
 namespace {
@@ -53,7 +53,8 @@ Scene modelScene(const std::string& file) {
   const Vec3 size = b.upper - b.lower;
   const float s = 2.0f / std::max({size.x, size.y, size.z});
   const Vec3 centre = 0.5f * (b.lower + b.upper);
-  transformMesh(mesh, glm::scale(glm::translate(Mat4(1.0f), Vec3(-centre.x * s, -b.lower.y * s, -centre.z * s)), Vec3(s)));
+  transformMesh(mesh,
+                glm::scale(glm::translate(Mat4(1.0f), Vec3(-centre.x * s, -b.lower.y * s, -centre.z * s)), Vec3(s)));
   Scene scene;
   scene.objects.push_back(testing::makeObject(0, makePlane(12.0f, 12.0f)));
   scene.objects.push_back(testing::makeObject(1, std::move(mesh)));
@@ -120,13 +121,15 @@ TEST_P(RealMesh, SsvAndWedgesBeatTheHardShadow) {
     EXPECT_EQ(bad, 0u) << names[i] << " on " << model.file;
     m[i] = measure(v, truth, mask);
   }
-  std::printf("[ measured ] %s: %zu triangles (%zu degenerate, %zu repeated), %zu boundary / %zu non-manifold / %zu inconsistent edges, "
-              "%zu solid + %zu shell components; %dx%d, reference %u spp; RMSE8 / penumbra RMSE8 / umbra leaks: "
-              "hard %.2f / %.2f / %zu, ssv %.2f / %.2f / %zu, wedges %.2f / %.2f / %zu\n",
-              model.file, mesh.triangleCount(), topology.droppedDegenerate, topology.droppedDuplicates, topology.boundaryEdges,
-              topology.nonManifoldEdges, topology.inconsistentEdges, topology.solidComponents, topology.shellComponents, kImage, kImage,
-              kReferenceSpp, m[0].error.rmse8, m[0].error.penumbraRmse8, m[0].umbraLeaks, m[1].error.rmse8, m[1].error.penumbraRmse8,
-              m[1].umbraLeaks, m[2].error.rmse8, m[2].error.penumbraRmse8, m[2].umbraLeaks);
+  std::printf(
+      "[ measured ] %s: %zu triangles (%zu degenerate, %zu repeated), %zu boundary / %zu non-manifold / %zu "
+      "inconsistent edges, "
+      "%zu solid + %zu shell components; %dx%d, reference %u spp; RMSE8 / penumbra RMSE8 / umbra leaks: "
+      "hard %.2f / %.2f / %zu, ssv %.2f / %.2f / %zu, wedges %.2f / %.2f / %zu\n",
+      model.file, mesh.triangleCount(), topology.droppedDegenerate, topology.droppedDuplicates, topology.boundaryEdges,
+      topology.nonManifoldEdges, topology.inconsistentEdges, topology.solidComponents, topology.shellComponents, kImage,
+      kImage, kReferenceSpp, m[0].error.rmse8, m[0].error.penumbraRmse8, m[0].umbraLeaks, m[1].error.rmse8,
+      m[1].error.penumbraRmse8, m[1].umbraLeaks, m[2].error.rmse8, m[2].error.penumbraRmse8, m[2].umbraLeaks);
   for (int i = 1; i < 3; ++i) {
     EXPECT_LT(m[i].error.rmse8, m[0].error.rmse8) << names[i] << " on " << model.file;
     EXPECT_LE(m[i].umbraLeaks, m[0].umbraLeaks) << names[i] << " on " << model.file;
@@ -134,9 +137,11 @@ TEST_P(RealMesh, SsvAndWedgesBeatTheHardShadow) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AssimpTestModels, RealMesh,
-                         ::testing::Values(Model{"Collada/teapots.DAE", Defect::Open}, Model{"OBJ/spider.obj", Defect::InconsistentWinding},
+                         ::testing::Values(Model{"Collada/teapots.DAE", Defect::Open},
+                                           Model{"OBJ/spider.obj", Defect::InconsistentWinding},
                                            Model{"glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb", Defect::Open},
-                                           Model{"STL/sphereWithHole.stl", Defect::Open}, Model{"OBJ/WusonOBJ.obj", Defect::Open}),
+                                           Model{"STL/sphereWithHole.stl", Defect::Open},
+                                           Model{"OBJ/WusonOBJ.obj", Defect::Open}),
                          [](const ::testing::TestParamInfo<Model>& info) {
                            const std::string f = info.param.file;
                            std::string name = f.substr(f.find_last_of('/') + 1);

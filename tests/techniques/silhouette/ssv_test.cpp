@@ -55,7 +55,8 @@ Object box(int32_t id, const Mat4& wsFromObject, const Vec3& size) {
 
 // The 2.4 x 2.4 square light at height 3.6 of the tilted-cube tests (Rouf Fig. 4-10).
 Light largeSquareLight() {
-  return Light::polygon({Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
+  return Light::polygon(
+      {Vec3(-1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, -1.2f), Vec3(1.2f, 3.6f, 1.2f), Vec3(-1.2f, 3.6f, 1.2f)});
 }
 
 // A cube of side `size` centred at `center`, turned by `aboutZ` then `aboutX` degrees.
@@ -94,7 +95,8 @@ GBuffer groundGridGBuffer(float lo, float hi, int n) {
   return g;
 }
 
-Image<float> run(const std::string& name, const Scene& scene, const GBuffer& g, const std::vector<std::string>& kv = {}) {
+Image<float> run(const std::string& name, const Scene& scene, const GBuffer& g,
+                 const std::vector<std::string>& kv = {}) {
   return testing::runTechnique(name, scene, g, kv);
 }
 
@@ -149,7 +151,8 @@ double concavityDepth(const Image<float>& v, float level) {
       for (size_t i = 0; i < hull.size() && inHull; ++i) inHull = cross(hull[i], hull[(i + 1) % hull.size()], c) >= 0;
       if (!inHull) continue;
       double nearest = 1e30;
-      for (const glm::ivec2& q : inside) nearest = std::min(nearest, glm::distance(c, glm::dvec2(q.x + 0.5, q.y + 0.5)));
+      for (const glm::ivec2& q : inside)
+        nearest = std::min(nearest, glm::distance(c, glm::dvec2(q.x + 0.5, q.y + 0.5)));
       deepest = std::max(deepest, nearest);
     }
   return deepest;
@@ -160,7 +163,8 @@ TEST(Ssv, ThinPlateAcrossASideMatchesTheClosedForm) {
   // plate's +x side (z = 0.1) the edge is parallel to the light's side: the visible fraction is
   // exactly linear in the edge's projected offset, as ssv interpolates it.
   const Light light = Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.8f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.5f));
-  const Scene scene = groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(0.2f, 1.499f, 0.1f)), Vec3(1.2f, 0.002f, 0.8f))});
+  const Scene scene =
+      groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(0.2f, 1.499f, 0.1f)), Vec3(1.2f, 0.002f, 0.8f))});
   const GBuffer g = groundLineGBuffer(Vec3(-2.5f, 0.0f, 0.1f), Vec3(2.5f, 0.0f, 0.1f), 301);
   const Image<float> v = run("ssv", scene, g);
   const double s = 4.0 / 1.5;
@@ -176,7 +180,8 @@ TEST(Ssv, ThinPlateAcrossASideMatchesTheClosedForm) {
   }
   std::printf("[ measured ] ssv thin plate across a side: max |V - exact| %.4f, %d soft samples\n", maxErr, soft);
   EXPECT_LT(maxErr, 0.015);  // measured 0.0069 (the plate's 0.002 thickness; the corners are off this line)
-  EXPECT_GT(soft, 60);       // measured 104  // two penumbrae of 1.6 * (4 - 1.5) / 1.5 = 2.7 world units each, less the edges: ~ 70 of 301
+  EXPECT_GT(soft, 60);       // measured 104  // two penumbrae of 1.6 * (4 - 1.5) / 1.5 = 2.7 world units each, less the
+                             // edges: ~ 70 of 301
 }
 
 TEST(Ssv, AxisParallelConcaveSlabMatchesTheReference) {
@@ -187,7 +192,8 @@ TEST(Ssv, AxisParallelConcaveSlabMatchesTheReference) {
   // are receivers too. What is left is the reference's noise.
   Scene scene = loadScene("concave");
   Object& slab = scene.objects.at(1);
-  transformMesh(slab.mesh, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.2f, 0.0f)) * glm::rotate(Mat4(1.0f), radians(-20.0f), Vec3(0.0f, 1.0f, 0.0f)) *
+  transformMesh(slab.mesh, glm::translate(Mat4(1.0f), Vec3(0.0f, 1.2f, 0.0f)) *
+                               glm::rotate(Mat4(1.0f), radians(-20.0f), Vec3(0.0f, 1.0f, 0.0f)) *
                                glm::translate(Mat4(1.0f), Vec3(0.0f, -1.2f, 0.0f)));
   const GBuffer g = renderGBuffer(scene, 128, 128);
   const Image<uint8_t> mask = errorMask(g, scene.lights.at(0));
@@ -202,8 +208,10 @@ TEST(Ssv, AxisParallelConcaveSlabMatchesTheReference) {
   for (size_t i = 0; i < vs.size(); ++i)
     if (mask[i] && g.objectId(static_cast<int>(i % g.width()), static_cast<int>(i / g.width())) == 0)
       groundMax = std::max(groundMax, double(std::abs(vs[i] - vr[i])));
-  std::printf("[ measured ] axis-parallel U slab RMSE8 / penumbra RMSE8 / max on the ground: ssv %.2f / %.2f / %.3f, wedges %.2f / %.2f\n",
-              ssv.rmse8, ssv.penumbraRmse8, groundMax, wedges.rmse8, wedges.penumbraRmse8);
+  std::printf(
+      "[ measured ] axis-parallel U slab RMSE8 / penumbra RMSE8 / max on the ground: ssv %.2f / %.2f / %.3f, wedges "
+      "%.2f / %.2f\n",
+      ssv.rmse8, ssv.penumbraRmse8, groundMax, wedges.rmse8, wedges.penumbraRmse8);
   EXPECT_LT(ssv.rmse8, 1.2);          // measured 0.91 (the reference's standard error is about 0.003, 0.8 in RMSE8)
   EXPECT_LT(ssv.penumbraRmse8, 2.4);  // measured 1.77
   EXPECT_LT(groundMax, 0.05);         // measured 0.037
@@ -217,10 +225,11 @@ TEST(Ssv, ACubeWithNoFacetFullyLitOrInShadowStillCastsItsShadow) {
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 64);
   const Image<float> vs = run("ssv", scene, g), vr = reference(scene, g, 1024);
   const auto ssvMin = *std::min_element(vs.begin(), vs.end()), refMin = *std::min_element(vr.begin(), vr.end());
-  std::printf("[ measured ] cube with every facet partially lit: min V ssv %.4f, reference %.4f; RMSE8 %.2f, none %.2f\n", ssvMin, refMin,
-              rmse8(vs, vr), rmse8(Image<float>(64, 64, 1.0f), vr));
-  EXPECT_LT(ssvMin, 0.98f);         // measured 0.964 (reference 0.943)
-  EXPECT_LT(rmse8(vs, vr), 2.5);    // measured 1.77; no shadow at all (V = 1) measures 9.69
+  std::printf(
+      "[ measured ] cube with every facet partially lit: min V ssv %.4f, reference %.4f; RMSE8 %.2f, none %.2f\n",
+      ssvMin, refMin, rmse8(vs, vr), rmse8(Image<float>(64, 64, 1.0f), vr));
+  EXPECT_LT(ssvMin, 0.98f);       // measured 0.964 (reference 0.943)
+  EXPECT_LT(rmse8(vs, vr), 2.5);  // measured 1.77; no shadow at all (V = 1) measures 9.69
 }
 
 TEST(Ssv, TheHoleOfARingShapedOccluderLetsTheLightThrough) {
@@ -232,12 +241,14 @@ TEST(Ssv, TheHoleOfARingShapedOccluderLetsTheLightThrough) {
   ring.id = 1;
   ring.name = "square ring";
   ring.mesh = makeTorus(0.8f, 0.15f, 4, 4);
-  transformMesh(ring.mesh, glm::rotate(glm::translate(Mat4(1.0f), Vec3(0.0f, 1.5f, 0.0f)), radians(45.0f), Vec3(0.0f, 1.0f, 0.0f)));
+  transformMesh(ring.mesh, glm::rotate(glm::translate(Mat4(1.0f), Vec3(0.0f, 1.5f, 0.0f)), radians(45.0f),
+                                       Vec3(0.0f, 1.0f, 0.0f)));
   const Scene scene = groundScene(light, {ring});
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 64);
   const Image<float> vs = run("ssv", scene, g), vr = reference(scene, g, 1024);
-  std::printf("[ measured ] square ring: V under the hole's centre ssv %.3f, reference %.3f; RMSE8 ssv %.2f, wedges %.2f\n", vs(32, 32), vr(32, 32),
-              rmse8(vs, vr), rmse8(run("wedges", scene, g), vr));
+  std::printf(
+      "[ measured ] square ring: V under the hole's centre ssv %.3f, reference %.3f; RMSE8 ssv %.2f, wedges %.2f\n",
+      vs(32, 32), vr(32, 32), rmse8(vs, vr), rmse8(run("wedges", scene, g), vr));
   // The whole light is seen through the hole from below its centre; were the hole's ring to
   // compete with the outline's, V would be 0 there.
   EXPECT_GT(vs(32, 32), 0.95f);   // measured 1.000 (reference 1.000)
@@ -269,14 +280,15 @@ TEST(Ssv, SingleSilhouetteArtifactTheOutlineOfAConvexOccludersShadowStaysConvex)
   const GBuffer g = groundGridGBuffer(-6.0f, 6.0f, 160);  // 0.075 per pixel
   const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g), vr = reference(scene, g, 512);
   for (float level : {0.99f, 0.97f}) {
-    std::printf("[ measured ] tilted cube, outline V < %.2f: deepest notch ssv %.2f, wedges %.2f, reference %.2f pixels\n", level,
-                concavityDepth(vs, level), concavityDepth(vw, level), concavityDepth(vr, level));
+    std::printf(
+        "[ measured ] tilted cube, outline V < %.2f: deepest notch ssv %.2f, wedges %.2f, reference %.2f pixels\n",
+        level, concavityDepth(vs, level), concavityDepth(vw, level), concavityDepth(vr, level));
   }
-  EXPECT_LE(concavityDepth(vr, 0.99f), 2.5);   // measured 1.41 (1.00 at 1024 spp): convex up to noise and staircase
-  EXPECT_LE(concavityDepth(vs, 0.99f), 1.5);   // measured 1.00
-  EXPECT_GE(concavityDepth(vw, 0.99f), 6.0);   // measured 10.00
-  EXPECT_LE(concavityDepth(vs, 0.97f), 1.5);   // measured 1.00
-  EXPECT_GE(concavityDepth(vw, 0.97f), 4.0);   // measured 6.00
+  EXPECT_LE(concavityDepth(vr, 0.99f), 2.5);  // measured 1.41 (1.00 at 1024 spp): convex up to noise and staircase
+  EXPECT_LE(concavityDepth(vs, 0.99f), 1.5);  // measured 1.00
+  EXPECT_GE(concavityDepth(vw, 0.99f), 6.0);  // measured 10.00
+  EXPECT_LE(concavityDepth(vs, 0.97f), 1.5);  // measured 1.00
+  EXPECT_GE(concavityDepth(vw, 0.97f), 4.0);  // measured 6.00
 }
 
 TEST(Ssv, CubeOnAVertexWithNoFullyLitFacetNotchesItsOutlineAsWedgesDo) {
@@ -289,8 +301,9 @@ TEST(Ssv, CubeOnAVertexWithNoFullyLitFacetNotchesItsOutlineAsWedgesDo) {
   const Scene scene = groundScene(largeSquareLight(), {cube});
   const GBuffer g = groundGridGBuffer(-6.0f, 6.0f, 160);
   const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g), vr = reference(scene, g, 1024);
-  std::printf("[ measured ] cube on a vertex, outline V < 0.995: deepest notch ssv %.2f, wedges %.2f, reference %.2f pixels\n",
-              concavityDepth(vs, 0.995f), concavityDepth(vw, 0.995f), concavityDepth(vr, 0.995f));
+  std::printf(
+      "[ measured ] cube on a vertex, outline V < 0.995: deepest notch ssv %.2f, wedges %.2f, reference %.2f pixels\n",
+      concavityDepth(vs, 0.995f), concavityDepth(vw, 0.995f), concavityDepth(vr, 0.995f));
   EXPECT_LE(concavityDepth(vr, 0.995f), 3.5);  // measured 2.83 (2.24 at 2048 spp: Monte Carlo noise)
   EXPECT_GE(concavityDepth(vs, 0.995f), 5.0);  // measured 7.21
   EXPECT_GE(concavityDepth(vw, 0.995f), 4.0);  // measured 5.39
@@ -299,22 +312,24 @@ TEST(Ssv, CubeOnAVertexWithNoFullyLitFacetNotchesItsOutlineAsWedgesDo) {
 TEST(Ssv, OverlappingOccludersAgainstTheReference) {
   // Rouf Fig. 4-13: two plates at different heights whose shadows overlap.
   const Light light = Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.8f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.8f));
-  const Scene scene = groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(-0.3f, 2.0f, -0.2f)), Vec3(0.9f, 0.05f, 0.9f)),
-                                          box(2, glm::translate(Mat4(1.0f), Vec3(0.35f, 1.4f, 0.3f)), Vec3(0.9f, 0.05f, 0.9f))});
+  const Scene scene =
+      groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(-0.3f, 2.0f, -0.2f)), Vec3(0.9f, 0.05f, 0.9f)),
+                          box(2, glm::translate(Mat4(1.0f), Vec3(0.35f, 1.4f, 0.3f)), Vec3(0.9f, 0.05f, 0.9f))});
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 96);
   const Image<float> vr = reference(scene, g, 1024);
   const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g);
   const double ssv = rmse8(vs, vr), wedges = rmse8(vw, vr);
   double ssvMax = 0.0;
   for (size_t i = 0; i < vs.size(); ++i) ssvMax = std::max(ssvMax, double(std::abs(vs[i] - vr[i])));
-  std::printf("[ measured ] overlapping plates RMSE8: ssv %.2f (max |V - reference| %.3f), wedges %.2f\n", ssv, ssvMax, wedges);
+  std::printf("[ measured ] overlapping plates RMSE8: ssv %.2f (max |V - reference| %.3f), wedges %.2f\n", ssv, ssvMax,
+              wedges);
   // The thesis' claim holds: the rings compete (their hidden parts are united), so where both
   // plates hide the same part of the light it is counted once, while wedges adds the two
   // contributions. The plates' edges are parallel to the light's sides, where ssv is exact: what
   // is left is the reference's noise (1024 spp).
-  EXPECT_LT(ssv, 0.6);     // measured 0.37
+  EXPECT_LT(ssv, 0.6);      // measured 0.37
   EXPECT_LT(ssvMax, 0.03);  // measured 0.015
-  EXPECT_LT(wedges, 8.0);  // measured 6.48
+  EXPECT_LT(wedges, 8.0);   // measured 6.48
   EXPECT_LT(3.0 * ssv, wedges);
 }
 
@@ -325,7 +340,8 @@ TEST(Ssv, SlitShowsTheThinVisiblePartOfTheLight) {
   const GBuffer g = groundLineGBuffer(Vec3(-0.6f, 0.0f, 0.0f), Vec3(0.6f, 0.0f, 0.0f), 121);
   const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g), vr = reference(scene, g, 1024);
   for (int i = 0; i <= 120; i += 10)
-    std::printf("[ measured ] slit x %+.2f: reference %.3f ssv %.3f wedges %.3f\n", g.wsPosition(i, 0).x, vr(i, 0), vs(i, 0), vw(i, 0));
+    std::printf("[ measured ] slit x %+.2f: reference %.3f ssv %.3f wedges %.3f\n", g.wsPosition(i, 0).x, vr(i, 0),
+                vs(i, 0), vw(i, 0));
   // Measured: under the gap (x = 0) reference 0.174, ssv 0.134; max |ssv - reference| over
   // |x| <= 0.3 is 0.042; beyond x = +-0.5 both slabs hide all of the light.
   double maxDiff = 0.0;
@@ -353,9 +369,12 @@ TEST(Ssv, ConcaveUnderEveryLightShapeAgainstTheReference) {
   ASSERT_GE(scene.lights.size(), 4u);
   const std::vector<LightCase> cases = {
       {"concave far (square 1.2 at 4)", scene.lights[0], 9, 16, 4.5, 8.5},
-      {"concave near (square 1.2 at 2)", Light::polygon({Vec3(-0.6f, 2, -0.6f), Vec3(0.6f, 2, -0.6f), Vec3(0.6f, 2, 0.6f), Vec3(-0.6f, 2, 0.6f)}), 20.5, 21.5, 8.2, 8.6},
+      {"concave near (square 1.2 at 2)",
+       Light::polygon({Vec3(-0.6f, 2, -0.6f), Vec3(0.6f, 2, -0.6f), Vec3(0.6f, 2, 0.6f), Vec3(-0.6f, 2, 0.6f)}), 20.5,
+       21.5, 8.2, 8.6},
       {"triangle (circumradius 0.7)", scene.lights[1], 16, 28.5, 2.3, 5},
-      {"square rect 1.2", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.6f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f)), 9, 16, 4.5, 8.5},
+      {"square rect 1.2", Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.6f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f)), 9, 16,
+       4.5, 8.5},
       {"hexagon (circumradius 0.7)", scene.lights[2], 8, 14.5, 4, 8},
       {"thin rect 1.8 x 0.12", scene.lights[3], 9.5, 18, 6, 11.7},
   };
@@ -387,10 +406,14 @@ TEST(Ssv, ConcaveUnderEveryLightShapeAgainstTheReference) {
     Image<uint8_t> groundMask = mask;
     for (int y = 0; y < g.height(); ++y)
       for (int x = 0; x < g.width(); ++x) groundMask(x, y) = mask(x, y) && g.objectId(x, y) == 0;
-    const ErrorStats ssvGround = compareVisibility(vs, vr, groundMask), wedgesGround = compareVisibility(vw, vr, groundMask);
-    std::printf("[ measured ] %-32s RMSE8 / penumbra RMSE8: ssv %5.2f / %5.2f, ssv edge_visibility=area %5.2f / %5.2f, wedges %5.2f / %5.2f, raytraced-hard %5.2f / %5.2f; on the ground only: ssv %5.2f / %5.2f, wedges %5.2f / %5.2f\n",
-                c.name, ssv.rmse8, ssv.penumbraRmse8, area.rmse8, area.penumbraRmse8, wedges.rmse8, wedges.penumbraRmse8, hard.rmse8,
-                hard.penumbraRmse8, ssvGround.rmse8, ssvGround.penumbraRmse8, wedgesGround.rmse8, wedgesGround.penumbraRmse8);
+    const ErrorStats ssvGround = compareVisibility(vs, vr, groundMask),
+                     wedgesGround = compareVisibility(vw, vr, groundMask);
+    std::printf(
+        "[ measured ] %-32s RMSE8 / penumbra RMSE8: ssv %5.2f / %5.2f, ssv edge_visibility=area %5.2f / %5.2f, wedges "
+        "%5.2f / %5.2f, raytraced-hard %5.2f / %5.2f; on the ground only: ssv %5.2f / %5.2f, wedges %5.2f / %5.2f\n",
+        c.name, ssv.rmse8, ssv.penumbraRmse8, area.rmse8, area.penumbraRmse8, wedges.rmse8, wedges.penumbraRmse8,
+        hard.rmse8, hard.penumbraRmse8, ssvGround.rmse8, ssvGround.penumbraRmse8, wedgesGround.rmse8,
+        wedgesGround.penumbraRmse8);
     EXPECT_LT(ssv.rmse8, c.ssvRmse8) << c.name;
     EXPECT_LT(ssv.penumbraRmse8, c.ssvPenumbraRmse8) << c.name;
     EXPECT_LT(wedges.rmse8, c.wedgesRmse8) << c.name;
@@ -408,7 +431,8 @@ TEST(Ssv, ConcaveUnderEveryLightShapeAgainstTheReference) {
 
 TEST(Ssv, FixedSamplingQuantizesSlicingDoesNot) {
   const Light light = Light::rect(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.8f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.5f));
-  const Scene scene = groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(0.2f, 1.4f, 0.1f)), Vec3(1.2f, 0.2f, 0.8f))});
+  const Scene scene =
+      groundScene(light, {box(1, glm::translate(Mat4(1.0f), Vec3(0.2f, 1.4f, 0.1f)), Vec3(1.2f, 0.2f, 0.8f))});
   const GBuffer g = groundGridGBuffer(-3.0f, 3.0f, 96);
   auto shades = [](const Image<float>& v) { return std::set<float>(v.begin(), v.end()).size(); };
   const size_t s8 = shades(run("ssv", scene, g, {"integration=8x8"}));
@@ -421,9 +445,10 @@ TEST(Ssv, FixedSamplingQuantizesSlicingDoesNot) {
 }
 
 TEST(Ssv, RefusesNonPolygonalLightsNamingTheShape) {
-  for (const Light& light : {Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f), Light::disk(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
-                             Light::segment(Vec3(-1.0f, 4.0f, 0.0f), Vec3(1.0f, 4.0f, 0.0f)),
-                             Light::directional(Vec3(0.0f, 1.0f, 0.0f), 0.1f)}) {
+  for (const Light& light :
+       {Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f), Light::disk(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
+        Light::segment(Vec3(-1.0f, 4.0f, 0.0f), Vec3(1.0f, 4.0f, 0.0f)),
+        Light::directional(Vec3(0.0f, 1.0f, 0.0f), 0.1f)}) {
     const Scene scene = groundScene(light, {});
     try {
       createTechnique("ssv")->prepare(scene, light);
@@ -461,10 +486,11 @@ TEST(Ssv, ABoxWithAHoleShadowsTheGroundAsTheClosedBoxDoes) {
     const Scene scene = groundScene(light, {open});
     const Image<float> truth = reference(scene, g, 256);
     const Image<float> vs = run("ssv", scene, g), vw = run("wedges", scene, g);
-    std::printf("[ measured ] box with a hole in its %s: RMSE8 against the closed box's reference: reference (256 spp) %.2f, "
-                "ssv %.2f (closed %.2f), wedges %.2f (closed %.2f); against their closed-box images: ssv %.2f, wedges %.2f\n",
-                top ? "top" : "bottom", rmse8(truth, vr), rmse8(vs, vr), rmse8(ssvClosed, vr), rmse8(vw, vr), rmse8(wedgesClosed, vr),
-                rmse8(vs, ssvClosed), rmse8(vw, wedgesClosed));
+    std::printf(
+        "[ measured ] box with a hole in its %s: RMSE8 against the closed box's reference: reference (256 spp) %.2f, "
+        "ssv %.2f (closed %.2f), wedges %.2f (closed %.2f); against their closed-box images: ssv %.2f, wedges %.2f\n",
+        top ? "top" : "bottom", rmse8(truth, vr), rmse8(vs, vr), rmse8(ssvClosed, vr), rmse8(vw, vr),
+        rmse8(wedgesClosed, vr), rmse8(vs, ssvClosed), rmse8(vw, wedgesClosed));
     EXPECT_LT(rmse8(truth, vr), 1.0) << "the truth is the closed box's";  // measured 0.31 (noise)
     EXPECT_LT(rmse8(vs, ssvClosed), 0.5);                                 // measured 0.01
     EXPECT_LT(rmse8(vw, wedgesClosed), 0.5);                              // measured 0.00

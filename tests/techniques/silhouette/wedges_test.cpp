@@ -57,7 +57,9 @@ Image<float> run(const std::string& name, const Scene& scene, const GBuffer& g) 
 double plateVisibility(double px, double pz, double H, double hx, double hz, double h, double x0, double x1, double z0,
                        double z1) {
   const double s = H / h;
-  auto overlap = [](double a0, double a1, double b0, double b1) { return std::max(0.0, std::min(a1, b1) - std::max(a0, b0)); };
+  auto overlap = [](double a0, double a1, double b0, double b1) {
+    return std::max(0.0, std::min(a1, b1) - std::max(a0, b0));
+  };
   const double ox = overlap(px + (x0 - px) * s, px + (x1 - px) * s, -hx, hx);
   const double oz = overlap(pz + (z0 - pz) * s, pz + (z1 - pz) * s, -hz, hz);
   return 1.0 - ox * oz / (4.0 * hx * hz);
@@ -106,7 +108,8 @@ TEST(Wedges, OverlapApproximationAddsCoverage) {
     additiveErr = std::max(additiveErr, std::abs(v12(i, 0) - sum));
     refGap = std::max(refGap, double(ref(i, 0) - v12(i, 0)));
   }
-  std::printf("[ measured ] wedges overlap: max |V12 - additive| %.5f, max reference - wedges %.3f\n", additiveErr, refGap);
+  std::printf("[ measured ] wedges overlap: max |V12 - additive| %.5f, max reference - wedges %.3f\n", additiveErr,
+              refGap);
   EXPECT_LT(additiveErr, 1e-4);  // exactly additive (float rounding)
   EXPECT_GT(refGap, 0.1);        // the reference sees more light than the sum says
 }
@@ -117,8 +120,8 @@ TEST(Wedges, ErrorAgainstReferenceOnConcave) {
   for (float x : v) ASSERT_TRUE(x >= 0.0f && x <= 1.0f);
   const ErrorStats wedges = errorAgainstReference(v, s);
   const ErrorStats hard = errorAgainstReference(s.hardTruth, s);
-  std::printf("[ measured ] concave wedges: RMSE8 %.2f, penumbra RMSE8 %.2f (raytraced-hard %.2f, %.2f)\n", wedges.rmse8,
-              wedges.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
+  std::printf("[ measured ] concave wedges: RMSE8 %.2f, penumbra RMSE8 %.2f (raytraced-hard %.2f, %.2f)\n",
+              wedges.rmse8, wedges.penumbraRmse8, hard.rmse8, hard.penumbraRmse8);
   // Measured: 4.53 / 8.51 (raytraced-hard 35.2 / 66.6). Most of it is on the slab's notch walls,
   // where the silhouette seen from the light's centre (the notch walls face it) is not the one seen
   // from the wall (the single-silhouette approximation): the edge right above a wall point bounds
@@ -130,9 +133,10 @@ TEST(Wedges, ErrorAgainstReferenceOnConcave) {
 }
 
 TEST(Wedges, RefusesNonPolygonalLightsNamingTheShape) {
-  for (const Light& light : {Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f), Light::disk(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
-                             Light::segment(Vec3(-1.0f, 4.0f, 0.0f), Vec3(1.0f, 4.0f, 0.0f)),
-                             Light::directional(Vec3(0.0f, 1.0f, 0.0f), 0.1f)}) {
+  for (const Light& light :
+       {Light::sphere(Vec3(0.0f, 4.0f, 0.0f), 0.5f), Light::disk(Vec3(0.0f, 4.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f),
+        Light::segment(Vec3(-1.0f, 4.0f, 0.0f), Vec3(1.0f, 4.0f, 0.0f)),
+        Light::directional(Vec3(0.0f, 1.0f, 0.0f), 0.1f)}) {
     const Scene scene = plateScene(light, {plate(1, Vec3(0.0f, 1.0f, 0.0f), Vec3(1.0f))});
     try {
       createTechnique("wedges")->prepare(scene, light);
