@@ -13,30 +13,20 @@
 //  3. PCF over that disk: `filter_samples` taps, each a 1-texel box compare (bilinear weights) while
 //     the disk's radius is at most `bilinear_max_radius` texels, so narrow penumbrae stay
 //     antialiased; wider disks take one nearest-texel compare per tap (a quarter of the reads; their
-//     taps lie over a texel apart, where the box smooths little — measured at map 1024: RMSE8 +0.15,
-//     penumbra RMSE8 +0.5 to +0.8 on torus and crowded, for about 10% of the frame's time).
+//     taps lie over a texel apart, where the box smooths little).
 // Both disks use Vogel's spiral (deterministic; the sketch uses a Poisson disk), rotated per pixel
 // when `rotate` is on (banding becomes fine noise) by one of 256 angles read from a 16x16 tile
 // (PixelRotations: a table read, where a hash per pixel cost a few percent of the frame).
 //
-// Cost (crowded at 1024^2 with a 1024^2 map, 16 + 32 taps): about 2.4x `hard` where the CPU has
-// AVX-512F, 2.9x where it has only AVX2 (was 9.3x). The kernels are vectorized (shadow_map.cpp): an
-// AVX2 clone picked at load time (3.4x -> 3.0x), and 16 taps per 512-bit vector with one gather each
-// (2.8x -> 2.4x in one run), V bit-identical on every path; lit pixels and umbra are decided by the
-// search alone.
-// Tried and dropped: a min/max depth pyramid to skip the search where a region is all lit or all
-// blocked — it decided 0.1% of the search regions, because the receiver plane of a receiver tilted
-// towards the light sweeps more depth over a region than the bias allows, so the receiver's own
-// texels look like possible blockers; an exact early-out from per-tile plane bounds of the map
-// (least-squares plane + smallest residual per tile, a pyramid of 8- to 1024-texel tiles, compared
-// with the receiver's plane at the corners of each tile in the search square): it decided 5% of the
-// pixels with 4 tiles per pixel and 39% descending to 8-texel tiles, and was slower either way
-// (visibility 40-66 ms against 33 ms without), as the 16-tap search costs less than a few tile
-// tests; rows padded off the 4 KiB stride, a copy of the map in huge
-// pages, fixed-count unrolled kernels, and per-pixel rotations off (all: no gain on this CPU — the
-// kernels are bound by instructions, not by memory). Directional lights use the
-// orthographic variant: R is tan(angular_diameter / 2), the solar disk's radius at unit distance,
-// and the radii are R (z_r - z) and R (z_r - z_b) in world units (no perspective division).
+// The kernels are vectorized (shadow_map.cpp: an AVX2 clone picked at load time, and 16 taps per
+// 512-bit vector with one gather each where the CPU has AVX-512F), V bit-identical on every path;
+// lit pixels and umbra are decided by the search alone. No early-out skips the search: a receiver
+// tilted towards the light sweeps more depth over a search region than the bias allows, so bounds of
+// the map per region or tile rarely decide a pixel, and the 16-tap search costs less than a few tile
+// tests.
+// Directional lights use the orthographic variant: R is tan(angular_diameter / 2), the solar disk's
+// radius at unit distance, and the radii are R (z_r - z) and R (z_r - z_b) in world units (no
+// perspective division).
 //
 // Approximations (the sketch's): the blockers are replaced by one plane at their mean depth (so
 // overlapping occluders at different depths get one penumbra width); the light is a disk of radius
