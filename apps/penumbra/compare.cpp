@@ -534,6 +534,7 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   // frame to frame: what a prepare builds once for unchanged geometry is built at the first frame.
   std::vector<std::unique_ptr<ShadowTechnique>> instances(names.size());
   ReportRow truth0;
+  SequenceRow truthSequence;  // the truth's images per frame, for the page's frame slider
   for (int k = 0; k < motion.frames; ++k) {
     Setup frameSetup = setup;
     frameSetup.scene = sceneAtFrame(setup.scene, motion, k);
@@ -552,6 +553,8 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
     floorFrame.stem = frameSetup.stem + "_floor_";
     floors.push_back(truthRow(floorFrame, floorPlan, floorSource, floorRow));
     if (k == 0) truth0 = truth;
+    truthSequence.frames.push_back(*truth.error);
+    truthSequence.images.push_back(truth.images);
     for (size_t i = 0; i < names.size(); ++i) {
       if (!running[i]) continue;
       const TechniqueInfo& info = findTechnique(names[i]);
@@ -585,6 +588,8 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   report.sequence = SequenceInfo{motion.frames, describeMotion(motion), temporalError(floors, truths, masks),
                                  fmt::format("seeds {} and {}", seed, seed + 1)};
   fillBaselineRatios(report);
+  truthSequence.temporal = temporalError(truths, truths, masks);
+  truth0.sequence = std::move(truthSequence);
   report.truth = std::move(truth0);
 
   writeReportFiles(setup, staged.dir(), report);

@@ -13,6 +13,7 @@
 #include <limits>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "penumbra/report.h"
 #include "penumbra/report_figures.h"
@@ -440,13 +441,41 @@ const char* kScript = R"js(
       });
     });
   });
+  // A sequence's frame slider: every image with data-frames shows that frame; play steps through them.
+  const slider = document.getElementById('frame');
+  if (slider) {
+    const label = document.getElementById('frame-label');
+    const count = Number(slider.max) + 1;
+    const show = (k) => {
+      slider.value = String(k);
+      label.textContent = 'frame ' + (k + 1) + ' of ' + count;
+      document.querySelectorAll('img[data-frames]').forEach((img) => {
+        const file = img.dataset.frames.split('|')[k];
+        if (file) img.setAttribute('src', file);
+      });
+    };
+    slider.addEventListener('input', () => show(Number(slider.value)));
+    const play = document.getElementById('play');
+    let timer = null;
+    play.addEventListener('click', () => {
+      if (timer) {
+        clearInterval(timer);
+        timer = null;
+        play.textContent = 'play';
+        return;
+      }
+      play.textContent = 'pause';
+      timer = setInterval(() => show((Number(slider.value) + 1) % count), 250);
+    });
+  }
   const scan = document.getElementById('show-scanline');
   if (scan) scan.addEventListener('change', () => document.body.classList.toggle('no-scanline', !scan.checked));
 })();
 )js";
 
+// `frames`: for a sequence, the image's file at every frame (the frame slider swaps them).
 std::string imageFigure(const std::string& file, const std::string& caption, const std::string& alt,
-                        const Report& report) {
+                        const Report& report, const std::vector<std::string>& frames = {}) {
   std::string line;
   if (report.profile && report.height > 0)
     line = fmt::format("<div class=\"scanline\" style=\"top: {:.4f}%\"></div>",
@@ -455,14 +484,25 @@ std::string imageFigure(const std::string& file, const std::string& caption, con
   const bool small = report.width <= 256 && report.height <= 256;
   return fmt::format(
       "<figure class=\"image\"><div class=\"frame\"><img src=\"{}\" alt=\"{}\" width=\"{}\" "
-      "height=\"{}\"{}>{}</div><figcaption>{}</figcaption></figure>",
-      esc(file), esc(alt), report.width, report.height, small ? " class=\"small\"" : "", line, caption);
+      "height=\"{}\"{}{}>{}</div><figcaption>{}</figcaption></figure>",
+      esc(file), esc(alt), report.width, report.height, small ? " class=\"small\"" : "",
+      frames.empty() ? std::string()
+                     : fmt::format(" data-frames=\"{}\"", esc(fmt::format("{}", fmt::join(frames, "|")))),
+      line, caption);
 }
 
 std::string findImage(const KeyValues& images, const std::string& kind) {
   for (const auto& [k, v] : images)
     if (k == kind) return v;
   return {};
+}
+
+// The file of `kind` at every frame of a row's sequence; empty when the row has none.
+std::vector<std::string> frameImages(const ReportRow& row, const std::string& kind) {
+  std::vector<std::string> files;
+  if (!row.sequence) return files;
+  for (const KeyValues& images : row.sequence->images) files.push_back(findImage(images, kind));
+  return files;
 }
 
 std::string joinedParams(const KeyValues& params) {
@@ -515,6 +555,29 @@ std::string resultsTable(const Report& report) {
           esc(name), std::size(columns), esc(why));
     s += "</tbody>\n";
   }
+  return s + "</table>\n";
+}
+
+// Over a sequence: each row's error averaged over the frames and its temporal error, the truth's noise
+// floor last (outside the sorted body).
+std::string sequenceTable(const Report& report) {
+  std::string s = "<table id=\"sequence\"><thead><tr>";
+  for (const char* name : {"technique", "mean RMSE8", "mean penumbra RMSE8", "flicker", "pop %", "reversed pops %"})
+    s += fmt::format("<th scope=\"col\">{}</th>", name);
+  s += "</tr></thead>\n<tbody>\n";
+  const auto temporalCells = [](const TemporalStats& t) {
+    return numberCell(t.flicker, 2) + numberCell(100.0 * t.popRate, 2) + numberCell(100.0 * t.reversedPops, 1);
+  };
+  for (const ReportRow& row : report.rows) {
+    if (!row.sequence || !row.error) continue;
+    s += fmt::format("<tr data-technique=\"{0}\"><td data-value=\"{0}\">{0}</td>", esc(row.shownName())) +
+         numberCell(row.error->rmse8, 2) + numberCell(row.error->penumbraRmse8, 2) +
+         temporalCells(row.sequence->temporal) + "</tr>\n";
+  }
+  s += fmt::format("</tbody>\n<tbody><tr data-noise-floor><td>noise floor (reference, {})</td>",
+                   esc(report.sequence->noiseFloorSeeds)) +
+       numberCell(std::nullopt, 2) + numberCell(std::nullopt, 2) + temporalCells(report.sequence->noiseFloor) +
+       "</tr></tbody>\n";
   return s + "</table>\n";
 }
 
@@ -585,6 +648,16 @@ std::string reportToHtml(const Report& report) {
   }
   h += "</section>\n";
 
+  if (report.sequence)
+    h += fmt::format(
+        "<section id=\"over-sequence\"><h2>Over the sequence</h2><p class=\"muted\">{} frames, {}. Flicker = mean "
+        "|&#916;V &#8722; &#916;V<sub>ref</sub>| &#215; 255 over the pixels in the penumbra (V or V<sub>ref</sub> in "
+        "(0.01, 0.99)) of two consecutive frames, &#916; the change from one frame to the next; pop %: the share of "
+        "those with |&#916;V &#8722; &#916;V<sub>ref</sub>| &gt; 0.1; reversed pops %: the share of pops undone at "
+        "the next frame (shimmer). The noise floor is the truth against a truth of another seed. The table above "
+        "averages each row's error over the frames.</p>\n{}</section>\n",
+        report.sequence->frames, esc(report.sequence->motion), sequenceTable(report));
+
   h += "<section id=\"plots\"><h2>Plots</h2>\n" + seriesLegend(report) + "<div class=\"plots\">\n";
   if (const std::string p = errorTimePlot(report); !p.empty())
     h += "<figure><h3>Error against time</h3>" + p +
@@ -616,6 +689,12 @@ std::string reportToHtml(const Report& report) {
         "<p><label><input type=\"checkbox\" id=\"show-scanline\" checked> show the scan line (row {}) on "
         "the images</label></p>\n",
         report.profile->row);
+  if (report.sequence)
+    h += fmt::format(
+        "<p class=\"frames\"><button type=\"button\" id=\"play\">play</button> <input type=\"range\" "
+        "id=\"frame\" min=\"0\" max=\"{0}\" value=\"0\" aria-label=\"frame\"> <span id=\"frame-label\">frame 1 "
+        "of {1}</span></p>\n",
+        report.sequence->frames - 1, report.sequence->frames);
   h += "<div class=\"cards\">\n";
   const std::string truthShaded = report.truth ? findImage(report.truth->images, "shaded") : std::string();
   if (report.truth) {
@@ -623,9 +702,10 @@ std::string reportToHtml(const Report& report) {
         "<section class=\"card truth\" id=\"card-truth\"><h3>reference (truth): {}</h3><div "
         "class=\"row-images\">",
         esc(joinedParams(report.truth->params)));
-    if (!truthShaded.empty()) h += imageFigure(truthShaded, "shaded", "reference shaded", report);
+    if (!truthShaded.empty())
+      h += imageFigure(truthShaded, "shaded", "reference shaded", report, frameImages(*report.truth, "shaded"));
     if (const std::string v = findImage(report.truth->images, "visibility"); !v.empty())
-      h += imageFigure(v, "visibility V", "reference visibility", report);
+      h += imageFigure(v, "visibility V", "reference visibility", report, frameImages(*report.truth, "visibility"));
     h += "</div></section>\n";
   }
   for (size_t i = 0; i < report.rows.size(); ++i) {
@@ -638,12 +718,14 @@ std::string reportToHtml(const Report& report) {
         row.error ? fmt::format(" <span class=\"muted\">RMSE8 {}, penumbra RMSE8 {}</span>", fixed(row.error->rmse8, 2),
                                 fixed(row.error->penumbraRmse8, 2))
                   : std::string());
-    if (!truthShaded.empty()) h += imageFigure(truthShaded, "reference (truth), shaded", "reference shaded", report);
+    if (!truthShaded.empty())
+      h += imageFigure(truthShaded, "reference (truth), shaded", "reference shaded", report,
+                       report.truth ? frameImages(*report.truth, "shaded") : std::vector<std::string>());
     const std::pair<const char*, const char*> kinds[] = {
         {"shaded", "shaded"}, {"visibility", "visibility V"}, {"error", "signed error V &#8722; V<sub>ref</sub>"}};
     for (const auto& [kind, caption] : kinds)
       if (const std::string file = findImage(row.images, kind); !file.empty())
-        h += imageFigure(file, caption, row.shownName() + " " + kind, report);
+        h += imageFigure(file, caption, row.shownName() + " " + kind, report, frameImages(row, kind));
     h += "</div></section>\n";
   }
   h += "</div></section>\n</main>\n";

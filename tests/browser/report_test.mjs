@@ -6,6 +6,7 @@
 //   - every image loads (complete, non-zero natural size) and every row of compare.json is in the table;
 //   - clicking a column header sorts the table by that column's unrounded values, both ways;
 //   - the legend's check boxes hide a technique in the plots;
+//   - over a sequence (--motion-path), the frame slider shows every image at the chosen frame and play steps on;
 // then saves a full-page screenshot (a CI artifact) to OUT/report.png.
 //
 // Usage: node report_test.mjs PENUMBRA_BINARY OUT_DIR   (run.sh checks Chromium and installs playwright-core)
@@ -135,6 +136,40 @@ try {
   const screenshot = path.join(outDir, 'report.png');
   await page.screenshot({ path: screenshot, fullPage: true });
   check(fs.statSync(screenshot).size > 10000, `screenshot saved to ${screenshot}`);
+
+  // A sequence: the frame slider shows every image at the chosen frame, each of which loads; play steps on.
+  const sequenceOut = path.join(outDir, 'sequence');
+  const sequenceArgs = ['compare', '--scene', 'torus', '--width', '64', '--height', '64', '--spp', '8',
+    '--techniques', 'hard,pcss,raytraced-hard', '--motion-path', '0.4,8,-1;0.6,8,-1', '--frames', '3',
+    '--threads', '2', '--out', sequenceOut];
+  const sequenceRun = spawnSync(binary, sequenceArgs, { encoding: 'utf8' });
+  check(sequenceRun.status === 0, 'penumbra compare over a sequence runs', `${sequenceRun.stdout}\n${sequenceRun.stderr}`);
+  const sequenceDir = path.join(sequenceOut, 'report');
+  const sequenceReport = JSON.parse(fs.readFileSync(path.join(sequenceDir, 'compare.json'), 'utf8'));
+  await page.goto(pathToFileURL(path.join(sequenceDir, 'index.html')).href, { waitUntil: 'load' });
+  const sequenceRows = await page.$$eval('#sequence tbody tr', (rows) => rows.length);
+  check(sequenceRows === sequenceReport.techniques.length + 1,
+    `the sequence table has a row per technique and the noise floor (${sequenceRows})`);
+  const flicker = await page.$$eval('#sequence tbody tr[data-technique]', (rows) => rows.map((row) => Number(row.cells[3].dataset.value)));
+  check(JSON.stringify(flicker) === JSON.stringify(sequenceReport.techniques.map((t) => t.sequence.temporal.flicker)),
+    'the sequence table shows compare.json\'s flicker', flicker.join(' '));
+  const framed = await page.$$eval('img[data-frames]', (imgs) => imgs.length);
+  check(framed >= 2 + 4 * sequenceReport.techniques.length, `${framed} images follow the frame slider`);
+  await page.$eval('#frame', (slider) => { slider.value = '2'; slider.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => Array.from(document.images).every((img) => img.complete));
+  const atFrame = await page.$$eval('img[data-frames]', (imgs) => imgs.map((img) => ({
+    src: img.getAttribute('src'), wanted: img.dataset.frames.split('|')[2], width: img.naturalWidth,
+  })));
+  check(atFrame.every((img) => img.src === img.wanted && img.src.includes('_f002_')),
+    'moving the slider to frame 3 shows every image at frame 3', atFrame.filter((i) => i.src !== i.wanted).map((i) => i.src).join(', '));
+  check(atFrame.every((img) => img.width === sequenceReport.image.width), 'every frame-3 image loads');
+  check(await page.textContent('#frame-label') === 'frame 3 of 3', 'the label names the frame');
+  await page.click('#play');
+  const stepped = await page.waitForFunction(() => document.getElementById('frame').value !== '2', null, { timeout: 3000 })
+    .then(() => true, () => false);
+  check(stepped, 'play steps to the next frame within 3 s');
+  await page.click('#play');
+  check(pageErrors.length === 0, 'no script errors on the sequence page', pageErrors.join('; '));
 } finally {
   await browser.close();
 }
