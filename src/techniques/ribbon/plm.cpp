@@ -44,7 +44,8 @@
 // (the paper's single bilinear fetch) and Equation 2,
 //     l_g = sat(sat(1/2 + 1/2 p_i / (z - c)) + 4 (z < g) - 2 (z < c) + (z < b) - 1),
 // with the compare with g made at the receiver's depth moved towards the light by the slope-scaled
-// bias of shadow_map.h (a receiver must not shadow itself through its own depth), and Equation 1
+// bias of shadow_map.h (a receiver must not shadow itself through its own depth; where the map holds
+// another object, a receiver below c is moved no higher than c), and Equation 1
 // and the compares with c and b at its true depth (neither is the receiver's own surface); a
 // receiver facing away from the light's centre gets no bias (the map never holds it); where no ribbon
 // touches the four texels Equation 2 reduces to the compare with g, which is taken directly; then
@@ -750,6 +751,7 @@ class PlmTechnique final : public ShadowTechnique {
       const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
       if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
       const float z = space_.zeta(r.lsDepth);
+      const int32_t receiver = gbuffer.objectId(x, y);
       if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
         // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
         // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
@@ -761,14 +763,16 @@ class PlmTechnique final : public ShadowTechnique {
           const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
           const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
           const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
-          const float lg = equation2(*texels[k], zk, zck);
+          const float lg = equation2(*texels[k], zk, zck, map_.objectId(is[k], js[k]) != receiver);
           sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
         }
         return sum;
       }
       const PlmTexel texel{lerp2(t00.c, t10.c, t01.c, t11.c), g, lerp2(t00.b, t10.b, t01.b, t11.b),
                            lerp2(t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
-      const float lg = equation2(texel, z, zc);
+      const bool otherObject = map_.objectId(i0, j0) != receiver && map_.objectId(i1, j0) != receiver &&
+                               map_.objectId(i0, j1) != receiver && map_.objectId(i1, j1) != receiver;
+      const float lg = equation2(texel, z, zc, otherObject);
       return options_.illuminationTable ? table_(lg) : lg;
     });
   }
@@ -777,12 +781,16 @@ class PlmTechnique final : public ShadowTechnique {
   // receiver at depth z. The compare with g is made at zc, z moved towards the light by the bias;
   // those with c and b at z itself: the bias keeps a surface from shadowing itself through its own
   // depth in g, and neither the edge nor the lower limit is the receiver's surface (biased, a
-  // receiver just under a part of the occluder rose above the b that clamps it). A texel without a
-  // ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
-  float equation2(const PlmTexel& t, float z, float zc) const {
+  // receiver just under a part of the occluder rose above the b that clamps it). Where the map holds
+  // another object than the receiver's (otherObject), g is not the receiver's surface, so a receiver
+  // below the edge is lifted no higher than c: a bias larger than its distance to the occluder above
+  // it (slope-scaled on a grazing receiver, several texels) lit it through g in the ribbon's umbra. A
+  // texel without a ribbon gives the compare with g (c and b are zetaNone, p_i 0: the same value).
+  float equation2(const PlmTexel& t, float z, float zc, bool otherObject) const {
     if (t.c >= space_.zetaNone) return zc < t.g ? 1.0f : 0.0f;
     const float l = std::clamp(0.5f + 0.5f * t.pi / std::max(z - t.c, 1e-30f), 0.0f, 1.0f);
-    return std::clamp(l + 4.0f * (zc < t.g) - 2.0f * (z < t.c) + (z < t.b) - 1.0f, 0.0f, 1.0f);
+    const float zg = otherObject && z > t.c ? std::max(zc, t.c) : zc;
+    return std::clamp(l + 4.0f * (zg < t.g) - 2.0f * (z < t.c) + (z < t.b) - 1.0f, 0.0f, 1.0f);
   }
 
   // Whether the four texels of a bilinear fetch hold one continuous ribbon, whose parameters may be
