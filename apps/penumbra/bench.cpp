@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "penumbra/error.h"
+#include "penumbra/motion.h"
 #include "penumbra/raster.h"
 #include "penumbra/report.h"
 
@@ -22,9 +23,47 @@ struct BenchOptions {
   FrameOptions frame;
   std::vector<std::string> techniques;
   std::string baseline;
-  int repeat = 5;
+  std::optional<int> repeat;  //!< runs per technique (default 5); a sequence runs each frame once
   std::string jsonPath;
+  MotionOptions motion;
 };
+
+// The frames of a motion, one technique instance across them, as a renderer runs it: the timings are
+// each pass's median over the frames after the first (steady frames); the first frame's total, which
+// builds what the others reuse, is the row's `first_frame_ms`.
+std::optional<ReportRow> benchSequence(const Setup& setup, const Motion& motion, const TechniqueInfo& info,
+                                       const ParamSet& given, NotRunTechniques& notRun,
+                                       std::vector<double>& gbufferMs) {
+  std::unique_ptr<ShadowTechnique> instance;
+  std::vector<PassTimings> steady;
+  double firstFrameMs = 0.0;
+  ReportRow row;
+  row.technique = info.name;
+  GBuffer gbuffer;
+  for (int k = 0; k < motion.frames; ++k) {
+    Setup frame = setup;
+    frame.scene = sceneAtFrame(setup.scene, motion, k);
+    Timer timer;
+    renderGBuffer(frame.scene, setup.width, setup.height, gbuffer);
+    gbufferMs.push_back(timer.elapsedMs());
+    try {
+      TechniqueRun run = runTechnique(frame, gbuffer, info, given, 1, &instance);
+      if (k == 0) {
+        row.params = describeParams(run.params);
+        firstFrameMs = run.timings.total();
+      } else {
+        steady.push_back(std::move(run.timings));
+      }
+      row.stats = std::move(run.stats);  // the last frame's
+    } catch (const std::exception& e) {
+      notRun.add(info.name, e.what());
+      return std::nullopt;
+    }
+  }
+  row.timings = medianOverFrames(steady);
+  row.stats.emplace_back("first_frame_ms", firstFrameMs);
+  return row;
+}
 
 int runBench(const BenchOptions& options) {
   ThreadLimit threads(options.frame.threads);
@@ -35,13 +74,17 @@ int runBench(const BenchOptions& options) {
   checkPrefixedParams(options.frame.params, names);
 
   const Setup setup = loadSetup(options.frame);
+  const std::optional<Motion> motion = runMotion(options.motion, setup);
+  if (motion && options.repeat)
+    fail("--repeat is for a still scene; over a sequence each of the {} frames runs once", motion->frames);
+  const int repeat = motion ? motion->frames : options.repeat.value_or(5);
   if (!options.jsonPath.empty()) refuseInputOverwrite(setup, options.jsonPath);
   std::vector<ParamSet> given;
   std::vector<PlannedRun> planned;
   for (const std::string& name : names) {
     const TechniqueInfo& info = findTechnique(name);
     given.push_back(gatherParams(setup, info, options.frame, true));
-    planned.push_back({&info, resolveParams(info.name, info.params, given.back()), options.repeat});
+    planned.push_back({&info, resolveParams(info.name, info.params, given.back()), repeat});
   }
   checkResources(setup, planned, 1, options.frame.force);
   if (!options.jsonPath.empty()) checkWritableFolderOf(options.jsonPath);
@@ -51,26 +94,34 @@ int runBench(const BenchOptions& options) {
              setup.lightIndex, describeLight(light));
   std::vector<double> gbufferMs;
   GBuffer gbuffer;
-  for (int r = 0; r < options.repeat; ++r) {  // into the same G-buffer, as a renderer does frame to frame
-    Timer timer;
-    renderGBuffer(setup.scene, setup.width, setup.height, gbuffer);
-    gbufferMs.push_back(timer.elapsedMs());
+  if (motion) {
+    fmt::print("{} frames: {}\n", motion->frames, describeMotion(*motion));
+  } else {
+    for (int r = 0; r < repeat; ++r) {  // into the same G-buffer, as a renderer does frame to frame
+      Timer timer;
+      renderGBuffer(setup.scene, setup.width, setup.height, gbuffer);
+      gbufferMs.push_back(timer.elapsedMs());
+    }
   }
 
   Report report = beginReport("bench", setup, baseline);
-  report.settings = {{"repeat", fmt::format("{}", options.repeat)},
-                     {"statistic", "median over repeats"},
-                     {"gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs))},
-                     {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
-  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
-  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  // The G-buffer's time is reported once all runs are in (over a sequence, every frame renders its own).
+  report.settings = {{motion ? "frames" : "repeat", fmt::format("{}", repeat)},
+                     {"statistic", motion ? "median over frames 2 to N of one technique instance (steady frames); "
+                                            "first_frame_ms: frame 1, which builds what the others reuse"
+                                          : "median over repeats"}};
   // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
   for (size_t i = 0; i < names.size(); ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
+    if (motion) {
+      if (std::optional<ReportRow> row = benchSequence(setup, *motion, info, given[i], notRun, gbufferMs))
+        report.rows.push_back(std::move(*row));
+      continue;
+    }
     std::optional<TechniqueRun> attempt;
     try {
-      attempt = runTechnique(setup, gbuffer, info, given[i], options.repeat);
+      attempt = runTechnique(setup, gbuffer, info, given[i], repeat);
     } catch (const std::exception& e) {
       notRun.add(info.name, e.what());
       continue;
@@ -83,8 +134,13 @@ int runBench(const BenchOptions& options) {
     row.stats = run.stats;
     report.rows.push_back(std::move(row));
   }
+  report.settings.emplace_back("gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs)));
+  report.settings.emplace_back("threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all");
+  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
+  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
   fillBaselineRatios(report);
-  fmt::print("G-buffer raster {:.2f} ms (median of {})\n\n{}", median(gbufferMs), options.repeat, reportToText(report));
+  fmt::print("G-buffer raster {:.2f} ms (median of {})\n\n{}", median(gbufferMs), gbufferMs.size(),
+             reportToText(report));
   if (!options.jsonPath.empty()) {
     writeTextFile(options.jsonPath, reportToJson(report));
     fmt::print("wrote {}\n", options.jsonPath);
@@ -104,13 +160,14 @@ Command addBenchCommand(CLI::App& parent) {
   app->add_option("--baseline", options->baseline,
                   "technique the ratios are relative to, measured in the same run (default: hard if registered, "
                   "else raytraced-hard)");
-  app->add_option("--repeat", options->repeat, "runs per technique; the median is reported")
-      ->check(CLI::Range(1, 1000))
-      ->capture_default_str();
+  app->add_option("--repeat", options->repeat,
+                  "runs per technique; the median is reported (default 5; not with a motion)")
+      ->check(CLI::Range(1, 1000));
   app->add_option("--json", options->jsonPath, "also write the table as JSON to this file");
   addFrameOptions(
       *app, options->frame,
       "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
+  addMotionOptions(*app, options->motion);
   return {app, [options] { return runBench(*options); }};
 }
 

@@ -56,6 +56,16 @@ struct FrameOptions {
 // Adds --scene, --width, --height, --light, --spp, --seed, --threads (and --param) to a subcommand.
 void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& paramHelp);
 
+// A sequence (include/penumbra/motion.h) from the command line of compare and bench: --motion-path
+// replaces the scene file's motion, --frames either's frame count.
+struct MotionOptions {
+  std::string path;             //!< "x,y,z;x,y,z;...": key points; empty: the scene file's motion, if any
+  std::string moves = "light";  //!< what `path` moves: "light" (the --light used) or "camera"
+  std::optional<int> frames;
+};
+// Adds --motion-path, --motion-moves and --frames to a subcommand.
+void addMotionOptions(CLI::App& app, MotionOptions& options);
+
 // The loaded scene and everything derived from the frame options.
 struct Setup {
   Scene scene;
@@ -67,6 +77,13 @@ struct Setup {
 // Loads the scene and checks the light index and image size. Throws Error with the fix.
 Setup loadSetup(const FrameOptions& options);
 const Light& setupLight(const Setup& setup);
+
+// The run's motion: `options` over the scene file's, validated against the scene and the light used
+// (a motion of another light than --light is refused). None: a still scene. Throws Error naming the
+// option or the scene file's field.
+std::optional<Motion> runMotion(const MotionOptions& options, const Setup& setup);
+// One line: what moves, along which key points.
+std::string describeMotion(const Motion& motion);
 
 // The planned runs of a command, checked before any heavy work (the G-buffer included): the memory
 // of the G-buffer, of `keptImages` V images and of the largest technique's buffers (its
@@ -182,6 +199,8 @@ std::vector<std::string> techniqueList(const std::vector<std::string>& names);
 std::string defaultBaseline();
 
 double median(std::vector<double> values);
+// Each pass's median over frames (or runs), in the first one's pass order.
+PassTimings medianOverFrames(const std::vector<PassTimings>& frames);
 
 // A one-line progress bar on stderr, drawn only when stderr is a terminal and a pass has run for
 // more than a second. callback() is thread-safe (a mutex taken with try_lock, so worker threads

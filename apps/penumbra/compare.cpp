@@ -60,11 +60,7 @@ struct CompareOptions {
   double errorRange = 0.5;
   std::string cacheDir;  //!< empty: DIR/cache
   bool noCache = false;
-  // A sequence (include/penumbra/motion.h): --motion-path replaces the scene file's motion, --frames
-  // either's frame count.
-  std::string motionPath;             //!< "x,y,z;x,y,z;...": key points
-  std::string motionMoves = "light";  //!< what --motion-path moves: "light" (the compared --light) or "camera"
-  std::optional<int> frames;
+  MotionOptions motion;
 };
 
 // A row's shown name: techniques with a sample count say it, so a cheap reference row is not
@@ -110,9 +106,9 @@ std::string reproduceCommand(const CompareOptions& options, const Setup& setup, 
   if (!options.mapSizes.empty())
     args.insert(args.end(), {"--map-sizes", fmt::format("{}", fmt::join(options.mapSizes, ","))});
   if (options.profileRow) args.insert(args.end(), {"--profile-row", std::to_string(*options.profileRow)});
-  if (!options.motionPath.empty())
-    args.insert(args.end(), {"--motion-moves", options.motionMoves, "--motion-path", options.motionPath});
-  if (options.frames) args.insert(args.end(), {"--frames", std::to_string(*options.frames)});
+  if (!options.motion.path.empty())
+    args.insert(args.end(), {"--motion-moves", options.motion.moves, "--motion-path", options.motion.path});
+  if (options.motion.frames) args.insert(args.end(), {"--frames", std::to_string(*options.motion.frames)});
   args.insert(args.end(), {"--error-range", fmt::format("{:g}", options.errorRange), "--out", options.outDir});
   std::string command;
   for (const std::string& a : args) command += (command.empty() ? "" : " ") + shellQuote(a);
@@ -403,53 +399,6 @@ void writeReportFiles(const Setup& setup, const std::string& reportDir, Report& 
   writeTextFile(path("index.html"), reportToHtml(report));
 }
 
-// The run's motion: --motion-path (moving the compared light or the camera) over the scene file's
-// motion; --frames over either's frame count. None: a still scene.
-std::optional<Motion> runMotion(const CompareOptions& options, const Setup& setup) {
-  std::optional<Motion> motion = setup.scene.motion;
-  if (!options.motionPath.empty()) {
-    motion.emplace();
-    if (options.motionMoves == "camera")
-      motion->target = MotionTarget::Camera;
-    else if (options.motionMoves == "light")
-      motion->target = MotionTarget::Light;
-    else
-      fail("--motion-moves '{}': expected light or camera", options.motionMoves);
-    motion->lightIndex = setup.lightIndex;
-    size_t start = 0;
-    for (int key = 0; start <= options.motionPath.size(); ++key) {
-      const size_t end = std::min(options.motionPath.find(';', start), options.motionPath.size());
-      const std::string text = options.motionPath.substr(start, end - start);
-      Vec3 p;
-      char extra = 0;
-      if (std::sscanf(text.c_str(), "%f,%f,%f %c", &p.x, &p.y, &p.z, &extra) != 3)
-        fail("--motion-path: key {} '{}' is not three numbers x,y,z (keys are separated by ';')", key, text);
-      motion->path.push_back(p);
-      start = end + 1;
-    }
-  } else if (options.motionMoves != "light") {
-    fail("--motion-moves is for --motion-path, which is not given");
-  }
-  if (!motion) {
-    if (options.frames) fail("--frames {}: the scene has no motion; give one with --motion-path", *options.frames);
-    return std::nullopt;
-  }
-  if (options.frames) motion->frames = *options.frames;
-  motion->validate(setup.scene, options.motionPath.empty() ? setup.scene.source + ": motion" : "--motion-path");
-  if (motion->target == MotionTarget::Light && motion->lightIndex != setup.lightIndex)
-    fail("{}: the motion moves light {}, but light {} is compared: pass --light {}", setup.scene.source,
-         motion->lightIndex, setup.lightIndex, motion->lightIndex);
-  return motion;
-}
-
-std::string describeMotion(const Motion& motion) {
-  std::string path;
-  for (const Vec3& p : motion.path)
-    path += fmt::format("{}({:g}, {:g}, {:g})", path.empty() ? "" : " -> ", p.x, p.y, p.z);
-  return motion.target == MotionTarget::Light ? fmt::format("light {} along {}", motion.lightIndex, path)
-                                              : fmt::format("the camera along {}", path);
-}
-
 // A row's error over frames: the mean of each frame's (the maximum for the max error).
 ErrorStats meanOverFrames(const std::vector<ErrorStats>& frames) {
   ErrorStats mean;
@@ -469,17 +418,6 @@ ErrorStats meanOverFrames(const std::vector<ErrorStats>& frames) {
   mean.maskPixels = static_cast<size_t>(std::lround(mask));
   mean.penumbraPixels = static_cast<size_t>(std::lround(penumbra));
   return mean;
-}
-
-// Each pass's median over frames, in the first frame's pass order.
-PassTimings medianOverFrames(const std::vector<PassTimings>& frames) {
-  PassTimings out;
-  for (const auto& [pass, ms] : frames.front().passes) {
-    std::vector<double> values;
-    for (const PassTimings& t : frames) values.push_back(t.get(pass));
-    out.add(pass, median(values));
-  }
-  return out;
 }
 
 // compare over the frames of a motion: per frame the truth (cached per frame, as any still compare),
@@ -609,7 +547,7 @@ int runCompare(const CompareOptions& options) {
   if (options.profileRow && (*options.profileRow < 0 || *options.profileRow >= setup.height))
     fail("--profile-row {} is out of range: the image has {} rows (valid: 0 to {})", *options.profileRow, setup.height,
          setup.height - 1);
-  if (const std::optional<Motion> motion = runMotion(options, setup))
+  if (const std::optional<Motion> motion = runMotion(options.motion, setup))
     return runCompareSequence(options, setup, *motion, names, baseline);
   std::vector<int> mapSizes = options.mapSizes;
   std::sort(mapSizes.begin(), mapSizes.end());
@@ -713,16 +651,7 @@ Command addCompareCommand(CLI::App& parent) {
       ->capture_default_str();
   app->add_option("--cache-dir", options->cacheDir, "reference cache directory (default: DIR/cache)");
   app->add_flag("--no-cache", options->noCache, "render the truth even when it is cached, and do not store it");
-  app->add_option("--motion-path", options->motionPath,
-                  "a sequence: key points 'x,y,z;x,y,z;...' (at least 2) that the light (its centre; a directional "
-                  "light: its direction) or the camera moves along, at constant speed; replaces the scene file's "
-                  "motion");
-  app->add_option("--motion-moves", options->motionMoves,
-                  "what --motion-path moves: light (the compared --light) or camera")
-      ->check(CLI::IsMember({"light", "camera"}))
-      ->capture_default_str();
-  app->add_option("--frames", options->frames, "frames of the sequence (default: the scene file's motion's, else 12)")
-      ->check(CLI::Range(2, kMaxMotionFrames));
+  addMotionOptions(*app, options->motion);
   return {app, [options] { return runCompare(*options); }};
 }
 

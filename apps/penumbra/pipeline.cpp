@@ -93,6 +93,76 @@ Setup loadSetup(const FrameOptions& options) {
   return setup;
 }
 
+void addMotionOptions(CLI::App& app, MotionOptions& options) {
+  app.add_option("--motion-path", options.path,
+                 "a sequence: key points 'x,y,z;x,y,z;...' (at least 2) that the light (its centre; a directional "
+                 "light: its direction) or the camera moves along, at constant speed; replaces the scene file's "
+                 "motion");
+  app.add_option("--motion-moves", options.moves, "what --motion-path moves: light (the --light used) or camera")
+      ->check(CLI::IsMember({"light", "camera"}))
+      ->capture_default_str();
+  app.add_option("--frames", options.frames, "frames of the sequence (default: the scene file's motion's, else 12)")
+      ->check(CLI::Range(2, kMaxMotionFrames));
+}
+
+// The run's motion: --motion-path (moving the compared light or the camera) over the scene file's
+// motion; --frames over either's frame count. None: a still scene.
+std::optional<Motion> runMotion(const MotionOptions& options, const Setup& setup) {
+  std::optional<Motion> motion = setup.scene.motion;
+  if (!options.path.empty()) {
+    motion.emplace();
+    if (options.moves == "camera")
+      motion->target = MotionTarget::Camera;
+    else if (options.moves == "light")
+      motion->target = MotionTarget::Light;
+    else
+      fail("--motion-moves '{}': expected light or camera", options.moves);
+    motion->lightIndex = setup.lightIndex;
+    size_t start = 0;
+    for (int key = 0; start <= options.path.size(); ++key) {
+      const size_t end = std::min(options.path.find(';', start), options.path.size());
+      const std::string text = options.path.substr(start, end - start);
+      Vec3 p;
+      char extra = 0;
+      if (std::sscanf(text.c_str(), "%f,%f,%f %c", &p.x, &p.y, &p.z, &extra) != 3)
+        fail("--motion-path: key {} '{}' is not three numbers x,y,z (keys are separated by ';')", key, text);
+      motion->path.push_back(p);
+      start = end + 1;
+    }
+  } else if (options.moves != "light") {
+    fail("--motion-moves is for --motion-path, which is not given");
+  }
+  if (!motion) {
+    if (options.frames) fail("--frames {}: the scene has no motion; give one with --motion-path", *options.frames);
+    return std::nullopt;
+  }
+  if (options.frames) motion->frames = *options.frames;
+  motion->validate(setup.scene, options.path.empty() ? setup.scene.source + ": motion" : "--motion-path");
+  if (motion->target == MotionTarget::Light && motion->lightIndex != setup.lightIndex)
+    fail("{}: the motion moves light {}, but light {} is used: pass --light {}", setup.scene.source, motion->lightIndex,
+         setup.lightIndex, motion->lightIndex);
+  return motion;
+}
+
+std::string describeMotion(const Motion& motion) {
+  std::string path;
+  for (const Vec3& p : motion.path)
+    path += fmt::format("{}({:g}, {:g}, {:g})", path.empty() ? "" : " -> ", p.x, p.y, p.z);
+  return motion.target == MotionTarget::Light ? fmt::format("light {} along {}", motion.lightIndex, path)
+                                              : fmt::format("the camera along {}", path);
+}
+
+// Each pass's median over frames, in the first frame's pass order.
+PassTimings medianOverFrames(const std::vector<PassTimings>& frames) {
+  PassTimings out;
+  for (const auto& [pass, ms] : frames.front().passes) {
+    std::vector<double> values;
+    for (const PassTimings& t : frames) values.push_back(t.get(pass));
+    out.add(pass, median(values));
+  }
+  return out;
+}
+
 const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
 
 void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques) {

@@ -582,6 +582,27 @@ TEST_F(CliTest, BenchPrintsRatiosAndWritesJson) {
   EXPECT_TRUE(found) << j.dump(2);
 }
 
+// bench over a sequence: one technique instance across the frames; the times are steady frames (the
+// median over frames 2 to N) and the first frame's total is reported apart, as the table says.
+TEST_F(CliTest, BenchOverASequenceSeparatesTheFirstFrame) {
+  const Result r =
+      run("bench --scene torus -t hard,raytraced-hard --width 16 --height 16 --motion-path '0.4,8,-1;0.6,8,-1' "
+          "--frames 3 --json b.json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 frames: light 0 along (0.4, 8, -1) -> (0.6, 8, -1)"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("b.json"));
+  EXPECT_EQ(j["settings"]["frames"], "3");
+  EXPECT_NE(j["settings"]["statistic"].get<std::string>().find("steady frames"), std::string::npos);
+  ASSERT_EQ(j["techniques"].size(), 2u) << j.dump(2);
+  for (const auto& row : j["techniques"]) {
+    ASSERT_TRUE(row["stats"].contains("first_frame_ms")) << row.dump(2);
+    EXPECT_GT(row["stats"]["first_frame_ms"].get<double>(), 0.0);
+    EXPECT_GT(row["total_ms"].get<double>(), 0.0);
+  }
+  expectError("bench --scene torus -t hard --repeat 2 --motion-path '0,8,0;1,8,0'",
+              {"--repeat is for a still scene; over a sequence each of the 12 frames runs once"});
+}
+
 }  // namespace
 }  // namespace penumbra
 
