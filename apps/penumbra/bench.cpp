@@ -28,17 +28,18 @@ struct BenchOptions {
   MotionOptions motion;
 };
 
-// The frames of a motion, one technique instance across them, as a renderer runs it: the timings are
-// each pass's median over the frames after the first (steady frames); the first frame's total, which
-// builds what the others reuse, is the row's `first_frame_ms`.
-std::optional<ReportRow> benchSequence(const Setup& setup, const Motion& motion, const TechniqueInfo& info,
-                                       const ParamSet& given, NotRunTechniques& notRun,
-                                       std::vector<double>& gbufferMs) {
-  std::unique_ptr<ShadowTechnique> instance;
-  std::vector<PassTimings> steady;
-  double firstFrameMs = 0.0;
-  ReportRow row;
-  row.technique = info.name;
+// The frames of a motion, one instance of each technique across them, as a renderer runs it; each
+// frame's G-buffer is rendered once (into the same buffer) and timed. A row's timings are each pass's
+// median over the frames after the first (steady frames); the first frame's total, which builds what
+// the others reuse, is its `first_frame_ms`. Rows in `names`' order; a technique that cannot take a
+// frame leaves the sequence with its reason.
+std::vector<ReportRow> benchSequence(const Setup& setup, const Motion& motion, const std::vector<std::string>& names,
+                                     const std::vector<ParamSet>& given, NotRunTechniques& notRun,
+                                     std::vector<double>& gbufferMs) {
+  std::vector<std::unique_ptr<ShadowTechnique>> instances(names.size());
+  std::vector<std::optional<ReportRow>> rows(names.size(), ReportRow{});
+  std::vector<std::vector<PassTimings>> steady(names.size());
+  std::vector<double> firstFrameMs(names.size(), 0.0);
   GBuffer gbuffer;
   for (int k = 0; k < motion.frames; ++k) {
     Setup frame = setup;
@@ -46,23 +47,33 @@ std::optional<ReportRow> benchSequence(const Setup& setup, const Motion& motion,
     Timer timer;
     renderGBuffer(frame.scene, setup.width, setup.height, gbuffer);
     gbufferMs.push_back(timer.elapsedMs());
-    try {
-      TechniqueRun run = runTechnique(frame, gbuffer, info, given, 1, &instance);
-      if (k == 0) {
-        row.params = describeParams(run.params);
-        firstFrameMs = run.timings.total();
-      } else {
-        steady.push_back(std::move(run.timings));
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (!rows[i]) continue;
+      const TechniqueInfo& info = findTechnique(names[i]);
+      try {
+        TechniqueRun run = runTechnique(frame, gbuffer, info, given[i], 1, &instances[i]);
+        if (k == 0) {
+          rows[i]->technique = info.name;
+          rows[i]->params = describeParams(run.params);
+          firstFrameMs[i] = run.timings.total();
+        } else {
+          steady[i].push_back(std::move(run.timings));
+        }
+        rows[i]->stats = std::move(run.stats);  // the last frame's
+      } catch (const std::exception& e) {
+        notRun.add(info.name, e.what());
+        rows[i].reset();
       }
-      row.stats = std::move(run.stats);  // the last frame's
-    } catch (const std::exception& e) {
-      notRun.add(info.name, e.what());
-      return std::nullopt;
     }
   }
-  row.timings = medianOverFrames(steady);
-  row.stats.emplace_back("first_frame_ms", firstFrameMs);
-  return row;
+  std::vector<ReportRow> out;
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (!rows[i]) continue;
+    rows[i]->timings = medianOverFrames(steady[i]);
+    rows[i]->stats.emplace_back("first_frame_ms", firstFrameMs[i]);
+    out.push_back(std::move(*rows[i]));
+  }
+  return out;
 }
 
 int runBench(const BenchOptions& options) {
@@ -89,9 +100,7 @@ int runBench(const BenchOptions& options) {
   checkResources(setup, planned, 1, options.frame.force);
   if (!options.jsonPath.empty()) checkWritableFolderOf(options.jsonPath);
 
-  const Light& light = setupLight(setup);
-  fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
-             setup.lightIndex, describeLight(light));
+  fmt::print("{}\n", describeSetup(setup));
   std::vector<double> gbufferMs;
   GBuffer gbuffer;
   if (motion) {
@@ -112,13 +121,9 @@ int runBench(const BenchOptions& options) {
                                           : "median over repeats"}};
   // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
-  for (size_t i = 0; i < names.size(); ++i) {
+  if (motion) report.rows = benchSequence(setup, *motion, names, given, notRun, gbufferMs);
+  for (size_t i = 0; i < names.size() && !motion; ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
-    if (motion) {
-      if (std::optional<ReportRow> row = benchSequence(setup, *motion, info, given[i], notRun, gbufferMs))
-        report.rows.push_back(std::move(*row));
-      continue;
-    }
     std::optional<TechniqueRun> attempt;
     try {
       attempt = runTechnique(setup, gbuffer, info, given[i], repeat);
@@ -135,9 +140,7 @@ int runBench(const BenchOptions& options) {
     report.rows.push_back(std::move(row));
   }
   report.settings.emplace_back("gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs)));
-  report.settings.emplace_back("threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all");
-  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
-  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  addFrameSettings(report.settings, options.frame);
   fillBaselineRatios(report);
   fmt::print("G-buffer raster {:.2f} ms (median of {})\n\n{}", median(gbufferMs), gbufferMs.size(),
              reportToText(report));

@@ -77,6 +77,10 @@ struct Setup {
 // Loads the scene and checks the light index and image size. Throws Error with the fix.
 Setup loadSetup(const FrameOptions& options);
 const Light& setupLight(const Setup& setup);
+// One line: the scene, where it came from, the image size and the light used (printed by every command).
+std::string describeSetup(const Setup& setup);
+// The settings every report records from the frame options: threads, and --spp / --seed when given.
+void addFrameSettings(KeyValues& settings, const FrameOptions& options);
 
 // The run's motion: `options` over the scene file's, validated against the scene and the light used
 // (a motion of another light than --light is refused). None: a still scene. Throws Error naming the

@@ -447,16 +447,13 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   const int keptImages = (static_cast<int>(names.size()) + 2) * motion.frames;
   checkResources(setup, planned, keptImages, options.frame.force);
 
-  fmt::print("scene {} ({}), {}x{}, light {}: {}\n{} frames: {}\n", setup.scene.name, setup.scene.source, setup.width,
-             setup.height, setup.lightIndex, describeLight(setupLight(setup)), motion.frames, describeMotion(motion));
+  fmt::print("{}\n{} frames: {}\n", describeSetup(setup), motion.frames, describeMotion(motion));
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"frames", fmt::format("{}", motion.frames)},
                      {"timings",
                       "median over the frames of one technique instance (the first frame builds what "
-                      "later ones reuse)"},
-                     {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
-  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
-  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+                      "later ones reuse)"}};
+  addFrameSettings(report.settings, options.frame);
   report.errorMapRange = options.errorRange;
   report.command = reproduceCommand(options, setup, names, baseline);
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
@@ -471,8 +468,13 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   // One instance per technique for the whole sequence, as a renderer keeps its shadow technique from
   // frame to frame: what a prepare builds once for unchanged geometry is built at the first frame.
   std::vector<std::unique_ptr<ShadowTechnique>> instances(names.size());
+  std::vector<Params> params;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const TechniqueInfo& info = findTechnique(names[i]);
+    params.push_back(resolveParams(info.name, info.params, plan.given[i]));
+  }
   ReportRow truth0;
-  SequenceRow truthSequence;  // the truth's images per frame, for the page's frame slider
+  SequenceRow truthSequence;  // the truth's images per frame, for the page's frame slider (its temporal error: 0)
   for (int k = 0; k < motion.frames; ++k) {
     Setup frameSetup = setup;
     frameSetup.scene = sceneAtFrame(setup.scene, motion, k);
@@ -495,11 +497,9 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
     truthSequence.images.push_back(truth.images);
     for (size_t i = 0; i < names.size(); ++i) {
       if (!running[i]) continue;
-      const TechniqueInfo& info = findTechnique(names[i]);
-      const Params params = resolveParams(info.name, info.params, plan.given[i]);
       Image<float> v;
-      std::optional<ReportRow> row =
-          techniqueRow(frame, info, params, plan.given[i], truth, vTruth, plan.truthParams, notRun, v, &instances[i]);
+      std::optional<ReportRow> row = techniqueRow(frame, findTechnique(names[i]), params[i], plan.given[i], truth,
+                                                  vTruth, plan.truthParams, notRun, v, &instances[i]);
       if (!row) {
         running[i] = false;
         continue;
@@ -526,7 +526,6 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   report.sequence = SequenceInfo{motion.frames, describeMotion(motion), temporalError(floors, truths, masks),
                                  fmt::format("seeds {} and {}", seed, seed + 1)};
   fillBaselineRatios(report);
-  truthSequence.temporal = temporalError(truths, truths, masks);
   truth0.sequence = std::move(truthSequence);
   report.truth = std::move(truth0);
 
@@ -567,8 +566,7 @@ int runCompare(const CompareOptions& options) {
   if (!source.cached) plan.planned.push_back({&findTechnique(kReference), plan.truthParams, 1});
   checkResources(setup, plan.planned, keptImages, options.frame.force);
 
-  fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
-             setup.lightIndex, describeLight(light));
+  fmt::print("{}\n", describeSetup(setup));
   Timer gbufferTimer;
   const GBuffer gbuffer = renderGBuffer(setup.scene, setup.width, setup.height);
   const double gbufferMs = gbufferTimer.elapsedMs();
@@ -576,10 +574,8 @@ int runCompare(const CompareOptions& options) {
   const CompareFrame frame{options, setup, light, gbuffer, mask, staged.dir(), setup.stem + "_"};
 
   Report report = beginReport("compare", setup, baseline);
-  report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)},
-                     {"threads", options.frame.threads > 0 ? fmt::format("{}", options.frame.threads) : "all"}};
-  if (options.frame.spp) report.settings.emplace_back("spp", fmt::format("{}", *options.frame.spp));
-  if (options.frame.seed) report.settings.emplace_back("seed", fmt::format("{}", *options.frame.seed));
+  report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)}};
+  addFrameSettings(report.settings, options.frame);
   report.mapSizes = mapSizes;
   report.errorMapRange = options.errorRange;
   report.command = reproduceCommand(options, setup, names, baseline);

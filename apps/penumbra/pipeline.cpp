@@ -163,6 +163,17 @@ PassTimings medianOverFrames(const std::vector<PassTimings>& frames) {
   return out;
 }
 
+std::string describeSetup(const Setup& setup) {
+  return fmt::format("scene {} ({}), {}x{}, light {}: {}", setup.scene.name, setup.scene.source, setup.width,
+                     setup.height, setup.lightIndex, describeLight(setupLight(setup)));
+}
+
+void addFrameSettings(KeyValues& settings, const FrameOptions& options) {
+  settings.emplace_back("threads", options.threads > 0 ? fmt::format("{}", options.threads) : "all");
+  if (options.spp) settings.emplace_back("spp", fmt::format("{}", *options.spp));
+  if (options.seed) settings.emplace_back("seed", fmt::format("{}", *options.seed));
+}
+
 const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
 
 void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques) {

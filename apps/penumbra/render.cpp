@@ -41,8 +41,7 @@ int runRender(const RenderOptions& options) {
   makeOutputDir(options.outDir);
 
   const Light& light = setupLight(setup);
-  fmt::print("scene {} ({}), {}x{}, light {}: {}\n", setup.scene.name, setup.scene.source, setup.width, setup.height,
-             setup.lightIndex, describeLight(light));
+  fmt::print("{}\n", describeSetup(setup));
   Timer gbufferTimer;
   const GBuffer gbuffer = renderGBuffer(setup.scene, setup.width, setup.height);
   const double gbufferMs = gbufferTimer.elapsedMs();
