@@ -169,7 +169,8 @@ Command addBenchCommand(CLI::App& parent) {
   app->add_option("--json", options->jsonPath, "also write the table as JSON to this file");
   addFrameOptions(
       *app, options->frame,
-      "technique parameter technique.key=value, e.g. reference.spp=64 (repeatable; overrides the scene file)");
+      "technique parameter technique.key=value, e.g. reference.spp=64, or *.key=value for every technique that has "
+      "the key, e.g. *.map_fit=stable (repeatable; overrides the scene file; a technique's own key overrides *)");
   addMotionOptions(*app, options->motion);
   return {app, [options] { return runBench(*options); }};
 }

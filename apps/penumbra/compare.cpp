@@ -628,8 +628,9 @@ Command addCompareCommand(CLI::App& parent) {
   app->add_option("--baseline", options->baseline,
                   "technique the time ratios are relative to (default: hard if registered, else raytraced-hard)");
   addFrameOptions(*app, options->frame,
-                  "technique parameter technique.key=value, e.g. pcss.map_size=512 (repeatable; overrides the scene "
-                  "file); the truth's samples are --spp, not reference.spp");
+                  "technique parameter technique.key=value, e.g. pcss.map_size=512, or *.key=value for every technique "
+                  "that has the key, e.g. *.map_fit=stable (repeatable; overrides the scene file; a technique's own "
+                  "key overrides *); the truth's samples are --spp, not reference.spp");
   app->add_option("--map-sizes", options->mapSizes,
                   "comma-separated shadow-map sizes (texels per side): every technique with a map_size parameter "
                   "also runs at each, for the error-against-map-size plot and table")

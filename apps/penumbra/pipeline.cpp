@@ -183,6 +183,13 @@ void checkPrefixedParams(const std::vector<std::string>& params, const std::vect
     if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot > eq || dot + 1 == eq)
       fail("command line: parameter '{}' must be written technique.key=value here (for example reference.spp=64)", kv);
     const std::string technique = kv.substr(0, dot);
+    if (technique == "*") {  // every technique run here that has the key; at least one must
+      const std::string key = kv.substr(dot + 1, eq - dot - 1);
+      if (std::none_of(techniques.begin(), techniques.end(),
+                       [&](const std::string& t) { return findTechnique(t).hasParam(key); }))
+        fail("command line: parameter '{}': none of the techniques run here has a parameter '{}'", kv, key);
+      continue;
+    }
     findTechnique(technique);  // an unknown name: the registry's message lists the known ones
     if (std::find(techniques.begin(), techniques.end(), technique) == techniques.end())
       fail("command line: parameter '{}' is for technique '{}', which is not among the techniques run here", kv,
@@ -196,14 +203,20 @@ ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const Frame
   if (it != setup.scene.techniqueParams.end()) given = it->second;
   if (options.spp && info.hasParam("spp")) given.set("spp", *options.spp, "command line (--spp)");
   if (options.seed && info.hasParam("seed")) given.set("seed", *options.seed, "command line (--seed)");
-  for (const std::string& kv : options.params) {
-    if (!prefixed) {
-      given.setFromKeyValue(kv, "command line (--param)");
-      continue;
+  // `*.key=value` first, so that a technique's own `name.key=value` overrides it.
+  for (const bool wildcard : {true, false})
+    for (const std::string& kv : options.params) {
+      if (!prefixed) {
+        if (!wildcard) given.setFromKeyValue(kv, "command line (--param)");
+        continue;
+      }
+      const size_t dot = kv.find('.');
+      const std::string technique = kv.substr(0, dot), keyValue = kv.substr(dot + 1);
+      if (wildcard && technique == "*" && info.hasParam(keyValue.substr(0, keyValue.find('='))))
+        given.setFromKeyValue(keyValue, "command line (--param *)");
+      else if (!wildcard && technique == info.name)
+        given.setFromKeyValue(keyValue, "command line (--param)");
     }
-    const size_t dot = kv.find('.');
-    if (kv.substr(0, dot) == info.name) given.setFromKeyValue(kv.substr(dot + 1), "command line (--param)");
-  }
   return given;
 }
 

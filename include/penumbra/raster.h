@@ -18,13 +18,27 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height);
 // every frame then costs a pass over its memory, not fresh pages.
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& out);
 
+// How a light map is fitted to the scene bounds each time it is rendered (src/raster/light_map.cpp).
+enum class LightMapFit {
+  // Refitted to the scene every frame from the light's centre sample: the finest texels, but the
+  // texel grid turns, shifts and rescales as the light moves, so edges shimmer over a sequence.
+  Tight,
+  // As engines stabilize their cascades: the axis quantized to fixed directions (sphere and segment
+  // lights; a planar light keeps its normal, a directional light its direction), the extent quantized
+  // to steps of 2^(1/16), and the map's origin snapped to a world-fixed lattice of whole texels.
+  // Under light motion within a lattice cell the map does not change at all. Texels are coarser than
+  // Tight's by up to an extent step plus what the quantized axis's tilt costs, and the map looks
+  // from up to a texel (at the scene's centre) away from the light's centre sample.
+  Stable,
+};
+
 // The scene seen from the light's centre sample: a size x size map of light-space depth and object
 // id. Local lights use a perspective projection, directional lights an orthographic one; either is
 // fitted to the scene bounds so every object lands in the map.
 struct LightMap {
   int size = 0;
   bool orthographic = false;
-  Vec3 wsOrigin{0.0f};  //!< light-space origin: the centre sample (directional: behind the scene)
+  Vec3 wsOrigin{0.0f};  //!< light-space origin: the centre sample, snapped when Stable (directional: behind the scene)
   Frame lsFrame;        //!< light-space axes in world space; +z along the light's axis
   // Projection of light-space (x, y) to map coordinates, one of:
   //  perspective: s = size/2 * (1 + x / (z tanHalfFov)), t = size/2 * (1 - y / (z tanHalfFov))
@@ -54,9 +68,14 @@ struct LightMap {
   }
 };
 
-LightMap renderLightMap(const Scene& scene, const Light& light, int size);
+// The light map's axes for `light` over a scene with these bounds: Light::lightFrame, with its axis
+// quantized to fixed directions when the fit is Stable and the light has no axis of its own.
+Frame lightMapFrame(const Light& light, const Bounds3& sceneBounds, LightMapFit fit);
+
+LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightMapFit fit = LightMapFit::Tight);
 // The same into `out`, whose images keep their storage where it is large enough: a map rendered
 // every frame then costs a pass over its memory, not fresh pages.
-void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out);
+void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out,
+                    LightMapFit fit = LightMapFit::Tight);
 
 }  // namespace penumbra

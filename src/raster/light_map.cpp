@@ -15,6 +15,24 @@
 //  - directional lights: an orthographic square centred on the bounds' centre, holding the corners'
 //    extent in light x and y (0.1% margin), with the origin on the axis through the bounds' centre,
 //    just behind the scene (0.1% of the bounds' radius before the nearest corner).
+//
+// A Stable fit (LightMapFit, raster.h) changes three things, so that a light moving a little from
+// frame to frame leaves the texel grid where it was (engines do the same to their cascades):
+//  - axis: a sphere's or a segment's axis (towards the scene's centre) is rounded to the centre of
+//    its cell in a kStableAxisCells^2 octahedral grid of directions (cells about 4 to 8 degrees
+//    wide; straight down is a cell's centre), so it turns only when the light crosses a cell; planar and directional
+//    lights keep their own axis;
+//  - extent: tanHalfFov (halfWidth) is rounded up to a power of 2^(1/kStableExtentSteps), after a
+//    margin of one texel a side for the snap, so the texel size changes only at those steps;
+//  - origin: snapped to a lattice fixed in the world, along the map's axes, whose step is one texel
+//    at the reference depth (the scene centre's depth from the light, rounded up to a power of
+//    2^(1/16); orthographic: one texel, across the axis only). A light moving within one lattice cell
+//    leaves the map bit for bit as it was; a step to the next cell moves the whole projection by one
+//    texel on the reference plane, so what lies there is rasterized exactly as before, one texel
+//    over (elsewhere the parallax of the step remains: it is the shadow's own motion). The map then
+//    looks from up to sqrt(3)/2 lattice steps away from the light's centre sample.
+// A perspective stable map is fitted from its snapped origin and widened a step at a time until it
+// holds every corner of the scene's bounds (light_map_test checks that over a long path).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -32,12 +50,85 @@ namespace {
 
 constexpr float kMaxFovDegrees = 150.0f;
 constexpr float kFitMargin = 1.001f;
+constexpr int kStableAxisCells = 31;    //!< octahedral grid cells per side for the stable axis (odd: see below)
+constexpr int kStableExtentSteps = 16;  //!< stable extents per octave (steps of 2^(1/16), 4.4%)
+
+// Octahedral map of a unit direction to [-1, 1]^2 and back (Meyer et al. 2010, "On floating-point
+// normal vectors"): cells of equal size in the square are of similar solid angle on the sphere. The
+// octahedron's pole is straight down (-y), the most common light axis: it maps to the square's
+// centre, which an odd cell count puts at the centre of a cell, so a light straight above the scene
+// sits in the middle of its cell, not on an edge where the slightest move would turn the axis.
+Vec2 octahedralEncode(const Vec3& wsD) {
+  const Vec3 d(wsD.x, wsD.z, -wsD.y);
+  const Vec3 a = d / (std::abs(d.x) + std::abs(d.y) + std::abs(d.z));
+  if (a.z >= 0.0f) return Vec2(a.x, a.y);
+  return Vec2((1.0f - std::abs(a.y)) * (a.x >= 0.0f ? 1.0f : -1.0f),
+              (1.0f - std::abs(a.x)) * (a.y >= 0.0f ? 1.0f : -1.0f));
+}
+
+Vec3 octahedralDecode(const Vec2& e) {
+  Vec3 d(e.x, e.y, 1.0f - std::abs(e.x) - std::abs(e.y));
+  if (d.z < 0.0f) {
+    d.x = (1.0f - std::abs(e.y)) * (e.x >= 0.0f ? 1.0f : -1.0f);
+    d.y = (1.0f - std::abs(e.x)) * (e.y >= 0.0f ? 1.0f : -1.0f);
+  }
+  return glm::normalize(Vec3(d.x, -d.z, d.y));
+}
+
+// The centre of the octahedral cell holding direction d.
+Vec3 quantizeDirection(const Vec3& d) {
+  const float cell = 2.0f / static_cast<float>(kStableAxisCells);
+  const Vec2 e = octahedralEncode(d);
+  auto centre = [&](float v) {
+    const float i = std::clamp(std::floor((v + 1.0f) / cell), 0.0f, static_cast<float>(kStableAxisCells - 1));
+    return -1.0f + (i + 0.5f) * cell;
+  };
+  return octahedralDecode(Vec2(centre(e.x), centre(e.y)));
+}
+
+// The smallest power of 2^(1/kStableExtentSteps) at least x (x > 0).
+float quantizeExtentUp(float x) {
+  const double steps = std::ceil(std::log2(static_cast<double>(x)) * kStableExtentSteps - 1e-9);
+  return static_cast<float>(std::exp2(steps / kStableExtentSteps));
+}
 
 std::array<Vec3, 8> corners(const Bounds3& b) {
   std::array<Vec3, 8> c;
   for (int i = 0; i < 8; ++i)
     c[i] = Vec3((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y, (i & 4) ? b.upper.z : b.lower.z);
   return c;
+}
+
+// p with its coordinates along the frame's axes (only x and y when !alongZ) rounded to multiples of
+// `step` (world units). Rounded in double, since coordinates of tens of units meet steps of
+// thousandths, and rebuilt from the lattice coordinates alone, so that every p in one cell gives the
+// same point to the last bit.
+Vec3 snapToLattice(const Vec3& p, const Frame& frame, double step, bool alongZ) {
+  auto onLattice = [&](const Vec3& axis) {
+    return static_cast<float>(std::round(glm::dot(p, axis) / step) * step) * axis;
+  };
+  return onLattice(frame.x) + onLattice(frame.y) + (alongZ ? onLattice(frame.z) : glm::dot(p, frame.z) * frame.z);
+}
+
+// The perspective frustum from origin o along frame.z that holds the corners.
+struct FrustumFit {
+  float tanHalf = 0.0f;  //!< the corners' largest |x| / z and |y| / z (without margin)
+  float minZ = kInfinity, maxZ = -kInfinity;
+  bool behind = false;  //!< some corner at z <= 0
+};
+
+FrustumFit fitFrustum(const Frame& frame, const Vec3& o, const std::array<Vec3, 8>& wsCorners) {
+  FrustumFit f;
+  for (const Vec3& p : wsCorners) {
+    const Vec3 l = frame.toLocal(p - o);
+    f.minZ = std::min(f.minZ, l.z);
+    f.maxZ = std::max(f.maxZ, l.z);
+    if (l.z > 0.0f)
+      f.tanHalf = std::max(f.tanHalf, std::max(std::abs(l.x), std::abs(l.y)) / l.z);
+    else
+      f.behind = true;
+  }
+  return f;
 }
 
 }  // namespace
@@ -49,13 +140,21 @@ Vec3 LightMap::unproject(float s, float t, float z) const {
   return wsOrigin + lsFrame.fromLocal(Vec3(ndcX * scale, ndcY * scale, z));
 }
 
-LightMap renderLightMap(const Scene& scene, const Light& light, int size) {
+Frame lightMapFrame(const Light& light, const Bounds3& sceneBounds, LightMapFit fit) {
+  const Frame frame = light.lightFrame(sceneBounds);
+  const bool ownAxis = light.isDirectional() || light.shape() == LightShape::Disk ||
+                       light.shape() == LightShape::Rect || light.shape() == LightShape::Polygon;
+  if (fit == LightMapFit::Tight || ownAxis) return frame;
+  return Frame::fromZ(quantizeDirection(frame.z));
+}
+
+LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightMapFit fit) {
   LightMap m;
-  renderLightMap(scene, light, size, m);
+  renderLightMap(scene, light, size, m, fit);
   return m;
 }
 
-void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out) {
+void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit) {
   if (size < 1 || size > raster::kMaxImageSize)
     fail("renderLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
   // Every field from its default, the images' storage from `out`.
@@ -68,12 +167,15 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   m.lsDepth.reset(size, size, kInfinity);
   m.objectId.reset(size, size, kNoObject);
   const Bounds3 bounds = scene.bounds();
-  m.lsFrame = light.lightFrame(bounds);
+  m.lsFrame = lightMapFrame(light, bounds, fit);
   m.orthographic = light.isDirectional();
   m.wsOrigin = light.isDirectional() ? bounds.center() : light.center();
   if (bounds.empty()) return;
 
   const std::array<Vec3, 8> wsCorners = corners(bounds);
+  const bool stable = fit == LightMapFit::Stable;
+  // A stable extent keeps a texel of margin on each side for the snap of the origin.
+  const float snapMargin = 1.0f / (1.0f - 2.0f / static_cast<float>(size));
   // Clip-space z and w from light-space z (see the header comment).
   float clipZScale = 0.0f, clipZOffset = 0.0f, clipWScale = 1.0f, clipWOffset = 0.0f;
   if (light.isDirectional()) {
@@ -88,8 +190,15 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     const float pad = 1e-3f * std::max(bounds.radius(), 1e-6f);
     m.halfWidth = extent > 0.0f ? extent * kFitMargin : pad;
     m.wsOrigin = c - m.lsFrame.z * (behind + pad);
+    if (stable) {
+      m.halfWidth = quantizeExtentUp(m.halfWidth * snapMargin);
+      // Across the axis only: depth along it does not move the grid.
+      m.wsOrigin = snapToLattice(m.wsOrigin, m.lsFrame, 2.0 * m.halfWidth / size, false);
+    }
     m.zNear = pad;
     m.zFar = behind + pad + ahead;
+    if (stable)  // the snapped origin's float rounding may bring the nearest corner a little nearer
+      for (const Vec3& p : wsCorners) m.zNear = std::min(m.zNear, m.lsFromWs(p).z);
     // Linear key over [0, zFar]: z_clip = 2 z / zFar' - 1 >= -1 clips at the origin's plane.
     const float range = m.zFar * kFitMargin + pad;
     clipZScale = 2.0f / range;
@@ -97,26 +206,30 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     clipWScale = 0.0f;
     clipWOffset = 1.0f;
   } else {
-    float minZ = kInfinity, maxZ = -kInfinity, tanHalf = 0.0f;
-    bool behind = false;
-    for (const Vec3& p : wsCorners) {
-      const Vec3 l = m.lsFromWs(p);
-      minZ = std::min(minZ, l.z);
-      maxZ = std::max(maxZ, l.z);
-      if (l.z > 0.0f)
-        tanHalf = std::max(tanHalf, std::max(std::abs(l.x), std::abs(l.y)) / l.z);
-      else
-        behind = true;
-    }
     const float maxTanHalf = std::tan(0.5f * radians(kMaxFovDegrees));
-    m.tanHalfFov = behind ? maxTanHalf : std::clamp(tanHalf * kFitMargin, 1e-6f, maxTanHalf);
-    if (!(maxZ > 0.0f)) {  // the whole scene is behind the light: nothing to see
+    FrustumFit f = fitFrustum(m.lsFrame, m.wsOrigin, wsCorners);
+    m.tanHalfFov = f.behind ? maxTanHalf : std::clamp(f.tanHalf * kFitMargin, 1e-6f, maxTanHalf);
+    if (stable) {
+      const float zCentre = m.lsFromWs(bounds.center()).z;
+      const double zRef = quantizeExtentUp(zCentre > 0.0f ? zCentre : std::max(f.maxZ, 1e-6f));
+      if (!f.behind) m.tanHalfFov = std::min(quantizeExtentUp(m.tanHalfFov * snapMargin), maxTanHalf);
+      // Widen a step at a time until the frustum from the snapped origin holds the corners (the
+      // margin makes that the first try but for corners very near the light).
+      for (;;) {
+        m.wsOrigin = snapToLattice(light.center(), m.lsFrame, zRef * 2.0 * m.tanHalfFov / size, true);
+        f = fitFrustum(m.lsFrame, m.wsOrigin, wsCorners);
+        if (f.behind || m.tanHalfFov >= maxTanHalf || f.tanHalf * kFitMargin <= m.tanHalfFov) break;
+        m.tanHalfFov = std::min(quantizeExtentUp(m.tanHalfFov * 1.001f), maxTanHalf);
+      }
+      if (f.behind) m.tanHalfFov = maxTanHalf;
+    }
+    if (!(f.maxZ > 0.0f)) {  // the whole scene is behind the light: nothing to see
       m.zNear = 0.0f;
       m.zFar = 0.0f;
       return;
     }
-    m.zNear = std::max(minZ * 0.999f, maxZ * 1e-6f);
-    m.zFar = maxZ;
+    m.zNear = std::max(f.minZ * 0.999f, f.maxZ * 1e-6f);
+    m.zFar = f.maxZ;
     clipZOffset = -m.zNear;  // reversed, infinite-far key -zNear / z
     clipWScale = 1.0f;
   }

@@ -501,6 +501,27 @@ TEST_F(CliTest, CompareOptionsAreChecked) {
   EXPECT_NE(j["command"].get<std::string>().find("--profile-row 7"), std::string::npos);
 }
 
+// `-p '*.key=value'` sets the key for every technique run that has it, a technique's own
+// `name.key=value` overrides it, and a key that none of them has is refused.
+TEST_F(CliTest, CompareWildcardParameterSetsEveryTechniqueThatHasTheKey) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const Result r =
+      run("compare --scene s.json --techniques hard,pcf,raytraced-hard -p '*.map_fit=stable' -p pcf.map_fit=tight " +
+          kTiny);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  std::map<std::string, nlohmann::json> params;
+  for (const auto& row : j["techniques"]) params[row["name"].get<std::string>()] = row["params"];
+  EXPECT_EQ(params["hard"]["map_fit"], "stable") << j.dump(2);
+  EXPECT_EQ(params["pcf"]["map_fit"], "tight");
+  EXPECT_FALSE(params["raytraced-hard"].contains("map_fit"));
+  expectError(
+      "compare --scene s.json --techniques raytraced-hard,none --baseline raytraced-hard -p '*.map_fit=stable' " +
+          kTiny,
+      {"*.map_fit=stable", "none of the techniques run here has a parameter 'map_fit'"});
+  expectError("compare --scene s.json --techniques hard -p '*.map_fit=loose' " + kTiny, {"map_fit", "loose"});
+}
+
 // With no --techniques every registered technique runs; one that does not support the light's shape
 // is listed with its reason instead of ending the comparison, and fails when asked for by name.
 TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {

@@ -16,11 +16,13 @@
 namespace penumbra {
 
 struct HardShadowOptions {
-  int mapSize = 1024;  //!< texels per side of the light map
-  DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+  int mapSize = 1024;                       //!< texels per side of the light map
+  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
+  DepthBias bias;                           //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<HardShadowOptions>& f) {
     f.add(&HardShadowOptions::mapSize, mapSizeOption());
+    f.add(&HardShadowOptions::mapFit, mapFitOption(), mapFitChoices());
     f.nest(&HardShadowOptions::bias);
   }
 };
@@ -33,7 +35,7 @@ class HardShadowTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.mapSize, map_);
+    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {

@@ -555,8 +555,9 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   const int k = options_.subdivisions;
   const auto samples = static_cast<size_t>(k + 1);
   // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps
-  // that axis: Light::lightFrame takes a disk's normal, turned to face the scene.
-  const Frame frame = light.lightFrame(scene.bounds());
+  // that axis: Light::lightFrame takes a disk's normal, turned to face the scene (a stable fit
+  // quantizes the segment's axis here, and the disks keep it).
+  const Frame frame = lightMapFrame(light, scene.bounds(), options_.mapFit);
   const float tiny = 1e-4f * light.extent();
   Timer stage;
   maps_.resize(samples);
@@ -564,8 +565,10 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   for (size_t j = 0; j < samples; ++j) {
     const float u = static_cast<float>(j) / static_cast<float>(k);
     const Vec3 wsSample = light.a() + u * (light.b() - light.a());
-    wsSamples_.push_back(wsSample);
-    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize, maps_[j]);
+    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize, maps_[j], options_.mapFit);
+    // The point the map looks from: the sample itself, or its lattice point in a stable map, so that
+    // the facing test and the map agree.
+    wsSamples_.push_back(maps_[j].wsOrigin);
     ++shadowMapsBuilt_;
     reportProgress(0.5 * static_cast<double>(j + 1) / static_cast<double>(samples));
   }

@@ -26,13 +26,15 @@
 namespace penumbra {
 
 struct MultisampleOptions {
-  int mapSize = 1024;  //!< texels per side of each light map
-  int samples = 16;    //!< light samples = shadow maps
-  uint32_t seed = 1;   //!< selects the stratified sample pattern
-  DepthBias bias;      //!< depth-compare bias (shadow_map.h)
+  int mapSize = 1024;                       //!< texels per side of each light map
+  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
+  int samples = 16;                         //!< light samples = shadow maps
+  uint32_t seed = 1;                        //!< selects the stratified sample pattern
+  DepthBias bias;                           //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<MultisampleOptions>& f) {
     f.add(&MultisampleOptions::mapSize, mapSizeOption());
+    f.add(&MultisampleOptions::mapFit, mapFitOption(), mapFitChoices());
     f.add(&MultisampleOptions::samples, OptionDecl("samples").range(1, 1024).unit("samples").help(
                                             "light samples, one shadow map each (CMJ-stratified over the emitter)"));
     f.add(&MultisampleOptions::seed,
@@ -45,7 +47,7 @@ namespace {
 
 // A point-like light at sample u of `light`, with the light's own axis where it has one, and the
 // sample's radiance-profile weight.
-std::pair<Light, float> pointLightAtSample(const Light& light, const Scene& scene, const Vec2& u) {
+std::pair<Light, float> pointLightAtSample(const Light& light, const Scene& scene, const Vec2& u, LightMapFit fit) {
   // Emitter size of the stand-in: any positive value works (a light map only uses the centre and
   // axis); a tiny fraction of the light keeps it well inside the emitter.
   const float tiny = 1e-4f * light.extent();
@@ -55,7 +57,8 @@ std::pair<Light, float> pointLightAtSample(const Light& light, const Scene& scen
       return {Light::directional(s.wsDirection, 1e-6f), s.weight};
     }
     case LightShape::Sphere: {
-      const Frame frame = light.lightFrame(scene.bounds());
+      // The disk of samples faces the map's axis, so a stable fit's samples do not turn either.
+      const Frame frame = lightMapFrame(light, scene.bounds(), fit);
       const Vec2 q = concentricDisk(u) * light.radius();
       return {Light::sphere(light.center() + q.x * frame.x + q.y * frame.y, tiny), 1.0f};
     }
@@ -87,8 +90,9 @@ class MultisampleTechnique final : public ShadowTechnique {
     const CmjSampler sampler(static_cast<uint32_t>(options_.samples));
     float weightSum = 0.0f;
     for (uint32_t k = 0; k < sampler.count(); ++k) {
-      const auto [pointLight, weight] = pointLightAtSample(light, scene, sampler.sample(k, options_.seed));
-      LightMap map = createShadowMap(scene, pointLight, options_.mapSize);
+      const auto [pointLight, weight] =
+          pointLightAtSample(light, scene, sampler.sample(k, options_.seed), options_.mapFit);
+      LightMap map = createShadowMap(scene, pointLight, options_.mapSize, options_.mapFit);
       map.objectId = Image<int32_t>();  // only depths are compared; halves the memory of N maps
       maps_.push_back(std::move(map));
       weights_.push_back(weight);

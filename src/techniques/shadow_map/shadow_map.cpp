@@ -16,17 +16,17 @@
 
 namespace penumbra {
 
-LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize) {
+LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMapFit fit) {
   LightMap map;
-  createShadowMap(scene, light, mapSize, map);
+  createShadowMap(scene, light, mapSize, map, fit);
   return map;
 }
 
-void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out) {
+void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out, LightMapFit fit) {
   if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
     fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", mapSize, kMinShadowMapSize,
          kMaxShadowMapSize);
-  renderLightMap(scene, light, mapSize, out);
+  renderLightMap(scene, light, mapSize, out, fit);
 }
 
 float minMapDepth(const LightMap& map) {

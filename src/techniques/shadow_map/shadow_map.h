@@ -35,6 +35,8 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -82,11 +84,23 @@ inline OptionDecl mapSizeOption() {
       .help("width and height of the square light-space depth map");
 }
 
+// The map fit parameter every light-map technique shares (LightMapFit, raster.h).
+inline OptionDecl mapFitOption() {
+  return OptionDecl("map_fit").help(
+      "how the light map is fitted to the scene each frame: tight (refitted from the light's centre: finest "
+      "texels, the grid moves with the light) or stable (quantized axis and extent, origin snapped to whole "
+      "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
+      "plus what the quantized axis's tilt costs)");
+}
+inline std::vector<std::pair<std::string, LightMapFit>> mapFitChoices() {
+  return {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}};
+}
+
 // The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
 // Throws Error if mapSize is outside [kMinShadowMapSize, kMaxShadowMapSize].
-LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize);
+LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMapFit fit);
 // The same into `out`, reusing its storage (renderLightMap); `out` is untouched when mapSize is refused.
-void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out);
+void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out, LightMapFit fit);
 
 // Smallest finite depth in the map (the nearest possible blocker); kInfinity for an empty map.
 float minMapDepth(const LightMap& map);
