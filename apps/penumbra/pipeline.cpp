@@ -203,13 +203,13 @@ ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const Frame
   if (it != setup.scene.techniqueParams.end()) given = it->second;
   if (options.spp && info.hasParam("spp")) given.set("spp", *options.spp, "command line (--spp)");
   if (options.seed && info.hasParam("seed")) given.set("seed", *options.seed, "command line (--seed)");
+  if (!prefixed) {
+    for (const std::string& kv : options.params) given.setFromKeyValue(kv, "command line (--param)");
+    return given;
+  }
   // `*.key=value` first, so that a technique's own `name.key=value` overrides it.
   for (const bool wildcard : {true, false})
     for (const std::string& kv : options.params) {
-      if (!prefixed) {
-        if (!wildcard) given.setFromKeyValue(kv, "command line (--param)");
-        continue;
-      }
       const size_t dot = kv.find('.');
       const std::string technique = kv.substr(0, dot), keyValue = kv.substr(dot + 1);
       if (wildcard && technique == "*" && info.hasParam(keyValue.substr(0, keyValue.find('='))))

@@ -120,12 +120,13 @@ TEST(LightMap, SphereLightMatchesRaysFromTheCentreSample) {
   expectMatchesRays(scene, m, 9000);  // measured: 10412 hits
 }
 
-// Rendering into a map that held another (larger, perspective) gives a fresh render's map, field for
-// field and texel for texel, and then the other way round.
+// Two maps equal field for field and texel for texel.
 void expectSameMap(const LightMap& a, const LightMap& b) {
   EXPECT_EQ(a.size, b.size);
   EXPECT_EQ(a.orthographic, b.orthographic);
   EXPECT_EQ(a.wsOrigin, b.wsOrigin);
+  EXPECT_EQ(a.lsFrame.x, b.lsFrame.x);
+  EXPECT_EQ(a.lsFrame.y, b.lsFrame.y);
   EXPECT_EQ(a.lsFrame.z, b.lsFrame.z);
   EXPECT_EQ(a.halfWidth, b.halfWidth);
   EXPECT_EQ(a.tanHalfFov, b.tanHalfFov);
@@ -135,6 +136,8 @@ void expectSameMap(const LightMap& a, const LightMap& b) {
   EXPECT_TRUE(std::equal(a.objectId.begin(), a.objectId.end(), b.objectId.begin(), b.objectId.end()));
 }
 
+// Rendering into a map that held another (larger, perspective) gives a fresh render's map, field for
+// field and texel for texel, and then the other way round.
 TEST(LightMap, RenderingIntoAUsedMapEqualsAFreshRender) {
   const Scene scene = rastertest::objectsScene();
   const Light sphere = Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f);
@@ -263,13 +266,6 @@ TEST(LightMap, StableExtentAndAxisStayWithinTheirQuantizationOfTheTightFit) {
   }
 }
 
-// Two maps equal field for field and texel for texel.
-void expectIdenticalMaps(const LightMap& a, const LightMap& b) {
-  expectSameMap(a, b);
-  EXPECT_EQ(a.lsFrame.x, b.lsFrame.x);
-  EXPECT_EQ(a.lsFrame.y, b.lsFrame.y);
-}
-
 TEST(LightMap, StableMapDoesNotChangeWhileTheLightMovesWithinALatticeCell) {
   const Scene scene = rastertest::objectsScene();
   for (const Light& light : {Light::sphere(Vec3(1.3f, 6.1f, 2.2f), 0.3f),
@@ -279,7 +275,7 @@ TEST(LightMap, StableMapDoesNotChangeWhileTheLightMovesWithinALatticeCell) {
     // A hundredth of the way towards the lattice point the light still rounds to it (and stays
     // within its cell of axes and extents, which a larger move might cross).
     const Vec3 moved = light.center() + 0.01f * (m.wsOrigin - light.center());
-    expectIdenticalMaps(renderLightMap(scene, lightMovedTo(light, moved), 300, LightMapFit::Stable), m);
+    expectSameMap(renderLightMap(scene, lightMovedTo(light, moved), 300, LightMapFit::Stable), m);
     // The tight fit refits to the moved light: its origin follows it.
     EXPECT_EQ(renderLightMap(scene, lightMovedTo(light, moved), 300).wsOrigin, moved);
   }

@@ -1,11 +1,9 @@
-// Light maps over a sequence of frames (include/penumbra/motion.h), as the techniques see them:
-//  - with map_fit=stable (LightMapFit, include/penumbra/raster.h), a light moving by far less than
-//    the stable map's lattice step leaves every light-map technique's V unchanged, bit for bit, while
-//    the truth's change is far below its own noise; with map_fit=tight the map follows the light;
-//  - a sequence's frames are deterministic: one technique instance carried across the frames (as
-//    compare and bench run a sequence) gives each frame the V a fresh instance gives it.
-// The stable map's cover of the scene over a long path is checked on the map itself
-// (tests/raster/light_map_test.cpp).
+// Stable light maps (map_fit=stable; LightMapFit, include/penumbra/raster.h) as the techniques see
+// them: a light moving by far less than the stable map's lattice step leaves every light-map
+// technique's V unchanged, bit for bit, while the truth's change is far below its own noise. The
+// stable map's cover of the scene over a long path is checked on the map itself
+// (tests/raster/light_map_test.cpp); that every technique's frames of a sequence are deterministic,
+// in determinism_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -99,39 +97,6 @@ TEST(StableLightMap, ALightMoveWithinOneLatticeCellLeavesEveryLightMapTechniqueU
   }
   for (const TechniqueInfo* info : lightMapTechniques())
     EXPECT_NE(std::find(ran.begin(), ran.end(), info->name), ran.end()) << info->name << " never ran";
-}
-
-TEST(StableLightMap, OneInstanceAcrossTheFramesGivesEachFrameAFreshInstancesV) {
-  const Scene scene = loadScene("torus");
-  Motion motion;
-  motion.path = {scene.lights.at(0).center(), scene.lights.at(0).center() + Vec3(0.3f, 0.0f, 0.1f)};
-  motion.frames = 3;
-  motion.validate(scene, "test motion");
-  for (const TechniqueInfo& info : techniqueRegistry()) {
-    SCOPED_TRACE(info.name);
-    ParamSet given;
-    if (info.hasParam("map_fit")) given.setFromKeyValue("map_fit=stable", "test");
-    if (info.hasParam("map_size")) given.set("map_size", int64_t{256}, "test");
-    if (info.hasParam("spp")) given.set("spp", int64_t{16}, "test");
-    auto carried = createTechnique(info.name, given);
-    bool refused = false;
-    for (int frame = 0; frame < motion.frames && !refused; ++frame) {
-      const Scene at = sceneAtFrame(scene, motion, frame);
-      const GBuffer gbuffer = renderGBuffer(at, 48, 48);
-      Image<float> v, fresh;
-      try {
-        carried->prepare(at, at.lights.at(0));
-      } catch (const Error&) {
-        refused = true;  // a light shape the technique does not take; the registry tests say which
-        continue;
-      }
-      carried->visibility(gbuffer, v);
-      auto once = createTechnique(info.name, given);
-      once->prepare(at, at.lights.at(0));
-      once->visibility(gbuffer, fresh);
-      EXPECT_TRUE(sameBits(v, fresh)) << "frame " << frame;
-    }
-  }
 }
 
 }  // namespace

@@ -44,15 +44,13 @@ namespace penumbra {
 namespace {
 
 struct KirschOptions {
-  int mapSize = 1024;                       //!< texels per side
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  DepthBias bias;                           //!< of the hard compare (shadow_map.h)
-  float marginTexels = 2.0f;                //!< added to every ribbon's width
+  LightMapOptions lightMap;   //!< the light map: size and fit
+  DepthBias bias;             //!< of the hard compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every ribbon's width
   bool illuminationTable = true;
 
   static void describe(OptionFields<KirschOptions>& f) {
-    f.add(&KirschOptions::mapSize, mapSizeOption());
-    f.add(&KirschOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&KirschOptions::lightMap);
     f.nest(&KirschOptions::bias);
     f.add(&KirschOptions::marginTexels, ribbonMarginOption());
     f.add(&KirschOptions::illuminationTable, illuminationTableOption());
@@ -68,7 +66,7 @@ class KirschTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "kirsch");
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);

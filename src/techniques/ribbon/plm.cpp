@@ -610,15 +610,13 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
 namespace {
 
 struct PlmOptions {
-  int mapSize = 1024;                       //!< texels per side
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  DepthBias bias;                           //!< of the compares with g, c and b (shadow_map.h)
-  float marginTexels = 2.0f;                //!< added to every ribbon's half-width
-  bool illuminationTable = true;            //!< V = f(l_g) through Appendix A's table (else V = l_g)
+  LightMapOptions lightMap;       //!< the light map g: size and fit
+  DepthBias bias;                 //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;      //!< added to every ribbon's half-width
+  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
 
   static void describe(OptionFields<PlmOptions>& f) {
-    f.add(&PlmOptions::mapSize, mapSizeOption());
-    f.add(&PlmOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&PlmOptions::lightMap);
     f.nest(&PlmOptions::bias);
     f.add(&PlmOptions::marginTexels, ribbonMarginOption());
     f.add(&PlmOptions::illuminationTable, illuminationTableOption());
@@ -660,7 +658,7 @@ class PlmTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     light_ = light;

@@ -41,15 +41,13 @@ namespace penumbra {
 namespace {
 
 struct SmoothiesOptions {
-  int mapSize = 1024;                       //!< texels per side
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  DepthBias bias;                           //!< of the hard compare and the smoothie compare (shadow_map.h)
-  float marginTexels = 2.0f;                //!< added to every smoothie's width
+  LightMapOptions lightMap;   //!< the light map: size and fit
+  DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every smoothie's width
   bool illuminationTable = true;
 
   static void describe(OptionFields<SmoothiesOptions>& f) {
-    f.add(&SmoothiesOptions::mapSize, mapSizeOption());
-    f.add(&SmoothiesOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&SmoothiesOptions::lightMap);
     f.nest(&SmoothiesOptions::bias);
     f.add(&SmoothiesOptions::marginTexels, ribbonMarginOption());
     f.add(&SmoothiesOptions::illuminationTable, illuminationTableOption());
@@ -65,7 +63,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     plm::emitterRadius(light, "smoothies");
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);

@@ -445,7 +445,7 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
 void BrabecTechnique::prepareImpl(const Scene& scene, const Light& light) {
   light_ = light;
   lightRadius_ = light.extent();
-  createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+  createShadowMap(scene, light, options_.lightMap, map_);
   // A segment's footprint is a segment along its direction in the map (its component across the
   // light's axis; t runs against light-space y).
   segmentLight_ = light.shape() == LightShape::Segment;

@@ -135,16 +135,15 @@
 namespace penumbra {
 
 struct BrabecOptions {
-  int mapSize = 1024;                       //!< light depth/id map, texels per side (the paper: 256 for 512x512 images)
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  DepthBias bias;                           //!< of the hard test and of the searches' depth layer
-  float meet = 0.5f;                        //!< V on the hard-shadow edge, where inner and outer penumbra meet
-  std::optional<float> rScale;              //!< paper: search radius per world unit of |z|, texels / world unit
-  std::optional<float> rBias;               //!< paper: search radius at z = 0, texels
-  std::optional<float> rShrink;             //!< paper: r_max factor per world unit of depth difference, 1 / world unit
-  int maxRadius = 96;                       //!< hard cap of the search radius, texels (see the file comment)
-  bool interpolate = true;                  //!< Sec. 4.3 adaptive 4x4 block interpolation
-  float interpolateMaxStep = 1.0f;          //!< also refine a group whose border V differ by more
+  LightMapOptions lightMap;         //!< light depth/id map (the paper: 256 texels a side for 512x512 images)
+  DepthBias bias;                   //!< of the hard test and of the searches' depth layer
+  float meet = 0.5f;                //!< V on the hard-shadow edge, where inner and outer penumbra meet
+  std::optional<float> rScale;      //!< paper: search radius per world unit of |z|, texels / world unit
+  std::optional<float> rBias;       //!< paper: search radius at z = 0, texels
+  std::optional<float> rShrink;     //!< paper: r_max factor per world unit of depth difference, 1 / world unit
+  int maxRadius = 96;               //!< hard cap of the search radius, texels (see the file comment)
+  bool interpolate = true;          //!< Sec. 4.3 adaptive 4x4 block interpolation
+  float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more
   bool interpolateKinks = true;  //!< also refine across the kinks of V (r = r_max, ridges of r); see the file comment
   float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees
   float jitter = 0.0f;                //!< texel position jitter amplitude, texels
@@ -157,8 +156,7 @@ struct BrabecOptions {
 
   static void describe(OptionFields<BrabecOptions>& f) {
     using O = BrabecOptions;
-    f.add(&O::mapSize, mapSizeOption());
-    f.add(&O::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&O::lightMap);
     f.nest(&O::bias);
     f.add(&O::meet, OptionDecl("meet").range(0, 1).help(
                         "V on the hard-shadow edge, where the inner and the outer penumbra meet (Sec. 3.3)"));

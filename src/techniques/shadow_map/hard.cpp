@@ -16,13 +16,11 @@
 namespace penumbra {
 
 struct HardShadowOptions {
-  int mapSize = 1024;                       //!< texels per side of the light map
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  DepthBias bias;                           //!< depth-compare bias (shadow_map.h)
+  LightMapOptions lightMap;  //!< the light map: size and fit
+  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<HardShadowOptions>& f) {
-    f.add(&HardShadowOptions::mapSize, mapSizeOption());
-    f.add(&HardShadowOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&HardShadowOptions::lightMap);
     f.nest(&HardShadowOptions::bias);
   }
 };
@@ -35,7 +33,7 @@ class HardShadowTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {

@@ -557,7 +557,7 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   // Every map looks along the segment's own light axis (see the file comment). A disk stand-in keeps
   // that axis: Light::lightFrame takes a disk's normal, turned to face the scene (a stable fit
   // quantizes the segment's axis here, and the disks keep it).
-  const Frame frame = lightMapFrame(light, scene.bounds(), options_.mapFit);
+  const Frame frame = lightMapFrame(light, scene.bounds(), options_.lightMap.fit);
   const float tiny = 1e-4f * light.extent();
   Timer stage;
   maps_.resize(samples);
@@ -565,7 +565,7 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   for (size_t j = 0; j < samples; ++j) {
     const float u = static_cast<float>(j) / static_cast<float>(k);
     const Vec3 wsSample = light.a() + u * (light.b() - light.a());
-    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.mapSize, maps_[j], options_.mapFit);
+    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.lightMap, maps_[j]);
     // The point the map looks from: the sample itself, or its lattice point in a stable map, so that
     // the facing test and the map agree.
     wsSamples_.push_back(maps_[j].wsOrigin);

@@ -19,15 +19,13 @@
 namespace penumbra {
 
 struct HeidrichOptions {
-  int mapSize = 1024;                       //!< texels per side of each sample point's shadow and visibility map
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  int subdivisions = 1;                     //!< k: sub-segments of the light (k + 1 sample points)
-  float edgeThreshold = 4.0f;               //!< smallest depth gap that is a discontinuity, in texel sizes at its depth
-  DepthBias bias;                           //!< depth-compare bias of the shadow-map channel (shadow_map.h)
+  LightMapOptions lightMap;    //!< each sample point's shadow and visibility map: size and fit
+  int subdivisions = 1;        //!< k: sub-segments of the light (k + 1 sample points)
+  float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth
+  DepthBias bias;              //!< depth-compare bias of the shadow-map channel (shadow_map.h)
 
   static void describe(OptionFields<HeidrichOptions>& f) {
-    f.add(&HeidrichOptions::mapSize, mapSizeOption());
-    f.add(&HeidrichOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&HeidrichOptions::lightMap);
     f.add(&HeidrichOptions::subdivisions,
           OptionDecl("subdivisions")
               .range(1, 64)

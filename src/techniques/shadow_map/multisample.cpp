@@ -26,15 +26,13 @@
 namespace penumbra {
 
 struct MultisampleOptions {
-  int mapSize = 1024;                       //!< texels per side of each light map
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  int samples = 16;                         //!< light samples = shadow maps
-  uint32_t seed = 1;                        //!< selects the stratified sample pattern
-  DepthBias bias;                           //!< depth-compare bias (shadow_map.h)
+  LightMapOptions lightMap;  //!< each sample's light map: size and fit
+  int samples = 16;          //!< light samples = shadow maps
+  uint32_t seed = 1;         //!< selects the stratified sample pattern
+  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<MultisampleOptions>& f) {
-    f.add(&MultisampleOptions::mapSize, mapSizeOption());
-    f.add(&MultisampleOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&MultisampleOptions::lightMap);
     f.add(&MultisampleOptions::samples, OptionDecl("samples").range(1, 1024).unit("samples").help(
                                             "light samples, one shadow map each (CMJ-stratified over the emitter)"));
     f.add(&MultisampleOptions::seed,
@@ -91,8 +89,8 @@ class MultisampleTechnique final : public ShadowTechnique {
     float weightSum = 0.0f;
     for (uint32_t k = 0; k < sampler.count(); ++k) {
       const auto [pointLight, weight] =
-          pointLightAtSample(light, scene, sampler.sample(k, options_.seed), options_.mapFit);
-      LightMap map = createShadowMap(scene, pointLight, options_.mapSize, options_.mapFit);
+          pointLightAtSample(light, scene, sampler.sample(k, options_.seed), options_.lightMap.fit);
+      LightMap map = createShadowMap(scene, pointLight, options_.lightMap);
       map.objectId = Image<int32_t>();  // only depths are compared; halves the memory of N maps
       maps_.push_back(std::move(map));
       weights_.push_back(weight);

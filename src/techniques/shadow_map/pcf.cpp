@@ -21,14 +21,12 @@
 namespace penumbra {
 
 struct PcfOptions {
-  int mapSize = 1024;                       //!< texels per side of the light map
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  int kernel = 3;                           //!< width of the box kernel in texels, odd
-  DepthBias bias;                           //!< depth-compare bias (shadow_map.h)
+  LightMapOptions lightMap;  //!< the light map: size and fit
+  int kernel = 3;            //!< width of the box kernel in texels, odd
+  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<PcfOptions>& f) {
-    f.add(&PcfOptions::mapSize, mapSizeOption());
-    f.add(&PcfOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&PcfOptions::lightMap);
     f.add(&PcfOptions::kernel, OptionDecl("kernel").range(1, 63).unit("texels").help(
                                    "width of the box kernel (odd); border texels weigh their covered fraction"));
     f.nest(&PcfOptions::bias);
@@ -46,7 +44,7 @@ class PcfTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {

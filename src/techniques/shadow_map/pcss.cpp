@@ -59,19 +59,17 @@
 namespace penumbra {
 
 struct PcssOptions {
-  int mapSize = 1024;                       //!< texels per side of the light map
-  LightMapFit mapFit = LightMapFit::Tight;  //!< how the light map is fitted each frame (raster.h)
-  int blockerSamples = 16;                  //!< taps of the blocker search
-  int filterSamples = 32;                   //!< taps of the PCF filter
-  std::optional<float> lightSize;           //!< light radius, world units (directional: tan of the half angle); empty =
-                                            //!< Light::extent() (segment, rect: as the map sees it, file comment)
-  bool rotate = true;                       //!< rotate the sample disks per pixel by a hash
+  LightMapOptions lightMap;        //!< the light map: size and fit
+  int blockerSamples = 16;         //!< taps of the blocker search
+  int filterSamples = 32;          //!< taps of the PCF filter
+  std::optional<float> lightSize;  //!< light radius, world units (directional: tan of the half angle); empty =
+                                   //!< Light::extent() (segment, rect: as the map sees it, file comment)
+  bool rotate = true;              //!< rotate the sample disks per pixel by a hash
   float bilinearMaxRadius = 4.0f;  //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel)
   DepthBias bias;                  //!< depth-compare bias (shadow_map.h)
 
   static void describe(OptionFields<PcssOptions>& f) {
-    f.add(&PcssOptions::mapSize, mapSizeOption());
-    f.add(&PcssOptions::mapFit, mapFitOption(), mapFitChoices());
+    f.nest(&PcssOptions::lightMap);
     f.add(&PcssOptions::blockerSamples,
           OptionDecl("blocker_samples").range(1, 1024).unit("samples").help("taps of the blocker search (Vogel disk)"));
     f.add(&PcssOptions::filterSamples,
@@ -116,7 +114,7 @@ class PcssTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
-    createShadowMap(scene, light, options_.mapSize, map_, options_.mapFit);
+    createShadowMap(scene, light, options_.lightMap, map_);
     // Segment and rect lights: the taps lie on the light's own image in the map (see the file
     // comment), not on the disk that circumscribes it.
     lineDirection_.reset();

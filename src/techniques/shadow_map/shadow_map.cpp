@@ -16,17 +16,17 @@
 
 namespace penumbra {
 
-LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMapFit fit) {
+LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options) {
   LightMap map;
-  createShadowMap(scene, light, mapSize, map, fit);
+  createShadowMap(scene, light, options, map);
   return map;
 }
 
-void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out, LightMapFit fit) {
-  if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
-    fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", mapSize, kMinShadowMapSize,
+void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out) {
+  if (options.size < kMinShadowMapSize || options.size > kMaxShadowMapSize)
+    fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", options.size, kMinShadowMapSize,
          kMaxShadowMapSize);
-  renderLightMap(scene, light, mapSize, out, fit);
+  renderLightMap(scene, light, options.size, out, options.fit);
 }
 
 float minMapDepth(const LightMap& map) {

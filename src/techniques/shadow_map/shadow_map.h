@@ -35,8 +35,6 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
-#include <string>
-#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -76,31 +74,33 @@ struct DepthBias {
   }
 };
 
-// The map size parameter every light-map technique shares (its default is the options' initializer).
-inline OptionDecl mapSizeOption() {
-  return OptionDecl("map_size")
-      .range(kMinShadowMapSize, kMaxShadowMapSize)
-      .unit("texels")
-      .help("width and height of the square light-space depth map");
-}
+// The light map every light-map technique renders: its size and how it is fitted to the scene
+// (renderLightMap). Every light-map technique nests it in its options, so map_size and map_fit read
+// the same everywhere.
+struct LightMapOptions {
+  int size = 1024;                       //!< texels per side
+  LightMapFit fit = LightMapFit::Tight;  //!< how the map is fitted each frame (raster.h)
 
-// The map fit parameter every light-map technique shares (LightMapFit, raster.h).
-inline OptionDecl mapFitOption() {
-  return OptionDecl("map_fit").help(
-      "how the light map is fitted to the scene each frame: tight (refitted from the light's centre: finest "
-      "texels, the grid moves with the light) or stable (quantized axis and extent, origin snapped to whole "
-      "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
-      "plus what the quantized axis's tilt costs)");
-}
-inline std::vector<std::pair<std::string, LightMapFit>> mapFitChoices() {
-  return {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}};
-}
+  static void describe(OptionFields<LightMapOptions>& f) {
+    f.add(&LightMapOptions::size, OptionDecl("map_size")
+                                      .range(kMinShadowMapSize, kMaxShadowMapSize)
+                                      .unit("texels")
+                                      .help("width and height of the square light-space depth map"));
+    f.add(&LightMapOptions::fit,
+          OptionDecl("map_fit").help(
+              "how the light map is fitted to the scene each frame: tight (refitted from the light's centre: finest "
+              "texels, the grid moves with the light) or stable (quantized axis and extent, origin snapped to whole "
+              "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
+              "plus what the quantized axis's tilt costs)"),
+          {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}});
+  }
+};
 
 // The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
-// Throws Error if mapSize is outside [kMinShadowMapSize, kMaxShadowMapSize].
-LightMap createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMapFit fit);
-// The same into `out`, reusing its storage (renderLightMap); `out` is untouched when mapSize is refused.
-void createShadowMap(const Scene& scene, const Light& light, int mapSize, LightMap& out, LightMapFit fit);
+// Throws Error if the size is outside [kMinShadowMapSize, kMaxShadowMapSize].
+LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options);
+// The same into `out`, reusing its storage (renderLightMap); `out` is untouched when the size is refused.
+void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out);
 
 // Smallest finite depth in the map (the nearest possible blocker); kInfinity for an empty map.
 float minMapDepth(const LightMap& map);

@@ -145,7 +145,7 @@ TEST(Brabec, VectorizedSearchGivesTheScalarOraclesVisibilityOnScenes) {
   for (const char* name : {"torus", "crowded"}) {
     const ShadowTestScene& s = shadowTestScene(name);
     BrabecOptions o;
-    o.mapSize = 256;
+    o.lightMap.size = 256;
     o.interpolate = false;
     o.jitter = std::string(name) == "crowded" ? 0.25f : 0.0f;
     const Image<float> fast = runBrabec(s.scene, s.gbuffer, o);
@@ -233,7 +233,7 @@ TEST(Brabec, InterpolationStaysWithinOneRmse8OfTheExhaustiveSearchOnCrowded) {
       return v;
     };
     BrabecOptions o;
-    o.mapSize = mapSize;
+    o.lightMap.size = mapSize;
     o.interpolate = false;
     double fExhaustive = -1.0, fInterpolated = -1.0, fPaper = -1.0, fStepped = -1.0;
     const Image<float> vx = run(o, &fExhaustive);
@@ -390,7 +390,7 @@ TEST(Brabec, ObjectIdTestKeepsATiltedPlaneLit) {
   const SmallScene s = finish(std::move(scene), 192);
 
   auto darkened = [&](BrabecOptions o) {
-    o.mapSize = 256;
+    o.lightMap.size = 256;
     const Image<float> v = runBrabec(s.scene, s.gbuffer, o);
     size_t lit = 0, dark = 0;
     for (int y = 0; y < s.gbuffer.height(); ++y)

@@ -434,7 +434,7 @@ TEST(Heidrich, CameraOnlyChangeRunsTheVisibilityPassAlone) {
   moved.camera.position += Vec3(1.5f, 1.0f, -0.5f);
   const GBuffer movedGbuffer = renderGBuffer(moved, 128, 128);
   HeidrichOptions o;
-  o.mapSize = 256;
+  o.lightMap.size = 256;
   o.subdivisions = 2;
   HeidrichTechnique technique(o);
   technique.prepare(s.scene, s.light());
@@ -469,7 +469,7 @@ TEST(Heidrich, CameraOnlyChangeRunsTheVisibilityPassAlone) {
 TEST(Heidrich, PrepareAgainForAnotherLightEqualsAFreshPrepare) {
   const ShadowTestScene& s = shadowTestScene("linear");
   HeidrichOptions o;
-  o.mapSize = 256;
+  o.lightMap.size = 256;
   o.subdivisions = 2;
   const Light other = Light::segment(Vec3(-1.0f, 4.0f, 0.8f), Vec3(1.2f, 4.5f, -0.6f));
   HeidrichTechnique reused(o);
@@ -497,7 +497,7 @@ TEST(Heidrich, PrepareAgainForAnotherLightEqualsAFreshPrepare) {
 TEST(Heidrich, SameResultForAnyThreadCount) {
   const ShadowTestScene& s = shadowTestScene("linear");
   HeidrichOptions o;
-  o.mapSize = 256;
+  o.lightMap.size = 256;
   o.subdivisions = 2;
   auto run = [&] {
     HeidrichTechnique t(o);
@@ -522,7 +522,7 @@ TEST(Heidrich, SameResultForAnyThreadCount) {
 TEST(HeidrichStages, SharedFrameReceiverMatchesMakeReceiver) {
   const ShadowTestScene& s = shadowTestScene("linear");
   HeidrichOptions o;
-  o.mapSize = 256;
+  o.lightMap.size = 256;
   o.subdivisions = 2;
   HeidrichTechnique technique(o);
   technique.prepare(s.scene, s.light());

@@ -170,7 +170,7 @@ double oraclePcf(const LightMap& m, const ShadowReceiver& r, float radius, const
 
 TEST(Pcss, DiskKernelsMatchScalarLoopsOnTheCrowdedMap) {
   const Scene scene = loadScene("crowded");
-  const LightMap m = createShadowMap(scene, scene.lights.at(0), 256, LightMapFit::Tight);
+  const LightMap m = createShadowMap(scene, scene.lights.at(0), LightMapOptions{256});
   const GBuffer& g = testing::shadowTestScene("crowded").gbuffer;
   const PixelRotations rotations;
   // 16 and 32 taps as pcss uses them, and 77: more than one 64-tap chunk, not a multiple of 4.

@@ -278,8 +278,8 @@ TEST(ShadowMap, VogelDiskSpreadsUniformlyOverTheUnitDisk) {
 TEST(ShadowMap, RejectsBadSizesAndKernels) {
   Scene empty;
   const Light light = Light::sphere(Vec3(0, 5, 0), 0.5f);
-  EXPECT_THROW(createShadowMap(empty, light, 8, LightMapFit::Tight), Error);
-  EXPECT_THROW(createShadowMap(empty, light, 9000, LightMapFit::Tight), Error);
+  EXPECT_THROW(createShadowMap(empty, light, LightMapOptions{8}), Error);
+  EXPECT_THROW(createShadowMap(empty, light, LightMapOptions{9000}), Error);
   for (const char* technique : {"hard", "pcf", "pcss", "multisample"}) {
     ParamSet bad;
     bad.set("map_size", int64_t{8}, "scene.json: techniques.x.map_size");
