@@ -5,6 +5,7 @@
 // (tests/raster/light_map_test.cpp); that every technique's frames of a sequence are deterministic,
 // in determinism_test.cpp.
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +14,7 @@
 
 #include "penumbra/error.h"
 #include "penumbra/motion.h"
+#include "penumbra/primitives.h"
 #include "penumbra/raster.h"
 #include "penumbra/reference.h"
 #include "penumbra/registry.h"
@@ -97,6 +99,34 @@ TEST(StableLightMap, ALightMoveWithinOneLatticeCellLeavesEveryLightMapTechniqueU
   }
   for (const TechniqueInfo* info : lightMapTechniques())
     EXPECT_NE(std::find(ran.begin(), ran.end(), info->name), ran.end()) << info->name << " never ran";
+}
+
+// What a technique takes from the light besides the map (plm's, smoothies' and kirsch's silhouettes,
+// plm's rays to the light, brabec's and plm's side a receiver faces) looks from the map's origin
+// (lightAtMapOrigin, shadow_map.h), so it holds still with the map: here the light crosses the plane of
+// a box's wall within one lattice cell, which turns the wall from back- to front-facing for the
+// light's centre and would move the box's silhouette from the wall's top edge to its bottom edge.
+TEST(StableLightMap, ALightCrossingAFacePlaneWithinOneLatticeCellLeavesTheSilhouetteTechniquesUnchanged) {
+  Scene scene = loadScene("torus");
+  const Vec3 center = scene.lights.at(0).center();
+  Object box;
+  box.name = "box";
+  box.id = 7;
+  box.mesh = makeBox(Vec3(0.6f, 0.4f, 0.6f));
+  // Its +x wall lies in the plane x = center.x.
+  transformMesh(box.mesh, glm::translate(Mat4(1.0f), Vec3(center.x - 0.3f, 1.0f, center.z)));
+  scene.objects.push_back(box);
+  const Vec3 step(1e-4f, 0.0f, 0.0f);
+  const Scene before = withLightAt(scene, center - step), after = withLightAt(scene, center + step);
+  ASSERT_EQ(renderLightMap(before, before.lights.at(0), kMapSize, LightMapFit::Stable).wsOrigin,
+            renderLightMap(after, after.lights.at(0), kMapSize, LightMapFit::Stable).wsOrigin);
+  const GBuffer gbuffer = renderGBuffer(scene, kImageSize, kImageSize);
+  for (const std::string name : {"plm", "smoothies", "kirsch", "brabec"}) {
+    SCOPED_TRACE(name);
+    const std::vector<std::string> params = {"map_fit=stable", "map_size=" + std::to_string(kMapSize)};
+    EXPECT_TRUE(sameBits(testing::runTechnique(name, before, gbuffer, params),
+                         testing::runTechnique(name, after, gbuffer, params)));
+  }
 }
 
 }  // namespace

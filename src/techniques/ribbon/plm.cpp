@@ -656,9 +656,10 @@ class PlmTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "plm"; }
 
  private:
-  void prepareImpl(const Scene& scene, const Light& light) override {
-    plm::emitterRadius(light, "plm");  // rejects unsupported shapes before any work
-    createShadowMap(scene, light, options_.lightMap, map_);
+  void prepareImpl(const Scene& scene, const Light& sceneLight) override {
+    plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
+    createShadowMap(scene, sceneLight, options_.lightMap, map_);
+    const Light light = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     light_ = light;

@@ -18,7 +18,9 @@
 // the disk of equal area; segment lights, which have no width across their axis, are not supported.
 //
 // Silhouette edges (Sec. 3.1). Per object, vertices are welded by position; a triangle faces the
-// light when its wound normal points to the light's centre (directional: its direction). An edge is
+// light when its wound normal points to the light's centre (directional: its direction); the techniques
+// pass the light the map looks from (lightAtMapOrigin of shadow_map.h: under a stable fit, moved to the
+// map's snapped origin), so that the silhouettes hold still with the map. An edge is
 // a silhouette when its triangles face both ways, or when it has one triangle (the border of an open
 // mesh: a single triangle, a plane). Its outer side, in the map, is the side away from its
 // (front-facing) triangle. Degenerate triangles and edges seen end-on are skipped.

@@ -61,9 +61,10 @@ class SmoothiesTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "smoothies"; }
 
  private:
-  void prepareImpl(const Scene& scene, const Light& light) override {
-    plm::emitterRadius(light, "smoothies");
-    createShadowMap(scene, light, options_.lightMap, map_);
+  void prepareImpl(const Scene& scene, const Light& sceneLight) override {
+    plm::emitterRadius(sceneLight, "smoothies");
+    createShadowMap(scene, sceneLight, options_.lightMap, map_);
+    const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(scene, map_, space_, farthest_);

@@ -442,10 +442,11 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
     fail("brabec: jitter = {} is not valid: expected a float in [0, 0.5] (texels)", options.jitter);
 }
 
-void BrabecTechnique::prepareImpl(const Scene& scene, const Light& light) {
+void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
+  createShadowMap(scene, sceneLight, options_.lightMap, map_);
+  const Light light = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin
   light_ = light;
   lightRadius_ = light.extent();
-  createShadowMap(scene, light, options_.lightMap, map_);
   // A segment's footprint is a segment along its direction in the map (its component across the
   // light's axis; t runs against light-space y).
   segmentLight_ = light.shape() == LightShape::Segment;

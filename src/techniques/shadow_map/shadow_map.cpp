@@ -13,6 +13,7 @@
 #endif
 
 #include "penumbra/error.h"
+#include "penumbra/motion.h"
 
 namespace penumbra {
 
@@ -27,6 +28,11 @@ void createShadowMap(const Scene& scene, const Light& light, const LightMapOptio
     fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", options.size, kMinShadowMapSize,
          kMaxShadowMapSize);
   renderLightMap(scene, light, options.size, out, options.fit);
+}
+
+Light lightAtMapOrigin(const Light& light, const LightMap& map) {
+  if (light.isDirectional() || map.wsOrigin == light.center()) return light;
+  return lightMovedTo(light, map.wsOrigin);
 }
 
 float minMapDepth(const LightMap& map) {

@@ -102,6 +102,14 @@ LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapO
 // The same into `out`, reusing its storage (renderLightMap); `out` is untouched when the size is refused.
 void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out);
 
+// The light as `map` sees it: moved so that its centre sample is the map's origin. A stable fit
+// (LightMapFit::Stable) snaps that origin to a world lattice, so whatever a technique takes from the
+// light besides the map (silhouettes, the side a receiver faces, rays to the light) must look from the
+// same point: from the light's own centre it would change within a lattice cell, where the map holds
+// still, and no longer match the map. A tight fit's origin is the centre itself, and a directional
+// light has no position: `light` is returned unchanged for both.
+Light lightAtMapOrigin(const Light& light, const LightMap& map);
+
 // Smallest finite depth in the map (the nearest possible blocker); kInfinity for an empty map.
 float minMapDepth(const LightMap& map);
 
