@@ -659,10 +659,10 @@ class PlmTechnique final : public ShadowTechnique {
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
     createShadowMap(scene, sceneLight, options_.lightMap, map_);
-    const Light light = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
+    light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
+    const Light& light = *light_;
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
-    light_ = light;
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
     plm::farthestSurface(scene, map_, space_, farthest_);
@@ -900,7 +900,7 @@ class PlmTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
-  std::optional<Light> light_;  //!< the light of the last prepare()
+  std::optional<Light> light_;  //!< the light the last prepare()'s map looks from (lightAtMapOrigin)
   Image<PlmTexel> limits_;
   Image<float> g_;               //!< limits_' g alone, for the lit fast path
   Image<uint8_t> footprint2x2_;  //!< kFootprint* of the 2x2 texels whose top-left this is

@@ -444,8 +444,8 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
 
 void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
   createShadowMap(scene, sceneLight, options_.lightMap, map_);
-  const Light light = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin
-  light_ = light;
+  light_ = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin
+  const Light& light = *light_;
   lightRadius_ = light.extent();
   // A segment's footprint is a segment along its direction in the map (its component across the
   // light's axis; t runs against light-space y).
