@@ -38,7 +38,9 @@ void addFrameOptions(CLI::App& app, FrameOptions& options, const std::string& pa
   app.add_option("--height", options.height, "image height in pixels (default: the scene's)")
       ->check(CLI::Range(1, kMaxImageSize));
   app.add_option("--light", options.lightIndex, "index of the scene's light to use")->capture_default_str();
-  app.add_option("--spp", options.spp, "samples per pixel, for techniques that have an `spp` parameter")
+  app.add_option("--spp", options.spp,
+                 "samples per pixel: render's technique's, if it has an `spp` parameter; in compare and bench the "
+                 "reference's (the few-ray techniques take --param NAME.spp)")
       ->check(CLI::PositiveNumber);
   app.add_option("--seed", options.seed, "random seed, for techniques that have a `seed` parameter")
       ->check(CLI::NonNegativeNumber);
@@ -201,7 +203,10 @@ ParamSet gatherParams(const Setup& setup, const TechniqueInfo& info, const Frame
   ParamSet given;
   auto it = setup.scene.techniqueParams.find(info.name);
   if (it != setup.scene.techniqueParams.end()) given = it->second;
-  if (options.spp && info.hasParam("spp")) given.set("spp", *options.spp, "command line (--spp)");
+  // Where several techniques run, --spp is the Monte Carlo reference's: raytraced-soft and hybrid also
+  // have an `spp`, of a few rays (1 to 16), which the reference's thousand must not set.
+  if (options.spp && info.hasParam("spp") && (!prefixed || info.name == "reference"))
+    given.set("spp", *options.spp, "command line (--spp)");
   if (options.seed && info.hasParam("seed")) given.set("seed", *options.seed, "command line (--seed)");
   if (!prefixed) {
     for (const std::string& kv : options.params) given.setFromKeyValue(kv, "command line (--param)");

@@ -34,6 +34,10 @@ class RayScene {
   bool occluded(const Ray& ray) const;
   // Occlusion of `count` <= 16 rays at once (one Embree packet); out[i] is set for each ray.
   void occluded16(const Ray* rays, int count, bool* out) const;
+  // The closest hit's distance of `count` <= 16 rays at once (one Embree packet): tHit[i] is the ray
+  // parameter of ray i's first hit within [tMin, tMax], kInfinity where it hits nothing. For shadow
+  // rays that need the blocker's distance (a penumbra's width), at the cost of a closest-hit query.
+  void intersect16(const Ray* rays, int count, float* tHit) const;
   // The closest hit within [tMin, tMax], or nothing. Thread-safe.
   std::optional<RayHit> intersect(const Ray& ray) const;
 

@@ -175,6 +175,38 @@ void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
   for (int i = 0; i < count; ++i) out[i] = packet.tfar[i] < 0.0f;
 }
 
+void RayScene::intersect16(const Ray* rays, int count, float* tHit) const {
+  if (count <= 0) return;
+  if (count > 16) fail("internal: intersect16 takes at most 16 rays (got {})", count);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[16];
+  RTCRayHit16 packet;  // 64-byte aligned by its declaration
+  for (int i = 0; i < 16; ++i) {
+    // Inactive lanes copy ray 0, as in occluded16.
+    const Ray& ray = rays[i < count ? i : 0];
+    valid[i] = i < count ? -1 : 0;
+    packet.ray.org_x[i] = ray.origin.x;
+    packet.ray.org_y[i] = ray.origin.y;
+    packet.ray.org_z[i] = ray.origin.z;
+    packet.ray.tnear[i] = ray.tMin;
+    packet.ray.dir_x[i] = ray.direction.x;
+    packet.ray.dir_y[i] = ray.direction.y;
+    packet.ray.dir_z[i] = ray.direction.z;
+    packet.ray.time[i] = 0.0f;
+    packet.ray.tfar[i] = ray.tMax;
+    packet.ray.mask[i] = 0xffffffffu;
+    packet.ray.id[i] = static_cast<unsigned>(i);
+    packet.ray.flags[i] = 0;
+    packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  rtcIntersect16(valid, impl_->scene, &context, &packet);
+  for (int i = 0; i < count; ++i)
+    tHit[i] = packet.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID ? kInfinity : packet.ray.tfar[i];
+}
+
 std::optional<RayHit> RayScene::intersect(const Ray& ray) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);

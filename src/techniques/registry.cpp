@@ -12,6 +12,8 @@ namespace penumbra {
 TechniqueInfo referenceTechniqueInfo();
 TechniqueInfo noneTechniqueInfo();
 TechniqueInfo raytracedHardTechniqueInfo();
+TechniqueInfo raytracedSoftTechniqueInfo();
+TechniqueInfo hybridTechniqueInfo();
 TechniqueInfo hardTechniqueInfo();
 TechniqueInfo pcfTechniqueInfo();
 TechniqueInfo pcssTechniqueInfo();
@@ -43,6 +45,12 @@ std::string lightHandling(const std::string& name) {
       {"raytraced-hard",
        "every shape, as a point at its centre sample; a polygon's is its area centroid, which for a concave one can "
        "lie off the emitter"},
+      {"raytraced-soft",
+       "every shape, sampled over its emitting area (a concave polygon uniformly by area, so its shape is kept); the "
+       "filter's width takes the light as a disk of radius Light::extent()"},
+      {"hybrid",
+       "every shape: rays sample its emitting area (a concave polygon uniformly by area); the map is taken from its "
+       "centre sample and the blocker search takes it as a disk of radius Light::extent()"},
       {"pcf",
        "every shape, as a point at its centre sample (a concave polygon: its area centroid); the kernel does not "
        "follow the light's size"},
@@ -107,6 +115,21 @@ std::function<ResourceEstimate(const Params&, int, int)> resourceEstimate(const 
       return ResourceEstimate{0.0, pixels(w, h) * static_cast<double>(p.getInt("spp")), 0.0,
                               fmt::format("{} x {} pixels x spp={}", w, h, p.getInt("spp"))};
     });
+  if (name == "raytraced-soft")
+    return Estimate([=](const Params& p, int w, int h) {
+      // Rays at most: a probe per 2 x 2 pixels, spp per pixel where every tile is a penumbra tile. Per
+      // pixel the ray sums (16 bytes) and four images.
+      return ResourceEstimate{pixels(w, h) * 32.0, pixels(w, h) * (static_cast<double>(p.getInt("spp")) + 0.25), 0.0,
+                              fmt::format("at most {} x {} pixels x (spp={} + 1/4)", w, h, p.getInt("spp"))};
+    });
+  if (name == "hybrid")
+    return Estimate([](const Params& p, int w, int h) {
+      ResourceEstimate e = mapEstimate(p, 1.0, kDepthMapBytes);
+      e.bytes += static_cast<double>(w) * h * 36.0;  // raytraced-soft's buffers and the search's ratio
+      e.rays = static_cast<double>(w) * h * static_cast<double>(p.getInt("spp"));  // at most
+      e.drivers += fmt::format(", at most {} x {} pixels x spp={}", w, h, p.getInt("spp"));
+      return e;
+    });
   if (name == "raytraced-hard" || name == "parker")
     return Estimate([=](const Params&, int w, int h) {
       return ResourceEstimate{0.0, pixels(w, h), 0.0, fmt::format("{} x {} pixels", w, h)};
@@ -139,10 +162,24 @@ std::function<ResourceEstimate(const Params&, int, int)> resourceEstimate(const 
 const std::vector<TechniqueInfo>& techniqueRegistry() {
   static const std::vector<TechniqueInfo> registry = [] {
     std::vector<TechniqueInfo> infos = {
-        referenceTechniqueInfo(), noneTechniqueInfo(),      hardTechniqueInfo(),        raytracedHardTechniqueInfo(),
-        pcfTechniqueInfo(),       pcssTechniqueInfo(),      multisampleTechniqueInfo(), brabecTechniqueInfo(),
-        plmTechniqueInfo(),       smoothiesTechniqueInfo(), kirschTechniqueInfo(),      heidrichTechniqueInfo(),
-        parkerTechniqueInfo(),    ssvTechniqueInfo(),       wedgesTechniqueInfo(),
+        referenceTechniqueInfo(),
+        noneTechniqueInfo(),
+        hardTechniqueInfo(),
+        raytracedHardTechniqueInfo(),
+        pcfTechniqueInfo(),
+        pcssTechniqueInfo(),
+        multisampleTechniqueInfo(),
+        brabecTechniqueInfo(),
+        plmTechniqueInfo(),
+        smoothiesTechniqueInfo(),
+        kirschTechniqueInfo(),
+        heidrichTechniqueInfo(),
+        parkerTechniqueInfo(),
+        ssvTechniqueInfo(),
+        wedgesTechniqueInfo(),
+        // Appended, not inserted: the fuzz corpus's seeds name a technique by its index here.
+        raytracedSoftTechniqueInfo(),
+        hybridTechniqueInfo(),
     };
     for (TechniqueInfo& info : infos) {
       info.lights = lightHandling(info.name);

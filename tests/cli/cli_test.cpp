@@ -522,6 +522,29 @@ TEST_F(CliTest, CompareWildcardParameterSetsEveryTechniqueThatHasTheKey) {
   expectError("compare --scene s.json --techniques hard -p '*.map_fit=loose' " + kTiny, {"map_fit", "loose"});
 }
 
+// In compare and bench --spp is the reference's (the truth's too): raytraced-soft and hybrid have an
+// `spp` of 1 to 16 rays, which the truth's thousands must neither set nor fail on; theirs is set with
+// --param. In render, the one technique run takes it.
+TEST_F(CliTest, SppIsTheReferencesWhereSeveralTechniquesRun) {
+  write("s.json", sceneJson(kLight, kObjects));
+  const Result r =
+      run("compare --scene s.json --techniques reference,raytraced-soft,hybrid -p hybrid.spp=3 --width 16 --height 16 "
+          "--spp 300 --out out");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(read("out/report/compare.json"));
+  std::map<std::string, nlohmann::json> params;
+  for (const auto& row : j["techniques"]) params[row["name"].get<std::string>()] = row["params"];
+  EXPECT_EQ(params["reference"]["spp"], "300") << j.dump(2);
+  EXPECT_EQ(params["raytraced-soft"]["spp"], "2");  // its default
+  EXPECT_EQ(params["hybrid"]["spp"], "3");
+  const Result b =
+      run("bench --scene s.json --techniques raytraced-soft,reference --repeat 1 --width 16 --height 16 "
+          "--spp 300");
+  EXPECT_EQ(b.code, 0) << b.output;
+  expectError("render --scene s.json -t raytraced-soft --width 16 --height 16 --spp 300 --out r",
+              {"raytraced-soft.spp = 300", "[1, 16]"});
+}
+
 // With no --techniques every registered technique runs; one that does not support the light's shape
 // is listed with its reason instead of ending the comparison, and fails when asked for by name.
 TEST_F(CliTest, CompareListsEveryRegisteredTechnique) {

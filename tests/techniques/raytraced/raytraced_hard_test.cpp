@@ -1,4 +1,4 @@
-// Tests of `raytraced-hard` (src/techniques/raytraced_hard.cpp): V is the exact hard shadow of a
+// Tests of `raytraced-hard` (src/techniques/raytraced/raytraced_hard.cpp): V is the exact hard shadow of a
 // point light at the light's centre sample, checked against the segment p -> centre crossing a
 // rectangle occluder computed by hand, for a local and a directional light.
 #include <gtest/gtest.h>

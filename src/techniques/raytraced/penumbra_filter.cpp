@@ -1,0 +1,94 @@
+// The penumbra-aware filter of penumbra_filter.h.
+#include "penumbra_filter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace penumbra::raytraced {
+namespace {
+
+// x^n by squaring: a handful of multiplies where std::pow is a library call per tap.
+inline float integerPower(float x, int n) {
+  float result = 1.0f;
+  for (; n > 0; n >>= 1, x *= x)
+    if (n & 1) result *= x;
+  return result;
+}
+
+// One separable pass along (dx, dy) over the active tiles: writes `out` at their pixels of radius
+// >= 1 from `in`, which is read where `inActive` says a tap lies in an active tile and `outside`
+// elsewhere (the second pass reads the first pass's result inside the active tiles and the unfiltered
+// input around them).
+void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
+                const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
+  const int width = g.width(), height = g.height();
+  const Image<float>& radius = *input.radius;
+  const Image<float>& reach = *input.reach;
+  const int tileSize = input.activeTiles ? input.tileSize : std::max(width, height);
+  const int tilesX = input.activeTiles ? input.tilesX : 1;
+  const int tilesY = (height + tileSize - 1) / tileSize;
+  auto active = [&](int x, int y) {
+    return !input.activeTiles || input.activeTiles[static_cast<size_t>(y / tileSize) * tilesX + x / tileSize];
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
+    for (int tile = range.begin(); tile < range.end(); ++tile) {
+      const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
+      if (!active(x0, y0)) continue;
+      for (int y = y0; y < std::min(y0 + tileSize, height); ++y)
+        for (int x = x0; x < std::min(x0 + tileSize, width); ++x) {
+          const float r = radius(x, y);
+          if (!(r >= 1.0f) || !g.hit(x, y)) {
+            out(x, y) = in(x, y);
+            continue;
+          }
+          const int32_t id = g.objectId(x, y);
+          const Vec3 p = g.wsPosition(x, y);
+          const Vec3 n = g.wsNormal(x, y);
+          // Tolerated distance from p's tangent plane per pixel of screen distance.
+          const float tolerance = options.planeTolerance * pixelFootprint(g.csDepth(x, y), input.tanHalfFovY, height);
+          const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
+          const int taps = static_cast<int>(r) / stride;
+          const float invR2 = 1.0f / (r * r);
+          float sum = in(x, y), weightSum = 1.0f;
+          for (int k = -taps; k <= taps; ++k) {
+            if (k == 0) continue;
+            const int qx = x + k * stride * dx, qy = y + k * stride * dy;
+            if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+            if (g.objectId(qx, qy) != id) continue;  // also drops pixels that see nothing
+            const float d = static_cast<float>(std::abs(k) * stride);
+            if (reach(qx, qy) < d) continue;
+            const float plane = std::abs(glm::dot(n, g.wsPosition(qx, qy) - p));
+            const float planeWeight = 1.0f - plane / (tolerance * d);
+            if (!(planeWeight > 0.0f)) continue;
+            const float cosine = glm::dot(n, g.wsNormal(qx, qy));
+            if (!(cosine > 0.0f)) continue;
+            const float normalWeight = integerPower(cosine, options.normalPower);
+            // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
+            const float s = 1.0f - d * d * invR2;
+            const float w = s * s * planeWeight * normalWeight;
+            sum += w * (active(qx, qy) ? in(qx, qy) : outside(qx, qy));
+            weightSum += w;
+          }
+          out(x, y) = sum / weightSum;
+        }
+    }
+  });
+}
+
+}  // namespace
+
+void filterPenumbrae(const GBuffer& gbuffer, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
+                     Image<float>& scratch, Image<float>& out) {
+  const Image<float>& noisy = *input.noisy;
+  // Pixels outside the active tiles keep their input; both passes write only inside them.
+  scratch.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  out.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  std::copy(noisy.begin(), noisy.end(), out.begin());
+  filterPass(gbuffer, input, options, noisy, noisy, 1, 0, scratch);
+  filterPass(gbuffer, input, options, scratch, noisy, 0, 1, out);
+}
+
+}  // namespace penumbra::raytraced

@@ -1,0 +1,149 @@
+// `raytraced-soft`: what engines ship for area-light shadows today — a few shadow rays per pixel and
+// a denoiser — on the same G-buffer as the papers' techniques.
+//
+//  1. Probes: in each 8 x 8 tile, one ray from one pixel of each 2 x 2 quad (16 rays, one packet)
+//     toward a point of the light, traced for its closest hit, so a blocked ray also gives the
+//     blocker's distance. The tile is wholly lit, wholly in umbra, or mixed.
+//  2. A tile that is mixed, or touches (8-neighbourhood) a mixed tile or one of the other uniform
+//     class, is a penumbra tile: each of its pixels traces spp rays (few_ray.h: 16-ray packets of
+//     8 x 2 pixels), and only they are filtered. The other tiles take their probes' 0 or 1
+//     (`skip_uniform_tiles`; off: every tile is a penumbra tile).
+//  3. Each penumbra pixel's penumbra width from its rays' hit distances (few_ray.h: similar
+//     triangles, as PCSS's estimate but from the hits themselves), in pixels.
+//  4. The filter of penumbra_filter.h, radius `filter_scale` times that width (at most max_radius).
+//
+// Approximations: the light is a disk of radius Light::extent() for the width estimate only (the
+// rays sample its true shape); a segment's shadow is filtered isotropically, so across the segment
+// it is blurred as much as along it; a tile classified uniform from its 16 probes keeps 0 or 1
+// (a pixel of true V 0.95 in a tile all of whose probes were lit, and whose neighbours' were too,
+// stays 1). Spatial only: nothing is carried from one frame to the next. Parameters and units:
+// RaytracedSoftOptions below and PenumbraFilterOptions (penumbra_filter.h).
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "few_ray.h"
+#include "penumbra/error.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/registry.h"
+
+namespace penumbra {
+namespace {
+
+struct RaytracedSoftOptions {
+  int samplesPerPixel = 2;       //!< rays per pixel of a penumbra tile
+  bool skipUniformTiles = true;  //!< tiles whose probes agree with their neighbours' trace no more rays
+  uint64_t seed = 1;             //!< selects the sample patterns
+  raytraced::PenumbraFilterOptions filter;
+  raytraced::TemporalOptions temporal;
+
+  static void describe(OptionFields<RaytracedSoftOptions>& f) {
+    f.add(
+        &RaytracedSoftOptions::samplesPerPixel,
+        OptionDecl("spp").range(1, 16).unit("rays").help(
+            "shadow rays per pixel of a penumbra tile (CMJ-stratified over the light); elsewhere one probe ray per 2x2 "
+            "pixels"));
+    f.add(&RaytracedSoftOptions::skipUniformTiles,
+          OptionDecl("skip_uniform_tiles")
+              .help("8x8 tiles whose probe rays are all lit or all blocked, as are their neighbours', keep the "
+                    "probe's answer: no more rays, no filter"));
+    f.add(&RaytracedSoftOptions::seed,
+          OptionDecl("seed").range(0, 4294967295.0).help("random seed; the same seed gives bit-identical output"));
+    f.nest(&RaytracedSoftOptions::filter);
+    f.nest(&RaytracedSoftOptions::temporal);
+  }
+};
+
+class RaytracedSoftTechnique final : public ShadowTechnique {
+ public:
+  explicit RaytracedSoftTechnique(const RaytracedSoftOptions& options) : options_(options) {}
+  std::string_view name() const override { return "raytraced-soft"; }
+
+  std::vector<std::pair<std::string, double>> stats() const override {
+    return {{"rays", rays_},
+            {"penumbra_tile_fraction", penumbraTileFraction_},
+            {"probe_ms", stageMs_[0]},
+            {"rays_ms", stageMs_[1]},
+            {"filter_ms", stageMs_[2]}};
+  }
+
+ private:
+  void prepareImpl(const Scene& scene, const Light& light) override {
+    raysScene_ = std::make_unique<RayScene>(scene);
+    light_ = light;
+    epsilon_ = shadowRayEpsilon(scene.bounds());
+    tanHalfFovY_ = std::tan(0.5f * radians(scene.camera.fovYDegrees));
+    camera_ = scene.camera;
+  }
+
+  void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
+
+  RaytracedSoftOptions options_;
+  std::unique_ptr<RayScene> raysScene_;
+  std::optional<Light> light_;
+  float epsilon_ = 0.0f;
+  float tanHalfFovY_ = 0.0f;
+  Camera camera_;                       //!< this frame's, for the temporal history
+  raytraced::TemporalHistory history_;  //!< the frames before, when temporal is on
+  raytraced::FewRayFrame frame_;        //!< kept across frames: its storage is reused
+  double rays_ = 0.0;
+  double penumbraTileFraction_ = 0.0;
+  // Milliseconds of the visibility pass's stages (stats(), not finer passes: the report's visibility
+  // column is the pass's own time, which finer passes would leave empty).
+  double stageMs_[3] = {0.0, 0.0, 0.0};
+};
+
+void RaytracedSoftTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
+  if (!raysScene_ || !light_)
+    fail("raytraced-soft: visibility() called before prepare(); call prepare(scene, light) first");
+  using namespace raytraced;
+  Timer stageTimer;
+  frame_.reset(gbuffer.width(), gbuffer.height());
+  const TileRayTracer tracer(*raysScene_, *light_, epsilon_, options_.samplesPerPixel,
+                             options_.temporal.enabled ? hashCombine(options_.seed, history_.frames()) : options_.seed);
+  const int tiles = static_cast<int>(frame_.tiles.size());
+  std::atomic<int64_t> rays{0};
+
+  // 1. Probes and tile classes (each tile's pixels are traced and read by one thread).
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
+    int64_t local = 0;
+    for (int tile = range.begin(); tile < range.end(); ++tile) {
+      local += tracer.probeTile(gbuffer, tile, frame_);
+    }
+    rays += local;
+  });
+  stageMs_[0] = stageTimer.elapsedMs();
+  stageTimer.reset();
+
+  // 2. Every sample of every pixel of the penumbra tiles.
+  const int penumbraTiles = markPenumbraTiles(frame_, options_.skipUniformTiles);
+  rays += tracePenumbraTiles(gbuffer, tracer, static_cast<uint32_t>(options_.samplesPerPixel), frame_);
+  stageMs_[1] = stageTimer.elapsedMs();
+  stageTimer.reset();
+
+  // 3, 4. V, filtered along the penumbra width.
+  resolveVisibility(gbuffer, frame_, *light_, options_.filter, tanHalfFovY_, nullptr, v);
+  if (options_.temporal.enabled) history_.accumulate(gbuffer, camera_, options_.temporal, v);
+  stageMs_[2] = stageTimer.elapsedMs();
+  rays_ = static_cast<double>(rays.load());
+  penumbraTileFraction_ = tiles > 0 ? static_cast<double>(penumbraTiles) / tiles : 0.0;
+}
+
+}  // namespace
+
+TechniqueInfo raytracedSoftTechniqueInfo() {
+  TechniqueInfo info;
+  info.name = "raytraced-soft";
+  info.summary = "a few shadow rays per pixel in penumbra tiles, filtered along the penumbra width their hits give";
+  info.source = "engine practice (axis-aligned filtering, Mehta et al. 2012; SIGMA; FidelityFX shadow denoiser)";
+  info.setOptions<RaytracedSoftOptions>(
+      [](const RaytracedSoftOptions& o) { return std::make_unique<RaytracedSoftTechnique>(o); });
+  return info;
+}
+
+}  // namespace penumbra
