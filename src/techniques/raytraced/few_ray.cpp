@@ -347,4 +347,24 @@ void TemporalHistory::accumulate(const GBuffer& gbuffer, const Camera& camera, c
   ++frames_;
 }
 
+void FewRayState::prepare(const Scene& scene, const Light& aimedAt) {
+  rays = std::make_unique<RayScene>(scene);
+  light = aimedAt;
+  epsilon = shadowRayEpsilon(scene.bounds());
+  tanHalfFovY = std::tan(0.5f * radians(scene.camera.fovYDegrees));
+  camera = scene.camera;
+}
+
+uint64_t FewRayState::frameSeed(const TemporalOptions& temporal, uint64_t seed) const {
+  return temporal.enabled ? hashCombine(seed, history.frames()) : seed;
+}
+
+std::vector<std::pair<std::string, double>> FewRayState::stats(const std::string& firstStage) const {
+  return {{"rays", rayCount},
+          {"penumbra_tile_fraction", penumbraTileFraction},
+          {firstStage + "_ms", stageMs[0]},
+          {"rays_ms", stageMs[1]},
+          {"filter_ms", stageMs[2]}};
+}
+
 }  // namespace penumbra::raytraced

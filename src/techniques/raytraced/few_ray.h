@@ -19,6 +19,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "penumbra/camera.h"
@@ -28,6 +32,7 @@
 #include "penumbra/options.h"
 #include "penumbra/ray_scene.h"
 #include "penumbra/sampling.h"
+#include "penumbra/scene.h"
 #include "penumbra_filter.h"
 
 namespace penumbra::raytraced {
@@ -150,6 +155,30 @@ class TemporalHistory {
   Image<int32_t> objectIds_;
   Camera camera_;
   uint64_t frames_ = 0;
+};
+
+// What raytraced-soft and hybrid keep between calls: the last prepare's ray scene, light and camera,
+// the frame's storage, the temporal history, and the last visibility pass's statistics.
+struct FewRayState {
+  std::unique_ptr<RayScene> rays;
+  std::optional<Light> light;  //!< the light the rays aim at
+  float epsilon = 0.0f;        //!< shadowRayEpsilon of the scene
+  float tanHalfFovY = 0.0f;    //!< the camera's, for pixel footprints
+  Camera camera;               //!< this frame's, for the temporal history
+  FewRayFrame frame;           //!< kept across frames: its storage is reused
+  TemporalHistory history;     //!< the frames before, when temporal is on
+  double rayCount = 0.0;
+  double penumbraTileFraction = 0.0;
+  // Milliseconds of the visibility pass's stages (stats, not finer passes: the report's visibility
+  // column is the pass's own time, which finer passes would leave empty).
+  double stageMs[3] = {0.0, 0.0, 0.0};
+
+  // A new ray scene for `scene`, and its camera; `light` is what the rays aim at.
+  void prepare(const Scene& scene, const Light& light);
+  // The sample patterns' seed of the frame about to be rendered: new each frame when temporal is on.
+  uint64_t frameSeed(const TemporalOptions& temporal, uint64_t seed) const;
+  // rays, penumbra_tile_fraction and the stage times, the first stage named `firstStage`.
+  std::vector<std::pair<std::string, double>> stats(const std::string& firstStage) const;
 };
 
 }  // namespace penumbra::raytraced

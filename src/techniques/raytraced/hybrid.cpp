@@ -72,24 +72,14 @@ class HybridTechnique final : public ShadowTechnique {
       : options_(options), blockerDisk_(vogelDisk(options.blockerSamples)) {}
   std::string_view name() const override { return "hybrid"; }
 
-  std::vector<std::pair<std::string, double>> stats() const override {
-    return {{"rays", rays_},
-            {"penumbra_tile_fraction", penumbraTileFraction_},
-            {"classify_ms", stageMs_[0]},
-            {"rays_ms", stageMs_[1]},
-            {"filter_ms", stageMs_[2]}};
-  }
+  std::vector<std::pair<std::string, double>> stats() const override { return state_.stats("classify"); }
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     createShadowMap(scene, light, options_.lightMap, map_);
-    raysScene_ = std::make_unique<RayScene>(scene);
     // The rays look from the map's origin too (shadow_map.h): under map_fit=stable a light moving
     // within one lattice cell then changes nothing, as for every light-map technique.
-    light_ = lightAtMapOrigin(light, map_);
-    epsilon_ = shadowRayEpsilon(scene.bounds());
-    tanHalfFovY_ = std::tan(0.5f * radians(scene.camera.fovYDegrees));
-    camera_ = scene.camera;
+    state_.prepare(scene, lightAtMapOrigin(light, map_));
     zMin_ = minMapDepth(map_);
     const float lightSize = light.extent();
     searchScale_ = map_.orthographic ? lightSize : lightSize / zMin_;
@@ -120,39 +110,28 @@ class HybridTechnique final : public ShadowTechnique {
   std::vector<Vec2> blockerDisk_;
   PixelRotations rotations_;
   LightMap map_;
-  std::unique_ptr<RayScene> raysScene_;
-  std::optional<Light> light_;
-  float epsilon_ = 0.0f;
-  float tanHalfFovY_ = 0.0f;
-  Camera camera_;                       //!< this frame's, for the temporal history
-  raytraced::TemporalHistory history_;  //!< the frames before, when temporal is on
   float zMin_ = 0.0f;
   float searchScale_ = 0.0f;  //!< light size (orthographic) or light size / zMin_ (perspective)
-  raytraced::FewRayFrame frame_;
+  raytraced::FewRayState state_;
   Image<float> searchRatio_;
-  double rays_ = 0.0;
-  double penumbraTileFraction_ = 0.0;
-  // Milliseconds of the visibility pass's stages (stats(), not finer passes: the report's visibility
-  // column is the pass's own time, which finer passes would leave empty).
-  double stageMs_[3] = {0.0, 0.0, 0.0};
 };
 
 void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
-  if (map_.size == 0 || !raysScene_ || !light_)
+  if (map_.size == 0 || !state_.rays || !state_.light)
     fail("hybrid: visibility() called before prepare(); call prepare(scene, light) first");
   using namespace raytraced;
   Timer stageTimer;
-  frame_.reset(gbuffer.width(), gbuffer.height());
+  state_.frame.reset(gbuffer.width(), gbuffer.height());
   searchRatio_.reset(gbuffer.width(), gbuffer.height(), 0.0f);
-  const int tiles = static_cast<int>(frame_.tiles.size());
+  const int tiles = static_cast<int>(state_.frame.tiles.size());
 
   // 1. The map's class of each 2 x 2 quad, from a search at its first pixel that sees geometry (a
   // quarter of the searches; a tile is uniform only if its 16 quads agree, as raytraced-soft's 16
   // probes), given to the quad's pixels; and the tiles' classes.
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
-      const int x0 = (tile % frame_.tilesX) * kTile, y0 = (tile / frame_.tilesX) * kTile;
-      const int x1 = std::min(x0 + kTile, frame_.width), y1 = std::min(y0 + kTile, frame_.height);
+      const int x0 = (tile % state_.frame.tilesX) * kTile, y0 = (tile / state_.frame.tilesX) * kTile;
+      const int x1 = std::min(x0 + kTile, state_.frame.width), y1 = std::min(y0 + kTile, state_.frame.height);
       for (int qy = y0; qy < y1; qy += 2)
         for (int qx = x0; qx < x1; qx += 2) {
           RaySums sums;
@@ -161,30 +140,31 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
             for (int x = qx; x < std::min(qx + 2, x1); ++x) {
               if (!gbuffer.hit(x, y)) continue;
               if (ratio < 0.0f) ratio = classify(gbuffer, x, y, sums);
-              frame_.at(x, y) = sums;
+              state_.frame.at(x, y) = sums;
               searchRatio_(x, y) = ratio;
             }
         }
-      frame_.tiles[static_cast<size_t>(tile)] = classifyTile(gbuffer, frame_, tile);
+      state_.frame.tiles[static_cast<size_t>(tile)] = classifyTile(gbuffer, state_.frame, tile);
     }
   });
-  stageMs_[0] = stageTimer.elapsedMs();
+  state_.stageMs[0] = stageTimer.elapsedMs();
   stageTimer.reset();
 
   // 2, 3. Rays in the penumbra tiles, replacing the stand-ins.
-  const int penumbraTiles = markPenumbraTiles(frame_, true);
-  const TileRayTracer tracer(*raysScene_, *light_, epsilon_, options_.samplesPerPixel,
-                             options_.temporal.enabled ? hashCombine(options_.seed, history_.frames()) : options_.seed);
-  const int64_t rays = tracePenumbraTiles(gbuffer, tracer, static_cast<uint32_t>(options_.samplesPerPixel), frame_);
-  stageMs_[1] = stageTimer.elapsedMs();
+  const int penumbraTiles = markPenumbraTiles(state_.frame, true);
+  const TileRayTracer tracer(*state_.rays, *state_.light, state_.epsilon, options_.samplesPerPixel,
+                             state_.frameSeed(options_.temporal, options_.seed));
+  const int64_t rays =
+      tracePenumbraTiles(gbuffer, tracer, static_cast<uint32_t>(options_.samplesPerPixel), state_.frame);
+  state_.stageMs[1] = stageTimer.elapsedMs();
   stageTimer.reset();
 
   // 3, 4. V: filtered rays in the penumbra tiles, the map's 0 or 1 elsewhere.
-  resolveVisibility(gbuffer, frame_, *light_, options_.filter, tanHalfFovY_, &searchRatio_, v);
-  if (options_.temporal.enabled) history_.accumulate(gbuffer, camera_, options_.temporal, v);
-  stageMs_[2] = stageTimer.elapsedMs();
-  rays_ = static_cast<double>(rays);
-  penumbraTileFraction_ = tiles > 0 ? static_cast<double>(penumbraTiles) / tiles : 0.0;
+  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.filter, state_.tanHalfFovY, &searchRatio_, v);
+  if (options_.temporal.enabled) state_.history.accumulate(gbuffer, state_.camera, options_.temporal, v);
+  state_.stageMs[2] = stageTimer.elapsedMs();
+  state_.rayCount = static_cast<double>(rays);
+  state_.penumbraTileFraction = tiles > 0 ? static_cast<double>(penumbraTiles) / tiles : 0.0;
 }
 
 }  // namespace

@@ -64,74 +64,51 @@ class RaytracedSoftTechnique final : public ShadowTechnique {
   explicit RaytracedSoftTechnique(const RaytracedSoftOptions& options) : options_(options) {}
   std::string_view name() const override { return "raytraced-soft"; }
 
-  std::vector<std::pair<std::string, double>> stats() const override {
-    return {{"rays", rays_},
-            {"penumbra_tile_fraction", penumbraTileFraction_},
-            {"probe_ms", stageMs_[0]},
-            {"rays_ms", stageMs_[1]},
-            {"filter_ms", stageMs_[2]}};
-  }
+  std::vector<std::pair<std::string, double>> stats() const override { return state_.stats("probe"); }
 
  private:
-  void prepareImpl(const Scene& scene, const Light& light) override {
-    raysScene_ = std::make_unique<RayScene>(scene);
-    light_ = light;
-    epsilon_ = shadowRayEpsilon(scene.bounds());
-    tanHalfFovY_ = std::tan(0.5f * radians(scene.camera.fovYDegrees));
-    camera_ = scene.camera;
-  }
+  void prepareImpl(const Scene& scene, const Light& light) override { state_.prepare(scene, light); }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
 
   RaytracedSoftOptions options_;
-  std::unique_ptr<RayScene> raysScene_;
-  std::optional<Light> light_;
-  float epsilon_ = 0.0f;
-  float tanHalfFovY_ = 0.0f;
-  Camera camera_;                       //!< this frame's, for the temporal history
-  raytraced::TemporalHistory history_;  //!< the frames before, when temporal is on
-  raytraced::FewRayFrame frame_;        //!< kept across frames: its storage is reused
-  double rays_ = 0.0;
-  double penumbraTileFraction_ = 0.0;
-  // Milliseconds of the visibility pass's stages (stats(), not finer passes: the report's visibility
-  // column is the pass's own time, which finer passes would leave empty).
-  double stageMs_[3] = {0.0, 0.0, 0.0};
+  raytraced::FewRayState state_;
 };
 
 void RaytracedSoftTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
-  if (!raysScene_ || !light_)
+  if (!state_.rays || !state_.light)
     fail("raytraced-soft: visibility() called before prepare(); call prepare(scene, light) first");
   using namespace raytraced;
   Timer stageTimer;
-  frame_.reset(gbuffer.width(), gbuffer.height());
-  const TileRayTracer tracer(*raysScene_, *light_, epsilon_, options_.samplesPerPixel,
-                             options_.temporal.enabled ? hashCombine(options_.seed, history_.frames()) : options_.seed);
-  const int tiles = static_cast<int>(frame_.tiles.size());
+  state_.frame.reset(gbuffer.width(), gbuffer.height());
+  const TileRayTracer tracer(*state_.rays, *state_.light, state_.epsilon, options_.samplesPerPixel,
+                             state_.frameSeed(options_.temporal, options_.seed));
+  const int tiles = static_cast<int>(state_.frame.tiles.size());
   std::atomic<int64_t> rays{0};
 
   // 1. Probes and tile classes (each tile's pixels are traced and read by one thread).
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
     int64_t local = 0;
     for (int tile = range.begin(); tile < range.end(); ++tile) {
-      local += tracer.probeTile(gbuffer, tile, frame_);
+      local += tracer.probeTile(gbuffer, tile, state_.frame);
     }
     rays += local;
   });
-  stageMs_[0] = stageTimer.elapsedMs();
+  state_.stageMs[0] = stageTimer.elapsedMs();
   stageTimer.reset();
 
   // 2. Every sample of every pixel of the penumbra tiles.
-  const int penumbraTiles = markPenumbraTiles(frame_, options_.skipUniformTiles);
-  rays += tracePenumbraTiles(gbuffer, tracer, static_cast<uint32_t>(options_.samplesPerPixel), frame_);
-  stageMs_[1] = stageTimer.elapsedMs();
+  const int penumbraTiles = markPenumbraTiles(state_.frame, options_.skipUniformTiles);
+  rays += tracePenumbraTiles(gbuffer, tracer, static_cast<uint32_t>(options_.samplesPerPixel), state_.frame);
+  state_.stageMs[1] = stageTimer.elapsedMs();
   stageTimer.reset();
 
   // 3, 4. V, filtered along the penumbra width.
-  resolveVisibility(gbuffer, frame_, *light_, options_.filter, tanHalfFovY_, nullptr, v);
-  if (options_.temporal.enabled) history_.accumulate(gbuffer, camera_, options_.temporal, v);
-  stageMs_[2] = stageTimer.elapsedMs();
-  rays_ = static_cast<double>(rays.load());
-  penumbraTileFraction_ = tiles > 0 ? static_cast<double>(penumbraTiles) / tiles : 0.0;
+  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.filter, state_.tanHalfFovY, nullptr, v);
+  if (options_.temporal.enabled) state_.history.accumulate(gbuffer, state_.camera, options_.temporal, v);
+  state_.stageMs[2] = stageTimer.elapsedMs();
+  state_.rayCount = static_cast<double>(rays.load());
+  state_.penumbraTileFraction = tiles > 0 ? static_cast<double>(penumbraTiles) / tiles : 0.0;
 }
 
 }  // namespace
