@@ -73,6 +73,27 @@ inline void fillRay(RTCRay& r, const Ray& ray) {
   r.flags = 0;
 }
 
+// Embree's 16-ray layout from `count` <= 16 of ours, with the valid mask. Inactive lanes copy ray 0,
+// so they hold valid numbers; the mask keeps Embree from tracing them.
+inline void fillPacket(RTCRay16& packet, int* valid, const Ray* rays, int count) {
+  for (int i = 0; i < 16; ++i) {
+    const Ray& ray = rays[i < count ? i : 0];
+    valid[i] = i < count ? -1 : 0;
+    packet.org_x[i] = ray.origin.x;
+    packet.org_y[i] = ray.origin.y;
+    packet.org_z[i] = ray.origin.z;
+    packet.tnear[i] = ray.tMin;
+    packet.dir_x[i] = ray.direction.x;
+    packet.dir_y[i] = ray.direction.y;
+    packet.dir_z[i] = ray.direction.z;
+    packet.time[i] = 0.0f;
+    packet.tfar[i] = ray.tMax;
+    packet.mask[i] = 0xffffffffu;
+    packet.id[i] = static_cast<unsigned>(i);
+    packet.flags[i] = 0;
+  }
+}
+
 }  // namespace
 
 RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
@@ -154,23 +175,7 @@ void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[16];
   RTCRay16 packet;  // 64-byte aligned by its declaration
-  for (int i = 0; i < 16; ++i) {
-    // Inactive lanes copy ray 0, so they hold valid numbers; the mask keeps Embree from tracing them.
-    const Ray& ray = rays[i < count ? i : 0];
-    valid[i] = i < count ? -1 : 0;
-    packet.org_x[i] = ray.origin.x;
-    packet.org_y[i] = ray.origin.y;
-    packet.org_z[i] = ray.origin.z;
-    packet.tnear[i] = ray.tMin;
-    packet.dir_x[i] = ray.direction.x;
-    packet.dir_y[i] = ray.direction.y;
-    packet.dir_z[i] = ray.direction.z;
-    packet.time[i] = 0.0f;
-    packet.tfar[i] = ray.tMax;
-    packet.mask[i] = 0xffffffffu;
-    packet.id[i] = static_cast<unsigned>(i);
-    packet.flags[i] = 0;
-  }
+  fillPacket(packet, valid, rays, count);
   rtcOccluded16(valid, impl_->scene, &context, &packet);
   for (int i = 0; i < count; ++i) out[i] = packet.tfar[i] < 0.0f;
 }
@@ -183,22 +188,8 @@ void RayScene::intersect16(const Ray* rays, int count, float* tHit) const {
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[16];
   RTCRayHit16 packet;  // 64-byte aligned by its declaration
+  fillPacket(packet.ray, valid, rays, count);
   for (int i = 0; i < 16; ++i) {
-    // Inactive lanes copy ray 0, as in occluded16.
-    const Ray& ray = rays[i < count ? i : 0];
-    valid[i] = i < count ? -1 : 0;
-    packet.ray.org_x[i] = ray.origin.x;
-    packet.ray.org_y[i] = ray.origin.y;
-    packet.ray.org_z[i] = ray.origin.z;
-    packet.ray.tnear[i] = ray.tMin;
-    packet.ray.dir_x[i] = ray.direction.x;
-    packet.ray.dir_y[i] = ray.direction.y;
-    packet.ray.dir_z[i] = ray.direction.z;
-    packet.ray.time[i] = 0.0f;
-    packet.ray.tfar[i] = ray.tMax;
-    packet.ray.mask[i] = 0xffffffffu;
-    packet.ray.id[i] = static_cast<unsigned>(i);
-    packet.ray.flags[i] = 0;
     packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
