@@ -14,13 +14,16 @@
 //
 // Speed: a pixel's rays share an origin and aim at one light, so they are traced as coherent
 // 16-ray Embree packets, each aimed at one 4 x 4 tile of the sample grid (a small patch of the
-// light); the light's per-point set-up is done once per pixel (Light::samplerAt); the hot loop
-// allocates nothing; rows run in parallel with oneTBB.
+// light); at up to 8 spp a packet holds 16 / spp neighbouring pixels of a row instead, so its lanes
+// are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
+// packing); the light's per-point set-up is done once per pixel (Light::samplerAt); the hot loop
+// allocates nothing (one strata buffer per range of rows); rows run in parallel with oneTBB.
 #include "penumbra/reference.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -63,6 +66,24 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const uint32_t columns = sampler.columns(), rows = sampler.rows();
   const bool fullGrid = columns * rows == spp;
 
+  // A pixel's strata in the order its samples are traced: the 4 x 4 tiles of the grid when spp fills
+  // it (at most 8 spp: the grid's row-major order), index order otherwise.
+  auto pixelStrata = [&](uint32_t pattern, uint32_t* out) {
+    uint32_t n = 0;
+    if (fullGrid) {
+      for (uint32_t ty = 0; ty < rows; ty += 4)
+        for (uint32_t tx = 0; tx < columns; tx += 4)
+          for (uint32_t cy = ty; cy < std::min(ty + 4, rows); ++cy)
+            for (uint32_t cx = tx; cx < std::min(tx + 4, columns); ++cx) out[n++] = cy * columns + cx;
+    } else {
+      for (uint32_t i = 0; i < spp; ++i) out[n++] = sampler.stratum(i, pattern);
+    }
+  };
+  // At up to 8 spp a packet holds several neighbouring pixels' samples (16 / spp pixels of a row), so
+  // its lanes are not left idle; each pixel's samples are still traced and summed in the same order,
+  // so V is the same as one pixel a packet.
+  const int pixelsPerPacket = spp <= 8 ? static_cast<int>(16 / spp) : 1;
+
   std::atomic<int> rowsDone{0};
   std::atomic<int64_t> hitPixels{0};
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
@@ -72,73 +93,93 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     Ray packet[16];
     bool occluded[16];
     float weights[16];
+    int xs[16];
     int64_t localHits = 0;
+    // Sums in double: with millions of samples a float sum would lose the low bits of V.
+    struct Sums {
+      double w = 0.0, wVis = 0.0, w2 = 0.0, w2Vis = 0.0;
+    };
+    auto add = [&](Sums& sums, int first, int count) {
+      for (int i = first; i < first + count; ++i) {
+        const double w = weights[i];
+        const double vis = occluded[i] ? 0.0 : 1.0;
+        sums.w += w;
+        sums.wVis += w * vis;
+        sums.w2 += w * w;
+        sums.w2Vis += w * w * vis;
+      }
+    };
+    auto finish = [&](const Sums& sums, int x, int y) {
+      const double V = sums.w > 0.0 ? sums.wVis / sums.w : 1.0;
+      double se = 0.0;
+      if (spp > 1 && sums.w > 0.0) {
+        // sum (w (vis - V))^2 with vis in {0, 1}: sum w^2 vis (1 - 2V) + V^2 sum w^2.
+        const double ss = std::max(0.0, sums.w2Vis * (1.0 - 2.0 * V) + V * V * sums.w2);
+        const double meanW = sums.w / spp;
+        se = std::sqrt(ss / (spp - 1)) / meanW / std::sqrt(static_cast<double>(spp));
+      }
+      v(x, y) = static_cast<float>(V);
+      stdError_(x, y) = static_cast<float>(se);
+    };
+    // Rays of `count` samples of one pixel into packet slots [first, first + count).
+    auto makeRays = [&](const Light::Sampler& lightSampler, const Vec3& wsP, const Vec3& wsOrigin, uint32_t pattern,
+                        const uint32_t* cells, int first, int count) {
+      // The sample points first, in a loop of their own: each is a long chain of dependent integer
+      // hashes, and only independent iterations back to back let the CPU overlap them.
+      for (int i = 0; i < count; ++i) us[first + i] = sampler.sampleInStratum(cells[i], pattern);
+      lightSampler.sample(us + first, count, lightSamples + first);
+      for (int i = first; i < first + count; ++i) {
+        // Stored member by member (rt::storeRay): a whole-struct copy stalls on store forwarding.
+        rt::storeRay(packet[i],
+                     rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon));
+        weights[i] = lightSamples[i].weight;
+      }
+    };
+    std::vector<uint32_t> allStrata(spp);
     for (int y = range.begin(); y < range.end(); ++y) {
-      for (int x = 0; x < width; ++x) {
-        if (!gbuffer.hit(x, y)) continue;
-        ++localHits;
-        const Vec3 wsP = gbuffer.wsPosition(x, y);
-        const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
+      int x = 0;
+      while (x < width) {
+        // The next pixelsPerPacket pixels of the row that see geometry.
+        int group = 0;
+        for (; x < width && group < pixelsPerPacket; ++x)
+          if (gbuffer.hit(x, y)) xs[group++] = x;
+        if (group == 0) break;
+        localHits += group;
+        if (pixelsPerPacket > 1) {
+          for (int j = 0; j < group; ++j) {
+            const Vec3 wsP = gbuffer.wsPosition(xs[j], y);
+            const Vec3 wsNg = gbuffer.wsGeometricNormal(xs[j], y);
+            const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+            const uint32_t pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + xs[j]);
+            pixelStrata(pattern, allStrata.data());
+            makeRays(light.samplerAt(wsP), wsP, wsOrigin, pattern, allStrata.data(), j * static_cast<int>(spp),
+                     static_cast<int>(spp));
+          }
+          rays.occluded16(packet, group * static_cast<int>(spp), occluded);
+          for (int j = 0; j < group; ++j) {
+            Sums sums;
+            add(sums, j * static_cast<int>(spp), static_cast<int>(spp));
+            finish(sums, xs[j], y);
+          }
+          continue;
+        }
+        const int px = xs[0];
+        const Vec3 wsP = gbuffer.wsPosition(px, y);
+        const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
         const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
-        const uint32_t pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + x);
+        const uint32_t pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + px);
         // The light's per-point set-up (a sphere's silhouette frame) once per pixel, not per ray.
         const Light::Sampler lightSampler = light.samplerAt(wsP);
-        // Sums in double: with millions of samples a float sum would lose the low bits of V.
-        double sumW = 0.0, sumWVis = 0.0, sumW2 = 0.0, sumW2Vis = 0.0;
-        int count = 0;
-        auto trace = [&] {
-          // The sample points first, in a loop of their own: each is a long chain of dependent integer
-          // hashes, and only independent iterations back to back let the CPU overlap them.
-          for (int i = 0; i < count; ++i) us[i] = sampler.sampleInStratum(strata[i], pattern);
-          lightSampler.sample(us, count, lightSamples);
-          for (int i = 0; i < count; ++i) {
-            // Copied member by member: a whole-struct copy made the compiler assemble the ray in a
-            // stack temporary with narrow stores and reload it with 16-byte loads: a store-forwarding
-            // stall in the hottest loop.
-            const Ray ray =
-                rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon);
-            packet[i].origin = ray.origin;
-            packet[i].direction = ray.direction;
-            packet[i].tMin = ray.tMin;
-            packet[i].tMax = ray.tMax;
-            weights[i] = lightSamples[i].weight;
-          }
+        pixelStrata(pattern, allStrata.data());
+        Sums sums;
+        for (uint32_t first = 0; first < spp; first += 16) {
+          const int count = static_cast<int>(std::min<uint32_t>(16, spp - first));
+          for (int i = 0; i < count; ++i) strata[i] = allStrata[first + static_cast<uint32_t>(i)];
+          makeRays(lightSampler, wsP, wsOrigin, pattern, strata, 0, count);
           rays.occluded16(packet, count, occluded);
-          for (int i = 0; i < count; ++i) {
-            const double w = weights[i];
-            const double vis = occluded[i] ? 0.0 : 1.0;
-            sumW += w;
-            sumWVis += w * vis;
-            sumW2 += w * w;
-            sumW2Vis += w * w * vis;
-          }
-          count = 0;
-        };
-        if (fullGrid) {
-          for (uint32_t ty = 0; ty < rows; ty += 4)
-            for (uint32_t tx = 0; tx < columns; tx += 4)
-              for (uint32_t cy = ty; cy < std::min(ty + 4, rows); ++cy)
-                for (uint32_t cx = tx; cx < std::min(tx + 4, columns); ++cx) {
-                  strata[count++] = cy * columns + cx;
-                  if (count == 16) trace();
-                }
-        } else {
-          for (uint32_t i = 0; i < spp; ++i) {
-            strata[count++] = sampler.stratum(i, pattern);
-            if (count == 16) trace();
-          }
+          add(sums, 0, count);
         }
-        if (count > 0) trace();
-        const double V = sumW > 0.0 ? sumWVis / sumW : 1.0;
-        double se = 0.0;
-        if (spp > 1 && sumW > 0.0) {
-          // sum (w (vis - V))^2 with vis in {0, 1}: sum w^2 vis (1 - 2V) + V^2 sum w^2.
-          const double ss = std::max(0.0, sumW2Vis * (1.0 - 2.0 * V) + V * V * sumW2);
-          const double meanW = sumW / spp;
-          se = std::sqrt(ss / (spp - 1)) / meanW / std::sqrt(static_cast<double>(spp));
-        }
-        v(x, y) = static_cast<float>(V);
-        stdError_(x, y) = static_cast<float>(se);
+        finish(sums, px, y);
       }
       // About a hundred progress reports per pass, whatever the image height.
       const int done = ++rowsDone;

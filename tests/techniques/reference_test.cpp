@@ -399,6 +399,36 @@ TEST(Reference, DeterministicPerSeedAndThreadCount) {
   EXPECT_GT(penumbra, 10);
 }
 
+// At up to 8 spp a packet holds several pixels' rays (reference.cpp); which pixels share a packet
+// must not change any pixel's V or standard error. With every other pixel hidden, each remaining
+// pixel shares its packets with other neighbours, and must get the same bits.
+TEST(Reference, PixelsSharingAPacketGetTheirOwnV) {
+  const SmallRender r;
+  GBuffer sparse = r.g;
+  for (int y = 0; y < sparse.height(); ++y)
+    for (int x = 1; x < sparse.width(); x += 2) sparse.objectId(x, y) = kNoObject;
+  for (uint32_t spp : {1u, 3u, 4u, 8u, 9u}) {
+    ReferenceTechnique reference(ReferenceOptions{spp, 1});
+    reference.prepare(r.scene, r.light);
+    Image<float> full, fewer;
+    reference.visibility(r.g, full);
+    const Image<float> fullError = reference.standardError();
+    reference.visibility(sparse, fewer);
+    int compared = 0, penumbra = 0;
+    for (int y = 0; y < sparse.height(); ++y)
+      for (int x = 0; x < sparse.width(); x += 2) {
+        if (!sparse.hit(x, y)) continue;
+        ++compared;
+        penumbra += full(x, y) > 0.0f && full(x, y) < 1.0f;
+        EXPECT_EQ(std::memcmp(&full(x, y), &fewer(x, y), sizeof(float)), 0)
+            << "spp " << spp << " (" << x << ", " << y << ")";
+        EXPECT_EQ(std::memcmp(&fullError(x, y), &reference.standardError()(x, y), sizeof(float)), 0) << "spp " << spp;
+      }
+    EXPECT_GT(compared, 100);
+    if (spp > 1) EXPECT_GT(penumbra, 5) << "spp " << spp;
+  }
+}
+
 TEST(Reference, StatsCountRaysAndStandardErrors) {
   const SmallRender r;
   ReferenceTechnique reference(ReferenceOptions{32, 1});
