@@ -208,7 +208,7 @@ int64_t tracePenumbraTiles(const GBuffer& gbuffer, const TileRayTracer& tracer, 
   return rays.load();
 }
 
-void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& light,
+void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& light, int samplesPerPixel,
                        const PenumbraFilterOptions& filter, float tanHalfFovY, const Image<float>* fallbackRatio,
                        Image<float>& v) {
   const int width = frame.width, height = frame.height;
@@ -236,6 +236,8 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
     tileBlocked[static_cast<size_t>(tile)] = blocked;
   });
   const float lightDiameter = 2.0f * light.extent();
+  // min_radius is for the noise of 2 rays a pixel; the noise falls as 1 / sqrt(spp), and so does the floor.
+  const float minRadius = filter.minRadius * std::sqrt(2.0f / static_cast<float>(std::max(samplesPerPixel, 1)));
   Image<float>& noisy = frame.noisy;
   Image<float>& radius = frame.radius;
   Image<float>& reach = frame.reach;
@@ -269,15 +271,16 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
         auto toRadius = [&](float ratio) {
           return std::min(filter.maxRadius, filter.filterScale * lightDiameter * ratio / footprint);
         };
-        // A penumbra pixel's radius is at least min_radius: a penumbra a pixel or two wide would
-        // otherwise keep its few rays' 0s and 1s unfiltered.
+        // A penumbra pixel with a lit ray filters over at least min_radius: a penumbra a pixel or two
+        // wide would otherwise keep its few rays' 0s and 1s as specks. One all of whose rays were
+        // blocked keeps its own radius: raised, it would average lit neighbours into a sharp umbra.
         // A pixel all of whose rays were blocked reaches only as far as its own radius (penumbra_filter.h).
         if (umbra) reach(x, y) = toRadius(p.ratio / p.blocked);
         if (!penumbra) continue;
         const float ratio = p.blocked > 0                                    ? p.ratio / p.blocked
                             : fallbackRatio && (*fallbackRatio)(x, y) > 0.0f ? (*fallbackRatio)(x, y)
                                                                              : neighbourhood;
-        radius(x, y) = std::max(filter.minRadius, toRadius(ratio));
+        radius(x, y) = umbra ? toRadius(ratio) : std::max(minRadius, toRadius(ratio));
       }
   });
   if (!(filter.filterScale > 0.0f)) {

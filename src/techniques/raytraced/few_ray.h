@@ -100,9 +100,10 @@ int markPenumbraTiles(FewRayFrame& frame, bool skipUniform);
 // probes' or the map's stand-ins), in parallel over tiles. Returns the rays traced.
 int64_t tracePenumbraTiles(const GBuffer& gbuffer, const TileRayTracer& tracer, uint32_t spp, FewRayFrame& frame);
 
-// V from the sums (1 where the pixel sees nothing), filtered in the penumbra tiles. `fallbackRatio`
+// V from the sums (1 where the pixel sees nothing), filtered in the penumbra tiles (min_radius scaled
+// by sqrt(2 / samplesPerPixel), the rays' noise against that of 2 rays). `fallbackRatio`
 // (may be null; <= 0: none) is a pixel's width ratio where none of its own rays was blocked.
-void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& light,
+void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& light, int samplesPerPixel,
                        const PenumbraFilterOptions& filter, float tanHalfFovY, const Image<float>* fallbackRatio,
                        Image<float>& v);
 

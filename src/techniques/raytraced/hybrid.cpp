@@ -5,8 +5,10 @@
 //  1. The light map from the light's centre (shadow_map.h) and, for one pixel of each 2 x 2 quad,
 //     PCSS's blocker search (Fernando 2005; pcss.cpp): `blocker_samples` taps of a Vogel disk,
 //     rotated per pixel, over the region through which the receiver sees the light at the nearest
-//     depth in the map. No tap blocked: lit; every tap blocked: umbra; otherwise uncertain. The
-//     quad's other pixels take its class.
+//     depth in the map. No tap blocked: lit; every tap blocked: umbra; otherwise the same taps over
+//     PCSS's penumbra estimate, the disk of radius R (z_r - z_b) / z_b (z_b the blockers' mean
+//     depth), decide: all lit, lit; all blocked, umbra; otherwise uncertain. The quad's other pixels
+//     take its class.
 //  2. Tiles of 8 x 8 pixels from those classes, and the penumbra tiles marked as raytraced-soft marks
 //     them (few_ray.h): mixed tiles and their neighbours, and tiles between a lit and an umbra one.
 //  3. In the penumbra tiles only, `spp` shadow rays per pixel (few_ray.h), and the filter of
@@ -81,8 +83,8 @@ class HybridTechnique final : public ShadowTechnique {
     // within one lattice cell then changes nothing, as for every light-map technique.
     state_.prepare(scene, lightAtMapOrigin(light, map_));
     zMin_ = minMapDepth(map_);
-    const float lightSize = light.extent();
-    searchScale_ = map_.orthographic ? lightSize : lightSize / zMin_;
+    lightSize_ = light.extent();
+    searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
@@ -101,7 +103,15 @@ class HybridTechnique final : public ShadowTechnique {
     if (found.blockers == 0) return 0.0f;
     const float zb = found.meanDepth;
     const float ratio = std::max(0.0f, map_.orthographic ? zr - zb : (zr - zb) / zb);
-    const bool umbra = found.blockers == static_cast<int>(blockerDisk_.size());
+    bool umbra = found.blockers == static_cast<int>(blockerDisk_.size());
+    if (!umbra) {
+      // The search region (at the nearest depth in the map) is wider than the penumbra: PCSS's
+      // estimate of it, the disk of radius R (z_r - z_b) / z_b, decides where all its taps agree.
+      const float filterRadius = std::min(lightSize_ * ratio / r.texelWorld, static_cast<float>(map_.size));
+      const float lit = pcfDiskNearest(map_, r, filterRadius, blockerDisk_, rotations_(x, y));
+      if (lit == 1.0f) return ratio;  // lit: the stand-in set above
+      umbra = lit == 0.0f;
+    }
     sums = raytraced::RaySums{1.0f, umbra ? 0.0f : 0.5f, ratio, 1};
     return ratio;
   }
@@ -111,6 +121,7 @@ class HybridTechnique final : public ShadowTechnique {
   PixelRotations rotations_;
   LightMap map_;
   float zMin_ = 0.0f;
+  float lightSize_ = 0.0f;    //!< the light's radius (directional: tan of half its angle)
   float searchScale_ = 0.0f;  //!< light size (orthographic) or light size / zMin_ (perspective)
   raytraced::FewRayState state_;
   Image<float> searchRatio_;
@@ -160,7 +171,8 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   stageTimer.reset();
 
   // 3, 4. V: filtered rays in the penumbra tiles, the map's 0 or 1 elsewhere.
-  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.filter, state_.tanHalfFovY, &searchRatio_, v);
+  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.samplesPerPixel, options_.filter, state_.tanHalfFovY,
+                    &searchRatio_, v);
   if (options_.temporal.enabled) state_.history.accumulate(gbuffer, state_.camera, options_.temporal, v);
   state_.stageMs[2] = stageTimer.elapsedMs();
   state_.rayCount = static_cast<double>(rays);

@@ -2,6 +2,7 @@
 #include "penumbra_filter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <tbb/blocked_range.h>
@@ -9,6 +10,13 @@
 
 namespace penumbra::raytraced {
 namespace {
+
+// 1 / k for the tap offsets k <= 64 (taps_per_side's largest).
+constexpr std::array<float, 65> kInverse = [] {
+  std::array<float, 65> t{};
+  for (int k = 1; k <= 64; ++k) t[static_cast<size_t>(k)] = 1.0f / static_cast<float>(k);
+  return t;
+}();
 
 // x^n by squaring: a handful of multiplies where std::pow is a library call per tap.
 inline float integerPower(float x, int n) {
@@ -33,6 +41,9 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
   auto active = [&](int x, int y) {
     return !input.activeTiles || input.activeTiles[static_cast<size_t>(y / tileSize) * tilesX + x / tileSize];
   };
+  // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile: that
+  // lookup's two divisions were a good part of a tap's cost.
+  const bool sameInput = &in == &outside;
   tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
@@ -48,10 +59,12 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
           const Vec3 p = g.wsPosition(x, y);
           const Vec3 n = g.wsNormal(x, y);
           // Tolerated distance from p's tangent plane per pixel of screen distance.
-          const float tolerance = options.planeTolerance * pixelFootprint(g.csDepth(x, y), input.tanHalfFovY, height);
+          const float invTolerance =
+              1.0f / (options.planeTolerance * pixelFootprint(g.csDepth(x, y), input.tanHalfFovY, height));
           const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
           const int taps = static_cast<int>(r) / stride;
           const float invR2 = 1.0f / (r * r);
+          const float invStride = 1.0f / static_cast<float>(stride);
           float sum = in(x, y), weightSum = 1.0f;
           for (int k = -taps; k <= taps; ++k) {
             if (k == 0) continue;
@@ -61,7 +74,8 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
             const float d = static_cast<float>(std::abs(k) * stride);
             if (reach(qx, qy) < d) continue;
             const float plane = std::abs(glm::dot(n, g.wsPosition(qx, qy) - p));
-            const float planeWeight = 1.0f - plane / (tolerance * d);
+            // 1 - plane / (tolerance d), with reciprocals: no division per tap.
+            const float planeWeight = 1.0f - plane * invTolerance * invStride * kInverse[std::abs(k)];
             if (!(planeWeight > 0.0f)) continue;
             const float cosine = glm::dot(n, g.wsNormal(qx, qy));
             if (!(cosine > 0.0f)) continue;
@@ -69,7 +83,7 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
             // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
             const float s = 1.0f - d * d * invR2;
             const float w = s * s * planeWeight * normalWeight;
-            sum += w * (active(qx, qy) ? in(qx, qy) : outside(qx, qy));
+            sum += w * (sameInput || active(qx, qy) ? in(qx, qy) : outside(qx, qy));
             weightSum += w;
           }
           out(x, y) = sum / weightSum;

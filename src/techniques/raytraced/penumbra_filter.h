@@ -39,7 +39,7 @@ namespace penumbra::raytraced {
 
 struct PenumbraFilterOptions {
   float filterScale = 0.25f;     //!< filter radius over the estimated penumbra width (both in pixels)
-  float minRadius = 0.0f;        //!< filter radius floor in penumbra tiles, pixels
+  float minRadius = 2.0f;        //!< filter radius floor in penumbra tiles, pixels
   float maxRadius = 48.0f;       //!< filter radius cap, pixels
   int tapsPerSide = 8;           //!< taps on each side of the centre per pass
   float planeTolerance = 0.25f;  //!< plane distance tolerated, in pixel footprints per pixel of distance
@@ -50,13 +50,15 @@ struct PenumbraFilterOptions {
           OptionDecl("filter_scale")
               .range(0.0, 4.0)
               .help("filter radius as a multiple of the estimated penumbra width (0 turns the filter off)"));
-    f.add(&PenumbraFilterOptions::minRadius,
-          OptionDecl("min_radius")
-              .range(0.0, 256.0)
-              .unit("pixels")
-              .help("smallest filter radius in a penumbra tile, so that a penumbra a pixel or two wide still averages "
-                    "its neighbours' rays (2: taps 1 pixel away weigh 0.56); fewer specks, but umbra leaks at "
-                    "sharp contacts"));
+    f.add(
+        &PenumbraFilterOptions::minRadius,
+        OptionDecl("min_radius")
+            .range(0.0, 256.0)
+            .unit("pixels")
+            .help("smallest filter radius of a penumbra tile's pixel that has a lit ray, so that a penumbra a pixel or "
+                  "two wide still averages its neighbours' rays (2: taps 1 pixel away weigh 0.56; at 2 rays per pixel, "
+                  "scaled by sqrt(2 / spp)); a pixel all of "
+                  "whose rays were blocked keeps its own radius, so umbra does not light up at sharp contacts"));
     f.add(&PenumbraFilterOptions::maxRadius,
           OptionDecl("max_radius").range(1.0, 256.0).unit("pixels").help("largest filter radius"));
     f.add(&PenumbraFilterOptions::tapsPerSide,

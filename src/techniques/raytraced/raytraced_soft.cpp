@@ -104,7 +104,8 @@ void RaytracedSoftTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>
   stageTimer.reset();
 
   // 3, 4. V, filtered along the penumbra width.
-  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.filter, state_.tanHalfFovY, nullptr, v);
+  resolveVisibility(gbuffer, state_.frame, *state_.light, options_.samplesPerPixel, options_.filter, state_.tanHalfFovY,
+                    nullptr, v);
   if (options_.temporal.enabled) state_.history.accumulate(gbuffer, state_.camera, options_.temporal, v);
   state_.stageMs[2] = stageTimer.elapsedMs();
   state_.rayCount = static_cast<double>(rays.load());
