@@ -32,7 +32,10 @@ void FewRayFrame::reset(int w, int h) {
   height = h;
   tilesX = (w + kTile - 1) / kTile;
   tilesY = (h + kTile - 1) / kTile;
-  sums.assign(static_cast<size_t>(w) * h, RaySums{});
+  // Not cleared: every pixel that sees geometry is written before it is read (a uniform tile's
+  // stand-ins, a penumbra tile's clearTile and rays, hybrid's classes), and the rest are never read.
+  // Clearing 16 bytes a pixel every frame cost a pass over the whole image.
+  sums.resize(static_cast<size_t>(w) * h);
   tiles.assign(static_cast<size_t>(tilesX) * tilesY, TileClass::Empty);
   penumbra.assign(tiles.size(), 0);
 }
@@ -84,6 +87,7 @@ int64_t TileRayTracer::probeTile(const GBuffer& gbuffer, int tile, FewRayFrame& 
         }
       }
     }
+  for (int i = 0; i < count; ++i) frame.at(xs[i], ys[i]) = RaySums{};  // the rays add to the sums
   const int64_t rays = tracePixels(gbuffer, xs, ys, count, 0, 1, frame);
   int blocked = 0;
   float ratio = 0.0f;
@@ -228,10 +232,11 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
     float ratio = 0.0f;
     int blocked = 0;
     for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
-        ratio += frame.at(x, y).ratio;
-        blocked += frame.at(x, y).blocked;
-      }
+      for (int x = x0; x < x1; ++x)
+        if (gbuffer.hit(x, y)) {
+          ratio += frame.at(x, y).ratio;
+          blocked += frame.at(x, y).blocked;
+        }
     tileRatio[static_cast<size_t>(tile)] = ratio;
     tileBlocked[static_cast<size_t>(tile)] = blocked;
   });
