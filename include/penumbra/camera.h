@@ -26,6 +26,11 @@ struct Camera {
   // integer + 0.5). Origin at the camera, direction not normalized: its camera-space z is -1, so
   // the ray parameter t of a hit equals the hit's view depth.
   Ray generateRay(float px, float py, int width, int height) const;
+
+  // World -> homogeneous raster coordinates of a width x height image, generateRay's inverse: a world
+  // point p maps to q = rasterFromWs * (p, 1) with raster position (q.x / q.w, q.y / q.w) and view
+  // depth q.w (in front of the camera where q.w > 0); q.z carries no meaning.
+  Mat4 rasterFromWs(int width, int height) const;
 };
 
 }  // namespace penumbra

@@ -40,4 +40,16 @@ Ray Camera::generateRay(float px, float py, int width, int height) const {
   return ray;
 }
 
+Mat4 Camera::rasterFromWs(int width, int height) const {
+  const float w = static_cast<float>(width), h = static_cast<float>(height);
+  // The viewport of generateRay: x = (ndc_x + 1) w / 2, y = (1 - ndc_y) h / 2, applied before the
+  // division by clip w (it is affine in clip space). Near and far only set the z row, unused here.
+  Mat4 viewport(1.0f);
+  viewport[0][0] = 0.5f * w;
+  viewport[3][0] = 0.5f * w;
+  viewport[1][1] = -0.5f * h;
+  viewport[3][1] = 0.5f * h;
+  return viewport * clipFromCamera(w / h, 1.0f, 2.0f) * cameraFromWs();
+}
+
 }  // namespace penumbra

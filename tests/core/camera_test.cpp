@@ -1,6 +1,7 @@
 // Tests of the pinhole camera (src/core/camera.cpp): a primary ray's parameter t equals the view depth
 // of the point it reaches, the centre pixel looks along the view axis, generateRay agrees with the
-// projection matrices (the rasterizer's view), and invalid cameras are rejected.
+// projection matrices (the rasterizer's view) and rasterFromWs inverts it, and invalid cameras are
+// rejected.
 #include <gtest/gtest.h>
 
 #include "penumbra/camera.h"
@@ -57,6 +58,24 @@ TEST(Camera, RaysMatchTheProjectionMatrices) {
   const Vec4 cs = cam.cameraFromWs() * Vec4(cam.position + topLeft.direction, 1.0f);
   EXPECT_LT(cs.x, 0.0f);
   EXPECT_GT(cs.y, 0.0f);
+}
+
+// rasterFromWs undoes generateRay: a point on the ray through (px, py) maps back to (px, py), with its
+// view depth (the ray parameter) as w; a point behind the camera has w < 0.
+TEST(Camera, RasterFromWsInvertsGenerateRay) {
+  const Camera cam = testCamera();
+  const int w = 64, h = 48;
+  const Mat4 rasterFromWs = cam.rasterFromWs(w, h);
+  for (const Vec2 px : {Vec2(0.5f, 0.5f), Vec2(63.5f, 47.5f), Vec2(10.25f, 30.75f), Vec2(32.0f, 24.0f)})
+    for (const float t : {0.5f, 4.0f, 30.0f}) {
+      const Ray ray = cam.generateRay(px.x, px.y, w, h);
+      const Vec4 q = rasterFromWs * Vec4(ray.origin + t * ray.direction, 1.0f);
+      EXPECT_NEAR(q.x / q.w, px.x, 1e-3f);
+      EXPECT_NEAR(q.y / q.w, px.y, 1e-3f);
+      EXPECT_NEAR(q.w, t, 1e-4f * t);
+    }
+  const Vec4 behind = rasterFromWs * Vec4(cam.position - (cam.lookAt - cam.position), 1.0f);
+  EXPECT_LT(behind.w, 0.0f);
 }
 
 TEST(Camera, ValidateRejectsBadCameras) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -309,25 +310,18 @@ void TemporalHistory::accumulate(const GBuffer& gbuffer, const Camera& camera, c
   const int width = gbuffer.width(), height = gbuffer.height();
   const bool hasHistory = frames_ > 0 && v_.width() == width && v_.height() == height;
   if (hasHistory) {
-    // The previous camera's raster position of a world point (Camera::generateRay inverted).
-    const Vec3 f = glm::normalize(camera_.lookAt - camera_.position);
-    const Vec3 s = glm::normalize(glm::cross(f, camera_.up));
-    const Vec3 u = glm::cross(s, f);
-    const float tanHalf = std::tan(0.5f * radians(camera_.fovYDegrees));
-    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    const Mat4 rasterFromWs = camera_.rasterFromWs(width, height);  // the previous frame's camera
     const float tanHalfNow = std::tan(0.5f * radians(camera.fovYDegrees));
-    Image<float> blended(width, height, 1.0f);
+    blended_.reset(width, height, 1.0f);
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
         for (int x = 0; x < width; ++x) {
-          blended(x, y) = v(x, y);
+          blended_(x, y) = v(x, y);
           if (!gbuffer.hit(x, y)) continue;
           const Vec3 p = gbuffer.wsPosition(x, y);
-          const Vec3 d = p - camera_.position;
-          const float depth = glm::dot(d, f);
-          if (!(depth > 0.0f)) continue;
-          const float px = (glm::dot(d, s) / (depth * tanHalf * aspect) + 1.0f) * 0.5f * static_cast<float>(width);
-          const float py = (1.0f - glm::dot(d, u) / (depth * tanHalf)) * 0.5f * static_cast<float>(height);
+          const Vec4 q = rasterFromWs * Vec4(p, 1.0f);
+          if (!(q.w > 0.0f)) continue;
+          const float px = q.x / q.w, py = q.y / q.w;
           if (!(px >= 0.0f && py >= 0.0f && px < static_cast<float>(width) && py < static_cast<float>(height)))
             continue;
           const int hx = static_cast<int>(px), hy = static_cast<int>(py);
@@ -343,10 +337,10 @@ void TemporalHistory::accumulate(const GBuffer& gbuffer, const Camera& camera, c
                 hi = std::max(hi, v(nx, ny));
               }
           const float h = std::clamp(v_(hx, hy), lo - options.clampMargin, hi + options.clampMargin);
-          blended(x, y) = h + options.alpha * (v(x, y) - h);
+          blended_(x, y) = h + options.alpha * (v(x, y) - h);
         }
     });
-    v = std::move(blended);
+    std::swap(v, blended_);  // blended_ keeps the old storage for the next frame
   }
   v_ = v;
   positions_ = gbuffer.wsPosition;

@@ -152,6 +152,7 @@ class TemporalHistory {
 
  private:
   Image<float> v_;
+  Image<float> blended_;  //!< the blend's output, kept so that each frame reuses its pages
   Image<Vec3> positions_;
   Image<int32_t> objectIds_;
   Camera camera_;
