@@ -51,15 +51,15 @@ TileRayTracer::TileRayTracer(const RayScene& scene, const Light& light, float ep
 
 int64_t TileRayTracer::traceTile(const GBuffer& gbuffer, int tile, uint32_t first, uint32_t last,
                                  FewRayFrame& frame) const {
-  const int x0 = (tile % frame.tilesX) * kTile, y0 = (tile / frame.tilesX) * kTile;
+  const TileBounds b = frame.bounds(tile);
   int64_t rays = 0;
   // One packet per sample index over the (up to) 16 pixels of an 8 x 2 block: neighbouring origins
   // aiming at one light form a narrow bundle, and at low spp a packet of one pixel's samples would
   // leave most of its 16 lanes idle.
-  for (int y0Block = y0; y0Block < std::min(y0 + kTile, frame.height); y0Block += 2) {
+  for (int y0Block = b.y0; y0Block < b.y1; y0Block += 2) {
     int xs[16], ys[16], count = 0;
-    for (int y = y0Block; y < std::min(y0Block + 2, frame.height); ++y)
-      for (int x = x0; x < std::min(x0 + kTile, frame.width); ++x)
+    for (int y = y0Block; y < std::min(y0Block + 2, b.y1); ++y)
+      for (int x = b.x0; x < b.x1; ++x)
         if (gbuffer.hit(x, y)) {
           xs[count] = x;
           ys[count++] = y;
@@ -70,8 +70,7 @@ int64_t TileRayTracer::traceTile(const GBuffer& gbuffer, int tile, uint32_t firs
 }
 
 int64_t TileRayTracer::probeTile(const GBuffer& gbuffer, int tile, FewRayFrame& frame) const {
-  const int x0 = (tile % frame.tilesX) * kTile, y0 = (tile / frame.tilesX) * kTile;
-  const int x1 = std::min(x0 + kTile, frame.width), y1 = std::min(y0 + kTile, frame.height);
+  const auto [x0, y0, x1, y1] = frame.bounds(tile);
   // One pixel of each 2 x 2 quad that sees geometry, the first in an order that starts at a hashed
   // corner (a fixed corner would probe a regular lattice, which aliases with regular geometry).
   int xs[16], ys[16], count = 0;
@@ -115,9 +114,9 @@ int64_t TileRayTracer::probeTile(const GBuffer& gbuffer, int tile, FewRayFrame& 
 }
 
 void FewRayFrame::clearTile(int tile) {
-  const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
-  for (int y = y0; y < std::min(y0 + kTile, height); ++y)
-    for (int x = x0; x < std::min(x0 + kTile, width); ++x) at(x, y) = RaySums{};
+  const TileBounds b = bounds(tile);
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) at(x, y) = RaySums{};
 }
 
 int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const int* ys, int count, uint32_t first,
@@ -164,10 +163,10 @@ int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const 
 }
 
 TileClass classifyTile(const GBuffer& gbuffer, const FewRayFrame& frame, int tile) {
-  const int x0 = (tile % frame.tilesX) * kTile, y0 = (tile / frame.tilesX) * kTile;
+  const TileBounds b = frame.bounds(tile);
   int hits = 0, lit = 0, umbra = 0;
-  for (int y = y0; y < std::min(y0 + kTile, frame.height); ++y)
-    for (int x = x0; x < std::min(x0 + kTile, frame.width); ++x) {
+  for (int y = b.y0; y < b.y1; ++y)
+    for (int x = b.x0; x < b.x1; ++x) {
       if (!gbuffer.hit(x, y)) continue;
       const RaySums& p = frame.at(x, y);
       ++hits;
@@ -220,20 +219,17 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
   const int tiles = static_cast<int>(frame.tiles.size());
   auto forTiles = [&](auto&& f) {
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
-      for (int tile = range.begin(); tile < range.end(); ++tile) {
-        const int x0 = (tile % frame.tilesX) * kTile, y0 = (tile / frame.tilesX) * kTile;
-        f(tile, x0, y0, std::min(x0 + kTile, width), std::min(y0 + kTile, height));
-      }
+      for (int tile = range.begin(); tile < range.end(); ++tile) f(tile, frame.bounds(tile));
     });
   };
   // Each tile's sums of the width ratios of its blocked rays, for its neighbours' pixels that have none.
   std::vector<float> tileRatio(frame.tiles.size(), 0.0f);
   std::vector<int> tileBlocked(frame.tiles.size(), 0);
-  forTiles([&](int tile, int x0, int y0, int x1, int y1) {
+  forTiles([&](int tile, const TileBounds& b) {
     float ratio = 0.0f;
     int blocked = 0;
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x)
+    for (int y = b.y0; y < b.y1; ++y)
+      for (int x = b.x0; x < b.x1; ++x)
         if (gbuffer.hit(x, y)) {
           ratio += frame.at(x, y).ratio;
           blocked += frame.at(x, y).blocked;
@@ -250,7 +246,7 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
   noisy.reset(width, height, 1.0f);
   radius.reset(width, height, 0.0f);
   reach.reset(width, height, kInfinity);
-  forTiles([&](int tile, int x0, int y0, int x1, int y1) {
+  forTiles([&](int tile, const TileBounds& b) {
     const int tx = tile % frame.tilesX, ty = tile / frame.tilesX;
     const bool penumbra = frame.penumbra[static_cast<size_t>(tile)] != 0;
     // The width ratio of a penumbra pixel none of whose rays was blocked, when the caller has none:
@@ -266,8 +262,8 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
         }
       neighbourhood = count > 0 ? sum / static_cast<float>(count) : 0.0f;
     }
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
+    for (int y = b.y0; y < b.y1; ++y)
+      for (int x = b.x0; x < b.x1; ++x) {
         if (!gbuffer.hit(x, y)) continue;
         const RaySums& p = frame.at(x, y);
         noisy(x, y) = p.weight > 0.0f ? p.visible / p.weight : 1.0f;
@@ -277,15 +273,15 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
         auto toRadius = [&](float ratio) {
           return std::min(filter.maxRadius, filter.filterScale * lightDiameter * ratio / footprint);
         };
-        // A penumbra pixel with a lit ray filters over at least min_radius: a penumbra a pixel or two
-        // wide would otherwise keep its few rays' 0s and 1s as specks. One all of whose rays were
-        // blocked keeps its own radius: raised, it would average lit neighbours into a sharp umbra.
         // A pixel all of whose rays were blocked reaches only as far as its own radius (penumbra_filter.h).
         if (umbra) reach(x, y) = toRadius(p.ratio / p.blocked);
         if (!penumbra) continue;
         const float ratio = p.blocked > 0                                    ? p.ratio / p.blocked
                             : fallbackRatio && (*fallbackRatio)(x, y) > 0.0f ? (*fallbackRatio)(x, y)
                                                                              : neighbourhood;
+        // A penumbra pixel with a lit ray filters over at least min_radius: a penumbra a pixel or two
+        // wide would otherwise keep its few rays' 0s and 1s as specks. One all of whose rays were
+        // blocked keeps its own radius: raised, it would average lit neighbours into a sharp umbra.
         radius(x, y) = umbra ? toRadius(ratio) : std::max(minRadius, toRadius(ratio));
       }
   });

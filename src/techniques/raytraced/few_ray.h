@@ -18,6 +18,7 @@
 // tiles around it. In pixels: divided by the pixel's footprint at its view depth.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -49,6 +50,11 @@ struct RaySums {
   uint8_t blocked = 0;   //!< blocked rays
 };
 
+// A tile's pixels: x in [x0, x1), y in [y0, y1) (the image's last tiles are cut at its edge).
+struct TileBounds {
+  int x0, y0, x1, y1;
+};
+
 // One frame's per-pixel sums and per-tile classes.
 struct FewRayFrame {
   int width = 0, height = 0, tilesX = 0, tilesY = 0;
@@ -64,6 +70,10 @@ struct FewRayFrame {
   RaySums& at(int x, int y) { return sums[static_cast<size_t>(y) * width + x]; }
   const RaySums& at(int x, int y) const { return sums[static_cast<size_t>(y) * width + x]; }
   int tileOf(int x, int y) const { return (y / kTile) * tilesX + x / kTile; }
+  TileBounds bounds(int tile) const {
+    const int x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
+    return {x0, y0, std::min(x0 + kTile, width), std::min(y0 + kTile, height)};
+  }
   void clearTile(int tile);  //!< zeroes the sums of the tile's pixels
 };
 

@@ -141,8 +141,7 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   // probes), given to the quad's pixels; and the tiles' classes.
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
-      const int x0 = (tile % state_.frame.tilesX) * kTile, y0 = (tile / state_.frame.tilesX) * kTile;
-      const int x1 = std::min(x0 + kTile, state_.frame.width), y1 = std::min(y0 + kTile, state_.frame.height);
+      const auto [x0, y0, x1, y1] = state_.frame.bounds(tile);
       for (int qy = y0; qy < y1; qy += 2)
         for (int qx = x0; qx < x1; qx += 2) {
           RaySums sums;
