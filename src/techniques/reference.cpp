@@ -14,7 +14,7 @@
 //
 // Speed: a pixel's rays share an origin and aim at one light, so they are traced as coherent
 // 16-ray Embree packets, each aimed at one 4 x 4 tile of the sample grid (a small patch of the
-// light); at up to 8 spp a packet holds 16 / spp neighbouring pixels of a row instead, so its lanes
+// light); at up to 16 spp a packet holds 16 / spp whole neighbouring pixels of a row instead, so its lanes
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
 // packing); the light's per-point set-up is done once per pixel (Light::samplerAt); the hot loop
 // allocates nothing (one strata buffer per range of rows); rows run in parallel with oneTBB.
@@ -67,7 +67,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const bool fullGrid = columns * rows == spp;
 
   // A pixel's strata in the order its samples are traced: the 4 x 4 tiles of the grid when spp fills
-  // it (at most 8 spp: the grid's row-major order), index order otherwise.
+  // it (at most 16 spp: the grid's row-major order), index order otherwise.
   auto pixelStrata = [&](uint32_t pattern, uint32_t* out) {
     uint32_t n = 0;
     if (fullGrid) {
@@ -79,15 +79,15 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       for (uint32_t i = 0; i < spp; ++i) out[n++] = sampler.stratum(i, pattern);
     }
   };
-  // At up to 8 spp a packet holds several neighbouring pixels' samples (16 / spp pixels of a row), so
-  // its lanes are not left idle; each pixel's samples are still traced and summed in the same order,
-  // so V is the same as one pixel a packet.
-  const int pixelsPerPacket = spp <= 8 ? static_cast<int>(16 / spp) : 1;
+  // At up to 16 spp a packet holds the samples of 16 / spp whole neighbouring pixels of a row (one at 9
+  // to 16), so its lanes are not left idle; each pixel's samples are still traced and summed in the
+  // same order, so V is the same as with one pixel a packet. Above 16 spp a pixel fills packets alone.
+  const bool wholePixels = spp <= 16;
+  const int pixelsPerPacket = wholePixels ? static_cast<int>(16 / spp) : 1;
 
   std::atomic<int> rowsDone{0};
   std::atomic<int64_t> hitPixels{0};
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
-    uint32_t strata[16];
     Vec2 us[16];
     LightSample lightSamples[16];
     Ray packet[16];
@@ -136,6 +136,17 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       }
     };
     std::vector<uint32_t> allStrata(spp);
+    // One pixel's set-up: its point, the shadow rays' origin, its sample pattern and (into allStrata)
+    // its strata in tracing order. Returns the light's sampler at the point (the per-point set-up, a
+    // sphere's silhouette frame, once per pixel, not per ray).
+    auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin, uint32_t& pattern) {
+      wsP = gbuffer.wsPosition(px, y);
+      const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
+      wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+      pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + px);
+      pixelStrata(pattern, allStrata.data());
+      return light.samplerAt(wsP);
+    };
     for (int y = range.begin(); y < range.end(); ++y) {
       int x = 0;
       while (x < width) {
@@ -145,41 +156,31 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           if (gbuffer.hit(x, y)) xs[group++] = x;
         if (group == 0) break;
         localHits += group;
-        if (pixelsPerPacket > 1) {
+        Vec3 wsP, wsOrigin;
+        uint32_t pattern = 0;
+        if (wholePixels) {
+          const int n = static_cast<int>(spp);
           for (int j = 0; j < group; ++j) {
-            const Vec3 wsP = gbuffer.wsPosition(xs[j], y);
-            const Vec3 wsNg = gbuffer.wsGeometricNormal(xs[j], y);
-            const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
-            const uint32_t pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + xs[j]);
-            pixelStrata(pattern, allStrata.data());
-            makeRays(light.samplerAt(wsP), wsP, wsOrigin, pattern, allStrata.data(), j * static_cast<int>(spp),
-                     static_cast<int>(spp));
+            const Light::Sampler lightSampler = setUp(xs[j], y, wsP, wsOrigin, pattern);
+            makeRays(lightSampler, wsP, wsOrigin, pattern, allStrata.data(), j * n, n);
           }
-          rays.occluded16(packet, group * static_cast<int>(spp), occluded);
+          rays.occluded16(packet, group * n, occluded);
           for (int j = 0; j < group; ++j) {
             Sums sums;
-            add(sums, j * static_cast<int>(spp), static_cast<int>(spp));
+            add(sums, j * n, n);
             finish(sums, xs[j], y);
           }
           continue;
         }
-        const int px = xs[0];
-        const Vec3 wsP = gbuffer.wsPosition(px, y);
-        const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
-        const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
-        const uint32_t pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + px);
-        // The light's per-point set-up (a sphere's silhouette frame) once per pixel, not per ray.
-        const Light::Sampler lightSampler = light.samplerAt(wsP);
-        pixelStrata(pattern, allStrata.data());
+        const Light::Sampler lightSampler = setUp(xs[0], y, wsP, wsOrigin, pattern);
         Sums sums;
         for (uint32_t first = 0; first < spp; first += 16) {
           const int count = static_cast<int>(std::min<uint32_t>(16, spp - first));
-          for (int i = 0; i < count; ++i) strata[i] = allStrata[first + static_cast<uint32_t>(i)];
-          makeRays(lightSampler, wsP, wsOrigin, pattern, strata, 0, count);
+          makeRays(lightSampler, wsP, wsOrigin, pattern, allStrata.data() + first, 0, count);
           rays.occluded16(packet, count, occluded);
           add(sums, 0, count);
         }
-        finish(sums, px, y);
+        finish(sums, xs[0], y);
       }
       // About a hundred progress reports per pass, whatever the image height.
       const int done = ++rowsDone;
