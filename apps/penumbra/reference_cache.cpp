@@ -48,7 +48,9 @@ uint64_t fnv1a(std::string_view text, uint64_t hash = 14695981039346656037ull) {
 nlohmann::json keyJson(const Setup& setup, const Params& params, uint64_t sceneHash) {
   nlohmann::json params_json = nlohmann::json::object();
   for (const auto& [k, v] : describeParams(params)) params_json[k] = v;
-  return {{"format", 1},
+  // format 2: the reference's rays are built in vector form (rt::buildShadowRays), which rounds
+  // differently, so a truth cached by format 1 is not what this build would trace.
+  return {{"format", 2},
           {"penumbra_version", PENUMBRA_VERSION},
           {"scene", setup.scene.name},
           {"scene_hash", fmt::format("{:016x}", sceneHash)},

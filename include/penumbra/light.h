@@ -107,31 +107,6 @@ class Light {
   // For a segment only u.x is used. Stratified u gives stratified samples.
   LightSample sample(const Vec3& wsP, const Vec2& u) const;
 
-  // Sampling from one point, many times (the reference's rays of one pixel): the per-point set-up
-  // (for a sphere the silhouette disk's frame and size: two square roots, divisions and a frame)
-  // is done once by samplerAt, after which sample(u) equals Light::sample(wsP, u) to float rounding
-  // (bit for bit in practice: the same operations, hoisted). Holds a pointer to the light: it must
-  // not outlive it.
-  class Sampler {
-   public:
-    LightSample sample(const Vec2& u) const;
-    // out[i] = sample(u[i]) for i < count: one call and one branch on the shape for a whole batch
-    // (a ray packet), so the per-sample work runs back to back.
-    void sample(const Vec2* u, int count, LightSample* out) const;
-
-   private:
-    friend class Light;
-    const Light* light_ = nullptr;
-    Vec3 wsP_{0.0f};
-    bool inside_ = false;      //!< sphere: p inside the light (nothing can occlude)
-    Vec3 toCenter_{0.0f};      //!< sphere: centre - p
-    float d2MinusR2_ = 0.0f;   //!< sphere: d^2 - R^2
-    Vec3 axial_{0.0f};         //!< sphere: silhouette-disk centre relative to p
-    float diskRadius_ = 0.0f;  //!< sphere: silhouette-disk radius; disk: radius; directional: tan(diameter/2)
-    Frame frame_;              //!< sphere: around p->centre; disk: around the normal; directional: around direction
-  };
-  Sampler samplerAt(const Vec3& wsP) const;
-
   // Unshadowed irradiance at p with unit normal n (only for shading; never for V).
   float irradiance(const Vec3& wsP, const Vec3& wsN) const;
 

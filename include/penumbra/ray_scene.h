@@ -21,6 +21,32 @@ struct RayHit {
   Vec3 wsGeometricNormal{0.0f};  //!< unit face normal, as wound (not flipped towards the ray)
 };
 
+// Sixteen rays as structure of arrays, in the layout of Embree's packet queries (RTCRay16, field for
+// field; ray_scene.cpp checks it), so code that builds rays lane by lane writes them where the
+// traversal reads them, with no copy. tMin and tMax bound t along direction (which need not be unit);
+// after occluded16, tMax[i] < 0 where ray i is blocked.
+struct alignas(64) RayPacket16 {
+  float orgX[16], orgY[16], orgZ[16], tMin[16];
+  float dirX[16], dirY[16], dirZ[16], time[16];
+  float tMax[16];
+  uint32_t mask[16], id[16], flags[16];
+
+  RayPacket16();  // every lane a valid empty ray: origin 0, direction +z, tMin = tMax = 0, time 0, mask all
+  bool blocked(int lane) const { return tMax[lane] < 0.0f; }
+};
+
+// The closest hits of a packet (RTCHit16 with one instance level): geomId[i] is kNoHit where ray i
+// hit nothing.
+struct alignas(64) HitPacket16 {
+  static constexpr uint32_t kNoHit = 0xffffffffu;
+  float ngX[16], ngY[16], ngZ[16], u[16], v[16];
+  uint32_t primId[16], geomId[16], instId[16];
+};
+struct alignas(64) RayHitPacket16 {
+  RayPacket16 ray;
+  HitPacket16 hit;
+};
+
 class RayScene {
  public:
   explicit RayScene(const Scene& scene);
@@ -34,6 +60,12 @@ class RayScene {
   bool occluded(const Ray& ray) const;
   // Occlusion of `count` <= 16 rays at once (one Embree packet); out[i] is set for each ray.
   void occluded16(const Ray* rays, int count, bool* out) const;
+  // Occlusion of lanes [0, count) of a packet built in place (count <= 16): afterwards
+  // packet.blocked(i) says whether ray i is blocked.
+  void occluded16(RayPacket16& packet, int count) const;
+  // The closest hits of lanes [0, count) of a packet built in place (count <= 16): afterwards
+  // packet.ray.tMax[i] is ray i's hit distance where packet.hit.geomId[i] != HitPacket16::kNoHit.
+  void intersect16(RayHitPacket16& packet, int count) const;
   // The closest hit's distance of `count` <= 16 rays at once (one Embree packet): tHit[i] is the ray
   // parameter of ray i's first hit within [tMin, tMax], kInfinity where it hits nothing. For shadow
   // rays that need the blocker's distance (a penumbra's width), at the cost of a closest-hit query.

@@ -3,6 +3,7 @@
 // not depend on thread scheduling.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -36,6 +37,8 @@ class CmjSampler {
     m_ = static_cast<uint32_t>(std::sqrt(static_cast<double>(count_)));
     if (m_ < 1) m_ = 1;
     n_ = (count_ + m_ - 1) / m_;
+    rowMagic_ = static_cast<uint32_t>((0xffffffffull + m_) / m_);  // ceil(2^32 / m_), m_ >= 2
+    exactRow_ = m_ >= 2 && static_cast<uint64_t>(m_) * n_ * m_ < (1ull << 32);
   }
   uint32_t count() const { return count_; }
 
@@ -58,40 +61,111 @@ class CmjSampler {
     const float y = (static_cast<float>(s / m_) + (static_cast<float>(sx) + jy) / m_) / n_;
     return Vec2(std::min(x, kOneMinusEpsilon), std::min(y, kOneMinusEpsilon));
   }
+  // sampleInStratum(strata[i], patterns[i]) for the count <= 16 lanes of a ray packet, bit for bit,
+  // into ux[i], uy[i]. Each step is one loop over the lanes, which the compiler vectorizes; the rare
+  // permutation round that must be repeated, and a grid side that is not a power of two, finish lane
+  // by lane.
+  void sampleLanes(const uint32_t* strata, const uint32_t* patterns, int count, float* ux, float* uy) const {
+    alignas(64) uint32_t column[16], row[16], sx[16], sy[16];
+    for (int i = 0; i < count; ++i) {
+      row[i] = rowOf(strata[i]);
+      column[i] = strata[i] - row[i] * m_;
+    }
+    permuteLanes(column, m_, patterns, 0x68bc21ebu, count, sx);
+    permuteLanes(row, n_, patterns, 0x02e5be93u, count, sy);
+    // Dividing by a power of two is multiplying by its reciprocal, bit for bit, and much cheaper.
+    if (((m_ & (m_ - 1)) | (n_ & (n_ - 1))) == 0)
+      jitterLanes<true>(strata, patterns, column, row, sx, sy, count, ux, uy);
+    else
+      jitterLanes<false>(strata, patterns, column, row, sx, sy, count, ux, uy);
+  }
 
  private:
   static constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 
-  // A random permutation of [0, l) indexed by i, selected by p (Kensler, Listing 3).
+  // sampleInStratum's last step for the lanes: the jitter inside each cell. The integers are below
+  // 2^31, so they convert to float as signed ones (one instruction; an unsigned conversion is several).
+  template <bool kPowersOfTwo>
+  void jitterLanes(const uint32_t* strata, const uint32_t* patterns, const uint32_t* column, const uint32_t* row,
+                   const uint32_t* sx, const uint32_t* sy, int count, float* ux, float* uy) const {
+    const float m = static_cast<float>(m_), n = static_cast<float>(n_);
+    const float invM = 1.0f / m, invN = 1.0f / n;
+    auto f = [](uint32_t i) { return static_cast<float>(static_cast<int32_t>(i)); };
+    for (int i = 0; i < count; ++i) {
+      const uint32_t s = strata[i], p = patterns[i];
+      const float jx = randomFloat(s, p * 0x967a889bu), jy = randomFloat(s, p * 0x368cc8b7u);
+      const float x =
+          kPowersOfTwo ? (f(column[i]) + (f(sy[i]) + jx) * invN) * invM : (f(column[i]) + (f(sy[i]) + jx) / n) / m;
+      const float y =
+          kPowersOfTwo ? (f(row[i]) + (f(sx[i]) + jy) * invM) * invN : (f(row[i]) + (f(sx[i]) + jy) / m) / n;
+      ux[i] = std::min(x, kOneMinusEpsilon);
+      uy[i] = std::min(y, kOneMinusEpsilon);
+    }
+  }
+  // A random permutation of [0, l) indexed by i, selected by p (Kensler, Listing 3): rounds of a
+  // hash on the bits of l - 1 until the result falls below l (cycle walking), then a rotation by p.
   static uint32_t permute(uint32_t i, uint32_t l, uint32_t p) {
     if (l <= 1) return 0;
+    const uint32_t w = bitMask(l);
+    do i = permuteRound(i, w, p);
+    while (i >= l);
+    return (i + p) % l;
+  }
+  // The smallest 2^k - 1 >= l - 1.
+  static uint32_t bitMask(uint32_t l) {
     uint32_t w = l - 1;
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
-    do {
-      i ^= p;
-      i *= 0xe170893du;
-      i ^= p >> 16;
-      i ^= (i & w) >> 4;
-      i ^= p >> 8;
-      i *= 0x0929eb3fu;
-      i ^= p >> 23;
-      i ^= (i & w) >> 1;
-      i *= 1u | p >> 27;
-      i *= 0x6935fa69u;
-      i ^= (i & w) >> 11;
-      i *= 0x74dcb303u;
-      i ^= (i & w) >> 2;
-      i *= 0x9e501cc3u;
-      i ^= (i & w) >> 2;
-      i *= 0xc860a3dfu;
-      i &= w;
-      i ^= i >> 5;
-    } while (i >= l);
-    return (i + p) % l;
+    return w;
+  }
+  static uint32_t permuteRound(uint32_t i, uint32_t w, uint32_t p) {
+    i ^= p;
+    i *= 0xe170893du;
+    i ^= p >> 16;
+    i ^= (i & w) >> 4;
+    i ^= p >> 8;
+    i *= 0x0929eb3fu;
+    i ^= p >> 23;
+    i ^= (i & w) >> 1;
+    i *= 1u | p >> 27;
+    i *= 0x6935fa69u;
+    i ^= (i & w) >> 11;
+    i *= 0x74dcb303u;
+    i ^= (i & w) >> 2;
+    i *= 0x9e501cc3u;
+    i ^= (i & w) >> 2;
+    i *= 0xc860a3dfu;
+    i &= w;
+    i ^= i >> 5;
+    return i;
+  }
+  // out[i] = permute(index[i], l, patterns[i] * salt) for count lanes: the first round for every
+  // lane at once, the further rounds (when a round lands at or above l) lane by lane.
+  static void permuteLanes(const uint32_t* index, uint32_t l, const uint32_t* patterns, uint32_t salt, int count,
+                           uint32_t* out) {
+    if (l <= 1) {
+      for (int i = 0; i < count; ++i) out[i] = 0;
+      return;
+    }
+    const uint32_t w = bitMask(l);
+    for (int i = 0; i < count; ++i) out[i] = permuteRound(index[i], w, patterns[i] * salt);
+    if (w + 1 == l) {  // a power of two: every round lands below l, and % l is a mask
+      for (int i = 0; i < count; ++i) out[i] = (out[i] + patterns[i] * salt) & w;
+      return;
+    }
+    for (int i = 0; i < count; ++i) {
+      const uint32_t p = patterns[i] * salt;
+      while (out[i] >= l) out[i] = permuteRound(out[i], w, p);
+      out[i] = (out[i] + p) % l;
+    }
+  }
+  // s / m_ by a multiply: exact while s m_ < 2^32 (for s < m_ n_, true up to about 2^21 samples),
+  // otherwise a division.
+  uint32_t rowOf(uint32_t s) const {
+    return exactRow_ ? static_cast<uint32_t>((static_cast<uint64_t>(s) * rowMagic_) >> 32) : s / m_;
   }
   // A float in [0, 1) from (i, p) (Kensler, Listing 4).
   static float randomFloat(uint32_t i, uint32_t p) {
@@ -109,6 +183,8 @@ class CmjSampler {
   }
 
   uint32_t count_, m_, n_;
+  uint32_t rowMagic_ = 0;
+  bool exactRow_ = false;
 };
 
 // Shirley–Chiu concentric map of [0,1)^2 onto the unit disk: preserves stratification and area.

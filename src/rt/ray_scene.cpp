@@ -11,6 +11,7 @@
 #include "penumbra/ray_scene.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -56,6 +57,30 @@ struct RayScene::Impl {
 };
 
 namespace {
+
+// RayPacket16 and RayHitPacket16 are handed to Embree as its own packet types.
+static_assert(sizeof(RayPacket16) == sizeof(RTCRay16) && alignof(RayPacket16) == alignof(RTCRay16));
+static_assert(offsetof(RayPacket16, orgX) == offsetof(RTCRay16, org_x) &&
+              offsetof(RayPacket16, tMin) == offsetof(RTCRay16, tnear) &&
+              offsetof(RayPacket16, dirX) == offsetof(RTCRay16, dir_x) &&
+              offsetof(RayPacket16, time) == offsetof(RTCRay16, time) &&
+              offsetof(RayPacket16, tMax) == offsetof(RTCRay16, tfar) &&
+              offsetof(RayPacket16, mask) == offsetof(RTCRay16, mask) &&
+              offsetof(RayPacket16, id) == offsetof(RTCRay16, id) &&
+              offsetof(RayPacket16, flags) == offsetof(RTCRay16, flags));
+static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1 && sizeof(RayHitPacket16) == sizeof(RTCRayHit16) &&
+              offsetof(RayHitPacket16, hit) == offsetof(RTCRayHit16, hit) &&
+              offsetof(HitPacket16, ngX) == offsetof(RTCHit16, Ng_x) &&
+              offsetof(HitPacket16, u) == offsetof(RTCHit16, u) &&
+              offsetof(HitPacket16, primId) == offsetof(RTCHit16, primID) &&
+              offsetof(HitPacket16, geomId) == offsetof(RTCHit16, geomID) &&
+              offsetof(HitPacket16, instId) == offsetof(RTCHit16, instID));
+static_assert(HitPacket16::kNoHit == RTC_INVALID_GEOMETRY_ID);
+
+// The valid mask of lanes [0, count).
+inline void validLanes(int count, int* valid) {
+  for (int i = 0; i < 16; ++i) valid[i] = i < count ? -1 : 0;
+}
 
 // Embree's single-ray layout from ours. mask = all bits so no geometry masking applies.
 inline void fillRay(RTCRay& r, const Ray& ray) {
@@ -153,6 +178,18 @@ RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   im.check("building the BVH");
 }
 
+RayPacket16::RayPacket16() {
+  for (int i = 0; i < 16; ++i) {
+    orgX[i] = orgY[i] = orgZ[i] = 0.0f;
+    dirX[i] = dirY[i] = 0.0f;
+    dirZ[i] = 1.0f;
+    tMin[i] = tMax[i] = time[i] = 0.0f;
+    mask[i] = 0xffffffffu;
+    id[i] = static_cast<uint32_t>(i);
+    flags[i] = 0;
+  }
+}
+
 RayScene::~RayScene() = default;
 RayScene::RayScene(RayScene&&) noexcept = default;
 RayScene& RayScene::operator=(RayScene&&) noexcept = default;
@@ -178,6 +215,32 @@ void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
   fillPacket(packet, valid, rays, count);
   rtcOccluded16(valid, impl_->scene, &context, &packet);
   for (int i = 0; i < count; ++i) out[i] = packet.tfar[i] < 0.0f;
+}
+
+void RayScene::occluded16(RayPacket16& packet, int count) const {
+  if (count <= 0) return;
+  if (count > 16) fail("internal: occluded16 takes at most 16 rays (got {})", count);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[16];
+  validLanes(count, valid);
+  rtcOccluded16(valid, impl_->scene, &context, reinterpret_cast<RTCRay16*>(&packet));
+}
+
+void RayScene::intersect16(RayHitPacket16& packet, int count) const {
+  if (count <= 0) return;
+  if (count > 16) fail("internal: intersect16 takes at most 16 rays (got {})", count);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[16];
+  validLanes(count, valid);
+  for (int i = 0; i < 16; ++i) {
+    packet.hit.geomId[i] = HitPacket16::kNoHit;
+    packet.hit.instId[i] = HitPacket16::kNoHit;
+  }
+  rtcIntersect16(valid, impl_->scene, &context, reinterpret_cast<RTCRayHit16*>(&packet));
 }
 
 void RayScene::intersect16(const Ray* rays, int count, float* tHit) const {

@@ -16,8 +16,9 @@
 // 16-ray Embree packets, each aimed at one 4 x 4 tile of the sample grid (a small patch of the
 // light); at up to 16 spp a packet holds 16 / spp whole neighbouring pixels of a row instead, so its lanes
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
-// packing); the light's per-point set-up is done once per pixel (Light::samplerAt); the hot loop
-// allocates nothing (one strata buffer per range of rows); rows run in parallel with oneTBB.
+// packing); the sample points and the rays are made sixteen at a time in vector form
+// (CmjSampler::sampleLanes, rt::buildShadowRays); the hot loop allocates nothing; rows run in
+// parallel with oneTBB.
 #include "penumbra/reference.h"
 
 #include <algorithm>
@@ -31,6 +32,7 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
+#include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {
@@ -50,7 +52,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   if (!rays_ || !light_) fail("reference: visibility() called before prepare(); call prepare(scene, light) first");
   const int width = gbuffer.width(), height = gbuffer.height();
   v.reset(width, height, 1.0f);
-  stdError_ = Image<float>(width, height, 0.0f);
+  stdError_.reset(width, height, 0.0f);  // in place: fresh pages every frame cost a fault each
   const Light& light = *light_;
   const RayScene& rays = *rays_;
   const float epsilon = epsilon_;
@@ -66,19 +68,13 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const uint32_t columns = sampler.columns(), rows = sampler.rows();
   const bool fullGrid = columns * rows == spp;
 
-  // A pixel's strata in the order its samples are traced: the 4 x 4 tiles of the grid when spp fills
-  // it (at most 16 spp: the grid's row-major order), index order otherwise.
-  auto pixelStrata = [&](uint32_t pattern, uint32_t* out) {
-    uint32_t n = 0;
-    if (fullGrid) {
-      for (uint32_t ty = 0; ty < rows; ty += 4)
-        for (uint32_t tx = 0; tx < columns; tx += 4)
-          for (uint32_t cy = ty; cy < std::min(ty + 4, rows); ++cy)
-            for (uint32_t cx = tx; cx < std::min(tx + 4, columns); ++cx) out[n++] = cy * columns + cx;
-    } else {
-      for (uint32_t i = 0; i < spp; ++i) out[n++] = sampler.stratum(i, pattern);
-    }
-  };
+  // That order of the cells, the same for every pixel (at most 16 spp: the grid's row-major order).
+  std::vector<uint32_t> gridOrder;
+  if (fullGrid)
+    for (uint32_t ty = 0; ty < rows; ty += 4)
+      for (uint32_t tx = 0; tx < columns; tx += 4)
+        for (uint32_t cy = ty; cy < std::min(ty + 4, rows); ++cy)
+          for (uint32_t cx = tx; cx < std::min(tx + 4, columns); ++cx) gridOrder.push_back(cy * columns + cx);
   // At up to 16 spp a packet holds the samples of 16 / spp whole neighbouring pixels of a row (one at 9
   // to 16), so its lanes are not left idle; each pixel's samples are still traced and summed in the
   // same order, so V is the same as with one pixel a packet. Above 16 spp a pixel fills packets alone.
@@ -87,11 +83,13 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
 
   std::atomic<int> rowsDone{0};
   std::atomic<int64_t> hitPixels{0};
+  // Each row's sum and maximum of the standard error, summed over the rows in order afterwards (the
+  // same sum at any thread count).
+  std::vector<double> rowErrorSum(static_cast<size_t>(height), 0.0);
+  std::vector<float> rowErrorMax(static_cast<size_t>(height), 0.0f);
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
-    Vec2 us[16];
-    LightSample lightSamples[16];
-    Ray packet[16];
-    bool occluded[16];
+    rt::ShadowLanes lanes;
+    RayPacket16 packet;
     float weights[16];
     int xs[16];
     int64_t localHits = 0;
@@ -102,7 +100,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     auto add = [&](Sums& sums, int first, int count) {
       for (int i = first; i < first + count; ++i) {
         const double w = weights[i];
-        const double vis = occluded[i] ? 0.0 : 1.0;
+        const double vis = packet.blocked(i) ? 0.0 : 1.0;
         sums.w += w;
         sums.wVis += w * vis;
         sums.w2 += w * w;
@@ -120,32 +118,31 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       }
       v(x, y) = static_cast<float>(V);
       stdError_(x, y) = static_cast<float>(se);
+      rowErrorSum[static_cast<size_t>(y)] += stdError_(x, y);
+      rowErrorMax[static_cast<size_t>(y)] = std::max(rowErrorMax[static_cast<size_t>(y)], stdError_(x, y));
     };
-    // Rays of `count` samples of one pixel into packet slots [first, first + count).
-    auto makeRays = [&](const Light::Sampler& lightSampler, const Vec3& wsP, const Vec3& wsOrigin, uint32_t pattern,
-                        const uint32_t* cells, int first, int count) {
-      // The sample points first, in a loop of their own: each is a long chain of dependent integer
-      // hashes, and only independent iterations back to back let the CPU overlap them.
-      for (int i = 0; i < count; ++i) us[first + i] = sampler.sampleInStratum(cells[i], pattern);
-      lightSampler.sample(us + first, count, lightSamples + first);
-      for (int i = first; i < first + count; ++i) {
-        // Stored member by member (rt::storeRay): a whole-struct copy stalls on store forwarding.
-        rt::storeRay(packet[i],
-                     rt::shadowRay(wsP, wsOrigin, lightSamples[i].wsDirection, lightSamples[i].distance, epsilon));
-        weights[i] = lightSamples[i].weight;
-      }
-    };
-    std::vector<uint32_t> allStrata(spp);
-    // One pixel's set-up: its point, the shadow rays' origin, its sample pattern and (into allStrata)
-    // its strata in tracing order. Returns the light's sampler at the point (the per-point set-up, a
-    // sphere's silhouette frame, once per pixel, not per ray).
-    auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin, uint32_t& pattern) {
+    alignas(64) uint32_t laneStrata[16], lanePatterns[16];
+    // One pixel's set-up: its point, the shadow rays' origin and its sample pattern.
+    auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin) {
       wsP = gbuffer.wsPosition(px, y);
       const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
       wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
-      pattern = hashCombine(seed, static_cast<uint64_t>(y) * width + px);
-      pixelStrata(pattern, allStrata.data());
-      return light.samplerAt(wsP);
+      return hashCombine(seed, static_cast<uint64_t>(y) * width + px);
+    };
+    // Lanes [lane, lane + count): one pixel's samples first .. first + count - 1.
+    auto fillLanes = [&](const Vec3& wsP, const Vec3& wsOrigin, uint32_t pattern, uint32_t first, int lane, int count) {
+      for (int i = 0; i < count; ++i) {
+        const uint32_t index = first + static_cast<uint32_t>(i);
+        laneStrata[lane + i] = fullGrid ? gridOrder[index] : sampler.stratum(index, pattern);
+        lanePatterns[lane + i] = pattern;
+        lanes.setPoint(lane + i, wsP, wsOrigin);
+      }
+    };
+    // Traces lanes [0, count): their sample points, rays and occlusion.
+    auto trace = [&](int count) {
+      sampler.sampleLanes(laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
+      rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
+      rays.occluded16(packet, count);
     };
     for (int y = range.begin(); y < range.end(); ++y) {
       int x = 0;
@@ -157,14 +154,13 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         if (group == 0) break;
         localHits += group;
         Vec3 wsP, wsOrigin;
-        uint32_t pattern = 0;
         if (wholePixels) {
           const int n = static_cast<int>(spp);
           for (int j = 0; j < group; ++j) {
-            const Light::Sampler lightSampler = setUp(xs[j], y, wsP, wsOrigin, pattern);
-            makeRays(lightSampler, wsP, wsOrigin, pattern, allStrata.data(), j * n, n);
+            const uint32_t pattern = setUp(xs[j], y, wsP, wsOrigin);
+            fillLanes(wsP, wsOrigin, pattern, 0, j * n, n);
           }
-          rays.occluded16(packet, group * n, occluded);
+          trace(group * n);
           for (int j = 0; j < group; ++j) {
             Sums sums;
             add(sums, j * n, n);
@@ -172,12 +168,12 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           }
           continue;
         }
-        const Light::Sampler lightSampler = setUp(xs[0], y, wsP, wsOrigin, pattern);
+        const uint32_t pattern = setUp(xs[0], y, wsP, wsOrigin);
         Sums sums;
         for (uint32_t first = 0; first < spp; first += 16) {
           const int count = static_cast<int>(std::min<uint32_t>(16, spp - first));
-          makeRays(lightSampler, wsP, wsOrigin, pattern, allStrata.data() + first, 0, count);
-          rays.occluded16(packet, count, occluded);
+          fillLanes(wsP, wsOrigin, pattern, first, 0, count);
+          trace(count);
           add(sums, 0, count);
         }
         finish(sums, xs[0], y);
@@ -190,14 +186,11 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   });
 
   rayCount_ = static_cast<double>(hitPixels.load()) * spp;
-  // Error statistics over the pixels that hit geometry, in a fixed order (deterministic sums).
   double sum = 0.0, mx = 0.0;
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      if (gbuffer.hit(x, y)) {
-        sum += stdError_(x, y);
-        mx = std::max(mx, static_cast<double>(stdError_(x, y)));
-      }
+  for (int y = 0; y < height; ++y) {
+    sum += rowErrorSum[static_cast<size_t>(y)];
+    mx = std::max(mx, static_cast<double>(rowErrorMax[static_cast<size_t>(y)]));
+  }
   meanStdError_ = hitPixels.load() > 0 ? sum / static_cast<double>(hitPixels.load()) : 0.0;
   maxStdError_ = mx;
 }

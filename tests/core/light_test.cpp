@@ -2,8 +2,8 @@
 // for spheres), their means are the emitter's centroid, segment samples are uniform along it,
 // directional samples stay within half the angular diameter, limb-darkened weights average 1,
 // irradiance matches closed forms, concave polygons (an L, a U) are sampled uniformly inside and
-// tiled by their convex parts, every degenerate light is rejected by its factory with a message that
-// names what is wrong, and the per-point Light::Sampler reproduces Light::sample for every shape.
+// tiled by their convex parts, and every degenerate light is rejected by its factory with a message
+// that names what is wrong.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -375,50 +375,6 @@ void expectError(F&& f, const std::string& fragment) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
   }
-}
-
-// Light::samplerAt hoists the per-point set-up out of Light::sample; the samples must not change.
-// Light::sample is the oracle. The two run the same float operations, so they agree bit for bit
-// (measured: maximum difference 0); the tolerance only allows for a compiler that contracts the two
-// differently, a few float ulps, far below any wrong frame or radius.
-TEST(LightSampler, MatchesLightSampleForEveryShape) {
-  const std::vector<Light> lights = {
-      Light::sphere(Vec3(0.0f, 1.0f, 3.0f), 1.2f),
-      Light::sphere(Vec3(-2.0f, 5.0f, 0.5f), 0.05f),
-      Light::disk(Vec3(0.5f, 2.0f, 1.0f), Vec3(0.2f, -1.0f, 0.3f), 0.7f),
-      Light::rect(Vec3(0.0f, 3.0f, 0.0f), Vec3(0.8f, 0.0f, 0.0f), Vec3(0.0f, 0.1f, 0.4f)),
-      Light::segment(Vec3(-1.0f, 2.0f, 0.0f), Vec3(1.5f, 2.5f, 0.5f)),
-      Light::polygon({Vec3(0, 2, 0), Vec3(1, 2, 0), Vec3(1.5f, 2, 1), Vec3(0.5f, 2, 1.5f), Vec3(-0.2f, 2, 0.8f)}),
-      Light::polygon(inPlaneZ2(kL)),
-      Light::directional(Vec3(0.3f, 1.0f, -0.4f), radians(5.0f)),
-      Light::directional(Vec3(-0.1f, 0.2f, 1.0f), radians(30.0f), LightProfile::LimbDarkened),
-  };
-  const std::vector<Vec3> points = {kP, Vec3(4.0f, -3.0f, 2.0f), Vec3(0.0f, 0.0f, 0.0f), Vec3(-0.7f, 1.9f, 0.2f)};
-  const CmjSampler sampler(256);
-  for (const Light& light : lights)
-    for (const Vec3& p : points) {
-      const Light::Sampler fast = light.samplerAt(p);
-      for (uint32_t i = 0; i < sampler.count(); ++i) {
-        const Vec2 u = sampler.sample(i, 7);
-        const LightSample expected = light.sample(p, u);
-        const LightSample got = fast.sample(u);
-        SCOPED_TRACE(::testing::Message() << toString(light.shape()) << " p=(" << p.x << "," << p.y << "," << p.z
-                                          << ") u=(" << u.x << "," << u.y << ")");
-        EXPECT_NEAR(got.wsDirection.x, expected.wsDirection.x, 1e-6f);
-        EXPECT_NEAR(got.wsDirection.y, expected.wsDirection.y, 1e-6f);
-        EXPECT_NEAR(got.wsDirection.z, expected.wsDirection.z, 1e-6f);
-        if (std::isinf(expected.distance))
-          EXPECT_EQ(got.distance, expected.distance);
-        else
-          EXPECT_NEAR(got.distance, expected.distance, 1e-6f * std::max(1.0f, expected.distance));
-        EXPECT_NEAR(got.weight, expected.weight, 1e-6f);
-      }
-    }
-  // A point inside a sphere light: nothing can occlude, as Light::sample says.
-  const Light sphere = Light::sphere(Vec3(1.0f, 2.0f, 3.0f), 2.0f);
-  const LightSample inside = sphere.samplerAt(Vec3(1.5f, 2.0f, 3.0f)).sample(Vec2(0.3f, 0.7f));
-  EXPECT_EQ(inside.distance, 0.0f);
-  EXPECT_EQ(inside.wsDirection, sphere.sample(Vec3(1.5f, 2.0f, 3.0f), Vec2(0.3f, 0.7f)).wsDirection);
 }
 
 TEST(LightFactories, RejectDegenerateLights) {

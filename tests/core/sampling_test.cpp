@@ -48,6 +48,33 @@ TEST(CmjSampler, StratifiedIn2DAndInBoth1DProjections) {
   }
 }
 
+TEST(CmjSampler, LanesAreTheSamplesBitForBit) {
+  // sampleLanes is sampleInStratum for a packet's lanes, each lane with its own pattern: the same
+  // floats, whatever the grid (square or not, sides powers of two or not: 3 x 3 cycle-walks its
+  // permutations), the lane count and the pattern, including the rare lanes that need a second round.
+  for (const uint32_t count : {1u, 2u, 3u, 4u, 9u, 12u, 16u, 48u, 100u, 1024u, 4096u}) {
+    const CmjSampler sampler(count);
+    const uint32_t cells = sampler.columns() * sampler.rows();
+    SCOPED_TRACE(::testing::Message() << "count " << count);
+    for (int lanes = 1; lanes <= 16; lanes += 5) {
+      for (uint32_t trial = 0; trial < 200; ++trial) {
+        uint32_t strata[16], patterns[16];
+        float ux[16], uy[16];
+        for (int i = 0; i < lanes; ++i) {
+          strata[i] = hash32(trial * 64 + static_cast<uint32_t>(i)) % cells;
+          patterns[i] = hash32(0x9e37u + trial * 64 + static_cast<uint32_t>(i));
+        }
+        sampler.sampleLanes(strata, patterns, lanes, ux, uy);
+        for (int i = 0; i < lanes; ++i) {
+          const Vec2 u = sampler.sampleInStratum(strata[i], patterns[i]);
+          ASSERT_EQ(ux[i], u.x) << "stratum " << strata[i] << " pattern " << patterns[i];
+          ASSERT_EQ(uy[i], u.y) << "stratum " << strata[i] << " pattern " << patterns[i];
+        }
+      }
+    }
+  }
+}
+
 TEST(CmjSampler, StrataDecomposeTheSample) {
   // sample(i) is the sample of cell stratum(i); stratum() is a permutation of the cells when count
   // == m * n, and sampleInStratum(s) lies in cell (s % m, s / m) of the m x n grid.

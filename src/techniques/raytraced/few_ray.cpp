@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra::raytraced {
@@ -18,12 +19,10 @@ namespace {
 inline float unitFloat(uint32_t h) { return static_cast<float>(h >> 8) * 0x1p-24f; }
 
 // u + offset modulo 1, kept below 1 where the sum rounds up to it.
-inline Vec2 rotate(const Vec2& u, const Vec2& offset) {
+inline float rotate(float u, float offset) {
   constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
-  Vec2 r = u + offset;
-  r.x = std::min(r.x >= 1.0f ? r.x - 1.0f : r.x, kOneMinusEpsilon);
-  r.y = std::min(r.y >= 1.0f ? r.y - 1.0f : r.y, kOneMinusEpsilon);
-  return r;
+  const float r = u + offset;
+  return std::min(r >= 1.0f ? r - 1.0f : r, kOneMinusEpsilon);
 }
 
 }  // namespace
@@ -121,41 +120,41 @@ void FewRayFrame::clearTile(int tile) {
 
 int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const int* ys, int count, uint32_t first,
                                    uint32_t last, FewRayFrame& frame) const {
-  Light::Sampler samplers[16];
-  Vec3 positions[16], origins[16];
-  Vec2 offsets[16];
+  if (count == 0) return 0;
+  rt::ShadowLanes lanes;
+  alignas(64) float offsetX[16], offsetY[16];
   for (int i = 0; i < count; ++i) {
     const int x = xs[i], y = ys[i];
     const Vec3 wsP = gbuffer.wsPosition(x, y);
     const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-    positions[i] = wsP;
-    origins[i] = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light_, wsP, wsNg), epsilon_);
-    samplers[i] = light_.samplerAt(wsP);
+    lanes.setPoint(i, wsP, rt::offsetOrigin(wsP, wsNg, rt::lightSide(light_, wsP, wsNg), epsilon_));
     const uint64_t pixel = static_cast<uint64_t>(y) * frame.width + x;
-    offsets[i] = Vec2(unitFloat(hashCombine(seed_, 2 * pixel)), unitFloat(hashCombine(seed_, 2 * pixel + 1)));
+    offsetX[i] = unitFloat(hashCombine(seed_, 2 * pixel));
+    offsetY[i] = unitFloat(hashCombine(seed_, 2 * pixel + 1));
   }
-  if (count == 0) return 0;
   const bool directional = light_.isDirectional();
-  Ray packet[16];
-  float weights[16], tHit[16];
+  RayHitPacket16 packet;
+  alignas(64) float weights[16], tLight[16];
   for (uint32_t index = first; index < last; ++index) {
+    const Vec2 point = points_[index];
     for (int i = 0; i < count; ++i) {
-      const LightSample s = samplers[i].sample(rotate(points_[index], offsets[i]));
-      rt::storeRay(packet[i], rt::shadowRay(positions[i], origins[i], s.wsDirection, s.distance, epsilon_));
-      weights[i] = s.weight;
+      lanes.ux[i] = rotate(point.x, offsetX[i]);
+      lanes.uy[i] = rotate(point.y, offsetY[i]);
     }
-    scene_.intersect16(packet, count, tHit);
+    rt::buildShadowRays(light_, lanes, count, epsilon_, packet.ray, weights);
+    std::copy(packet.ray.tMax, packet.ray.tMax + count, tLight);  // the hit overwrites tMax
+    scene_.intersect16(packet, count);
     for (int i = 0; i < count; ++i) {
       RaySums& p = frame.at(xs[i], ys[i]);
       p.weight += weights[i];
-      if (tHit[i] == kInfinity) {
+      if (packet.hit.geomId[i] == HitPacket16::kNoHit) {
         p.visible += weights[i];
         continue;
       }
       // The blocker's distance over what is left to the light point; a directional light's is
       // infinite, so its ratio is the distance itself.
-      const float t = tHit[i];
-      p.ratio += directional ? t : t / std::max(packet[i].tMax - t, 1e-6f * packet[i].tMax);
+      const float t = packet.ray.tMax[i];
+      p.ratio += directional ? t : t / std::max(tLight[i] - t, 1e-6f * tLight[i]);
       ++p.blocked;
     }
   }

@@ -5,7 +5,8 @@
 //
 // Samples: one set of spp points correlated multi-jittered over [0,1)^2 (CmjSampler, as the
 // reference's), shifted per pixel by a random offset modulo 1 (a Cranley-Patterson rotation: each
-// pixel's set stays stratified and unbiased) and mapped onto the light by Light::Sampler. The offset
+// pixel's set stays stratified and unbiased) and made into rays 16 lanes at a time by
+// rt::buildShadowRays (one sample of 16 pixels a packet). The offset
 // is a hash of (seed, pixel index), so a pixel's rays do not depend on the thread or the order that
 // traces them and V is bit-identical for a seed at any thread count; the shared set costs two adds
 // per sample where a CMJ pattern per pixel costs three hashed permutations.

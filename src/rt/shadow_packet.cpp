@@ -1,0 +1,224 @@
+// buildShadowRays of shadow_packet.h. Each shape's loop is written for the vectorizer: straight-line
+// code over the lanes, selects instead of branches, restrict pointers so that writing the packet
+// cannot be taken to change the lanes.
+#include "shadow_packet.h"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "rt/shadow_ray.h"
+
+namespace penumbra::rt {
+namespace {
+
+// The lane-invariant values of a light, hoisted out of the lane loops.
+struct LightConstants {
+  Vec3 center, u, v, a, ab, direction;
+  Frame frame;
+  float radius = 0.0f, r2 = 0.0f, tanHalf = 0.0f;
+  bool limbDarkened = false;
+};
+
+inline void sinCosPoly(float a, float& s, float& c) {
+  const float a2 = a * a;
+  s = a + a * a2 * (-1.6666654611e-1f + a2 * (8.3321608736e-3f + a2 * -1.9515295891e-4f));
+  c = 1.0f - 0.5f * a2 + a2 * a2 * (4.166664568298827e-2f + a2 * (-1.388731625493765e-3f + a2 * 2.443315711809948e-5f));
+}
+
+// concentricDisk (sampling.h) without its branches: the wedge's angle is at most pi/4 from an axis.
+inline void concentric(float ux, float uy, float& qx, float& qy) {
+  const float ox = 2.0f * ux - 1.0f, oy = 2.0f * uy - 1.0f;
+  const bool alongX = std::fabs(ox) > std::fabs(oy);
+  const float r = alongX ? ox : oy;
+  const float across = alongX ? oy : ox;
+  // r == 0 only at the centre, where across is 0 too and the point is the disk's centre.
+  const float a = (kPi / 4.0f) * (across / (r != 0.0f ? r : 1.0f));
+  float s, c;
+  sinCosPoly(a, s, c);
+  qx = r * (alongX ? c : s);
+  qy = r * (alongX ? s : c);
+}
+
+// The ray from origin o to light point x, as rt::shadowRay; flags the lanes rt::shadowRay treats
+// apart (a zero or overflowing length).
+inline void segmentTo(float xx, float xy, float xz, float ox, float oy, float oz, float epsilon, float& dx, float& dy,
+                      float& dz, float& tMax, int32_t& fix) {
+  const float ex = xx - ox, ey = xy - oy, ez = xz - oz;
+  const float len2 = ex * ex + ey * ey + ez * ez;
+  const float len = std::sqrt(len2);
+  const float inv = 1.0f / len;
+  dx = ex * inv;
+  dy = ey * inv;
+  dz = ez * inv;
+  tMax = std::max(0.0f, len - epsilon);
+  fix |= static_cast<int32_t>(!(len2 > 0.0f) | !(len2 < kInfinity));
+}
+
+struct Out {
+  float* __restrict orgX;
+  float* __restrict orgY;
+  float* __restrict orgZ;
+  float* __restrict tMin;
+  float* __restrict dirX;
+  float* __restrict dirY;
+  float* __restrict dirZ;
+  float* __restrict tMax;
+  float* __restrict weight;
+  int32_t* __restrict fix;
+};
+
+void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon, const Out& out) {
+  for (int i = 0; i < count; ++i) {
+    // Light::samplerAt's set-up: the silhouette disk seen from P, its frame around P -> centre.
+    const float tx = k.center.x - in.px[i], ty = k.center.y - in.py[i], tz = k.center.z - in.pz[i];
+    const float d2 = tx * tx + ty * ty + tz * tz;
+    const float invD = 1.0f / std::sqrt(d2);
+    const float wx = tx * invD, wy = ty * invD, wz = tz * invD;
+    const float sign = std::copysign(1.0f, wz);
+    const float fa = -1.0f / (sign + wz);
+    const float fb = wx * wy * fa;
+    const float fxx = 1.0f + sign * wx * wx * fa, fxy = sign * fb, fxz = -sign * wx;
+    const float fyx = fb, fyy = sign + wy * wy * fa, fyz = -wy;
+    const float h2 = d2 - k.r2;
+    const float diskRadius = k.radius * std::sqrt(h2) * invD;
+    const float axial = h2 * invD;
+    // Light::Sampler::sample: a point of the disk, the direction to it, the sphere's front surface.
+    float qx, qy;
+    concentric(in.ux[i], in.uy[i], qx, qy);
+    qx *= diskRadius;
+    qy *= diskRadius;
+    float sx = axial * wx + qx * fxx + qy * fyx;
+    float sy = axial * wy + qx * fxy + qy * fyy;
+    float sz = axial * wz + qx * fxz + qy * fyz;
+    const float sInv = 1.0f / std::sqrt(sx * sx + sy * sy + sz * sz);
+    sx *= sInv;
+    sy *= sInv;
+    sz *= sInv;
+    const float b = sx * tx + sy * ty + sz * tz;
+    const float t = b - std::sqrt(std::max(0.0f, b * b - h2));
+    int32_t fix = !(d2 > k.r2);  // P inside the light (or not finite): the scalar path's special case
+    segmentTo(in.px[i] + t * sx, in.py[i] + t * sy, in.pz[i] + t * sz, in.ox[i], in.oy[i], in.oz[i], epsilon,
+              out.dirX[i], out.dirY[i], out.dirZ[i], out.tMax[i], fix);
+    out.fix[i] = fix;
+    out.weight[i] = 1.0f;
+  }
+}
+
+// Disk, rect and segment lights: the light point does not depend on P.
+template <LightShape kShape>
+void planarLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon, const Out& out) {
+  for (int i = 0; i < count; ++i) {
+    float xx, xy, xz;
+    if constexpr (kShape == LightShape::Disk) {
+      float qx, qy;
+      concentric(in.ux[i], in.uy[i], qx, qy);
+      qx *= k.radius;
+      qy *= k.radius;
+      xx = k.center.x + qx * k.frame.x.x + qy * k.frame.y.x;
+      xy = k.center.y + qx * k.frame.x.y + qy * k.frame.y.y;
+      xz = k.center.z + qx * k.frame.x.z + qy * k.frame.y.z;
+    } else if constexpr (kShape == LightShape::Rect) {
+      const float su = 2.0f * in.ux[i] - 1.0f, sv = 2.0f * in.uy[i] - 1.0f;
+      xx = k.center.x + su * k.u.x + sv * k.v.x;
+      xy = k.center.y + su * k.u.y + sv * k.v.y;
+      xz = k.center.z + su * k.u.z + sv * k.v.z;
+    } else {
+      static_assert(kShape == LightShape::Segment);
+      xx = k.a.x + in.ux[i] * k.ab.x;
+      xy = k.a.y + in.ux[i] * k.ab.y;
+      xz = k.a.z + in.ux[i] * k.ab.z;
+    }
+    // Light::sample falls back to the centre's direction when the light point is P itself.
+    const float ex = xx - in.px[i], ey = xy - in.py[i], ez = xz - in.pz[i];
+    int32_t fix = !(ex * ex + ey * ey + ez * ez > 0.0f);
+    segmentTo(xx, xy, xz, in.ox[i], in.oy[i], in.oz[i], epsilon, out.dirX[i], out.dirY[i], out.dirZ[i], out.tMax[i],
+              fix);
+    out.fix[i] = fix;
+    out.weight[i] = 1.0f;
+  }
+}
+
+void directionalLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, const Out& out) {
+  // The weights' normalization: the limb-darkening law's mean over the disk.
+  const float lawMean = 1.0f - kLimbDarkeningU / 3.0f;
+  for (int i = 0; i < count; ++i) {
+    float qx, qy;
+    concentric(in.ux[i], in.uy[i], qx, qy);
+    const float sx = k.direction.x + k.tanHalf * (qx * k.frame.x.x + qy * k.frame.y.x);
+    const float sy = k.direction.y + k.tanHalf * (qx * k.frame.x.y + qy * k.frame.y.y);
+    const float sz = k.direction.z + k.tanHalf * (qx * k.frame.x.z + qy * k.frame.y.z);
+    const float inv = 1.0f / std::sqrt(sx * sx + sy * sy + sz * sz);
+    out.dirX[i] = sx * inv;
+    out.dirY[i] = sy * inv;
+    out.dirZ[i] = sz * inv;
+    out.tMax[i] = kInfinity;
+    const float mu = std::sqrt(std::max(0.0f, 1.0f - (qx * qx + qy * qy)));
+    out.weight[i] = k.limbDarkened ? (1.0f - kLimbDarkeningU * (1.0f - mu)) / lawMean : 1.0f;
+    out.fix[i] = 0;
+  }
+}
+
+}  // namespace
+
+void sinCosQuarterPi(float a, float& s, float& c) { sinCosPoly(a, s, c); }
+
+void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                     float* weight) {
+  alignas(64) int32_t fix[16];
+  const Out out{packet.orgX, packet.orgY, packet.orgZ, packet.tMin, packet.dirX,
+                packet.dirY, packet.dirZ, packet.tMax, weight,      fix};
+  for (int i = 0; i < count; ++i) {
+    out.orgX[i] = lanes.ox[i];
+    out.orgY[i] = lanes.oy[i];
+    out.orgZ[i] = lanes.oz[i];
+    out.tMin[i] = 0.0f;
+  }
+  LightConstants k;
+  k.center = light.center();
+  k.radius = light.radius();
+  k.r2 = k.radius * k.radius;
+  bool scalar = false;
+  switch (light.shape()) {
+    case LightShape::Sphere:
+      sphereLanes(k, lanes, count, epsilon, out);
+      break;
+    case LightShape::Disk:
+      k.frame = Frame::fromZ(light.normal());
+      planarLanes<LightShape::Disk>(k, lanes, count, epsilon, out);
+      break;
+    case LightShape::Rect:
+      k.u = light.u();
+      k.v = light.v();
+      planarLanes<LightShape::Rect>(k, lanes, count, epsilon, out);
+      break;
+    case LightShape::Segment:
+      k.a = light.a();
+      k.ab = light.b() - light.a();
+      planarLanes<LightShape::Segment>(k, lanes, count, epsilon, out);
+      break;
+    case LightShape::Directional:
+      k.direction = light.direction();
+      k.frame = Frame::fromZ(k.direction);
+      k.tanHalf = std::tan(0.5f * light.angularDiameter());
+      k.limbDarkened = light.profile() == LightProfile::LimbDarkened;
+      directionalLanes(k, lanes, count, out);
+      break;
+    case LightShape::Polygon:
+      scalar = true;  // a triangle picked by area per sample: not worth a vector form
+      break;
+  }
+  for (int i = 0; i < count; ++i) {
+    if (!scalar && !fix[i]) continue;
+    const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]);
+    const LightSample s = light.sample(wsP, Vec2(lanes.ux[i], lanes.uy[i]));
+    const Ray ray = shadowRay(wsP, Vec3(lanes.ox[i], lanes.oy[i], lanes.oz[i]), s.wsDirection, s.distance, epsilon);
+    packet.dirX[i] = ray.direction.x;
+    packet.dirY[i] = ray.direction.y;
+    packet.dirZ[i] = ray.direction.z;
+    packet.tMax[i] = ray.tMax;
+    weight[i] = s.weight;
+  }
+}
+
+}  // namespace penumbra::rt

@@ -1,0 +1,47 @@
+// Shadow rays built sixteen at a time, straight into an Embree packet: the ray-generation half of
+// the reference's and the few-ray techniques' inner loops.
+//
+// Lane i is the ray rt::shadowRay builds from the shaded point P_i, with origin O_i (P_i offset off
+// its surface, rt::offsetOrigin), towards the light point Light::sample(P_i, u_i): the same points,
+// the same offset and the same clipping, to float rounding. The difference is the form: every step
+// is one loop over the sixteen lanes, structure of arrays, without calls or branches, which the
+// compiler turns into vector code; per-lane scalar code spent more time making a ray than Embree
+// spent tracing it. The sphere's per-point set-up (its silhouette disk as seen from P) is redone
+// per lane, which in vector form costs less than gathering a per-pixel set-up into the lanes.
+//
+// Approximation: the concentric map's sine and cosine are minimax polynomials on [-pi/4, pi/4]
+// (Cephes' single-precision coefficients, a few ulp from libm's), so a point moves by about 1e-7 of
+// the light's size. Lanes whose ray is degenerate (P inside a sphere light, a light point on P, a
+// length that overflows) and polygon lights go through the scalar path, exactly as before.
+#pragma once
+
+#include "penumbra/light.h"
+#include "penumbra/ray_scene.h"
+
+namespace penumbra::rt {
+
+// Per lane: the shaded point P, the ray origin O and the light-sample coordinates u in [0,1)^2.
+struct alignas(64) ShadowLanes {
+  float px[16], py[16], pz[16];
+  float ox[16], oy[16], oz[16];
+  float ux[16], uy[16];
+
+  void setPoint(int lane, const Vec3& wsP, const Vec3& wsOrigin) {
+    px[lane] = wsP.x;
+    py[lane] = wsP.y;
+    pz[lane] = wsP.z;
+    ox[lane] = wsOrigin.x;
+    oy[lane] = wsOrigin.y;
+    oz[lane] = wsOrigin.z;
+  }
+};
+
+// Writes lanes [0, count) of `packet` (origin, direction, tMin, tMax; the rest as the packet holds
+// them) and weight[i], the light's profile weight of lane i's sample. `epsilon` as rt::shadowRay.
+void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                     float* weight);
+
+// sin and cos of a in [-pi/4, pi/4] by the polynomials above (exposed for its test).
+void sinCosQuarterPi(float a, float& s, float& c);
+
+}  // namespace penumbra::rt

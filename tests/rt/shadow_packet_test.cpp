@@ -1,0 +1,191 @@
+// Tests of the vector shadow-ray builder (src/rt/shadow_packet.h): every lane is the ray the scalar
+// path builds (rt::shadowRay towards Light::sample) for every light shape, to float rounding, the
+// degenerate lanes exactly; the polynomial sine and cosine are within a few ulp of libm's; packets
+// built in place trace as the same rays traced one at a time.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "penumbra/light.h"
+#include "penumbra/ray_scene.h"
+#include "penumbra/sampling.h"
+#include "rt/rt_test_scenes.h"
+#include "rt/shadow_packet.h"
+#include "rt/shadow_ray.h"
+
+namespace penumbra {
+namespace {
+
+float unit(uint32_t i) { return static_cast<float>(hash32(i) >> 8) * 0x1p-24f; }
+
+std::vector<std::pair<const char*, Light>> everyShape() {
+  return {{"sphere", Light::sphere(Vec3(0.3f, 4.0f, -0.2f), 0.7f)},
+          {"large near sphere", Light::sphere(Vec3(0.0f, 1.9f, 0.5f), 1.2f)},
+          {"small far sphere", Light::sphere(Vec3(-2.0f, 9.0f, 0.5f), 0.05f)},
+          {"disk", Light::disk(Vec3(0.0f, 3.5f, 0.5f), glm::normalize(Vec3(0.2f, -1.0f, 0.1f)), 0.9f)},
+          {"rect", Light::rect(Vec3(0.5f, 3.0f, 0.0f), Vec3(0.8f, 0.0f, 0.1f), Vec3(-0.05f, 0.0f, 0.4f))},
+          {"segment", Light::segment(Vec3(-1.0f, 3.0f, 0.0f), Vec3(1.5f, 3.2f, 0.4f))},
+          {"polygon", Light::polygon({Vec3(-1, 3, -1), Vec3(1, 3, -1), Vec3(1, 3, 0), Vec3(0, 3, 0), Vec3(0, 3, 1),
+                                      Vec3(-1, 3, 1)})},
+          {"directional", Light::directional(glm::normalize(Vec3(0.3f, 1.0f, 0.2f)), radians(8.0f))},
+          {"limb-darkened sun",
+           Light::directional(glm::normalize(Vec3(-0.2f, 1.0f, 0.4f)), radians(12.0f), LightProfile::LimbDarkened)}};
+}
+
+// Lane i of a packet against the scalar path for the same point, origin and u.
+void expectLaneMatches(const Light& light, const rt::ShadowLanes& lanes, int i, const RayPacket16& packet,
+                       const float* weight, float epsilon) {
+  const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]), wsO(lanes.ox[i], lanes.oy[i], lanes.oz[i]);
+  const LightSample s = light.sample(wsP, Vec2(lanes.ux[i], lanes.uy[i]));
+  const Ray ray = rt::shadowRay(wsP, wsO, s.wsDirection, s.distance, epsilon);
+  SCOPED_TRACE(::testing::Message() << "lane " << i << " u (" << lanes.ux[i] << ", " << lanes.uy[i] << ")");
+  EXPECT_EQ(packet.orgX[i], ray.origin.x);
+  EXPECT_EQ(packet.orgY[i], ray.origin.y);
+  EXPECT_EQ(packet.orgZ[i], ray.origin.z);
+  EXPECT_EQ(packet.tMin[i], 0.0f);
+  EXPECT_NEAR(packet.dirX[i], ray.direction.x, 2e-6f);
+  EXPECT_NEAR(packet.dirY[i], ray.direction.y, 2e-6f);
+  EXPECT_NEAR(packet.dirZ[i], ray.direction.z, 2e-6f);
+  if (ray.tMax == kInfinity) {
+    EXPECT_EQ(packet.tMax[i], kInfinity);
+  } else if (light.shape() == LightShape::Sphere) {
+    // Where the ray grazes the sphere (the silhouette disk's rim) the distance to its front surface
+    // is ill-conditioned (a square root of nearly 0), so the segment's end is checked instead: on the
+    // sphere, epsilon short of its surface.
+    const Vec3 end = wsO + (packet.tMax[i] + epsilon) * Vec3(packet.dirX[i], packet.dirY[i], packet.dirZ[i]);
+    // There b^2 - h^2 ~ 0 carries a rounding of a few ulp of b^2, and its square root ~ 5e-4 b: the
+    // distance moves by up to dt ~ 1e-3 t, and the end, along a ray tangent to the sphere, leaves
+    // its surface by dt^2 / 2R.
+    const float dt = 1e-3f * ray.tMax;
+    EXPECT_NEAR(packet.tMax[i], ray.tMax, dt);
+    EXPECT_NEAR(glm::length(end - light.center()), light.radius(), 1e-5f + dt * dt / (2.0f * light.radius()));
+  } else {
+    EXPECT_NEAR(packet.tMax[i], ray.tMax, 2e-6f * std::max(1.0f, ray.tMax));
+  }
+  // The limb-darkened weight needs mu = sqrt(1 - |q|^2), whose slope grows without bound at the limb:
+  // a rounding of |q|^2 there moves it by about 1e-7 / mu.
+  const float mu = 1.0f - (1.0f - s.weight * (1.0f - kLimbDarkeningU / 3.0f)) / kLimbDarkeningU;
+  EXPECT_NEAR(weight[i], s.weight, light.profile() == LightProfile::Uniform ? 0.0f : 1e-6f + 1e-7f / mu);
+}
+
+TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
+  const float epsilon = 1e-4f;
+  for (const auto& [name, light] : everyShape()) {
+    SCOPED_TRACE(name);
+    for (uint32_t trial = 0; trial < 64; ++trial) {
+      rt::ShadowLanes lanes;
+      const int count = 1 + static_cast<int>(trial % 16);
+      for (int i = 0; i < count; ++i) {
+        const uint32_t k = trial * 97 + static_cast<uint32_t>(i) * 7;
+        const Vec3 p(4.0f * unit(k) - 2.0f, 0.5f * unit(k + 1), 4.0f * unit(k + 2) - 2.0f);
+        const Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, 1.0f, unit(k + 4) - 0.5f));
+        lanes.setPoint(i, p, rt::offsetOrigin(p, n, rt::lightSide(light, p, n), epsilon));
+        // The corners and the centre of [0,1)^2 as well as random points: the concentric map's axes
+        // and diagonals, where its wedge changes.
+        const float corners[5] = {0.0f, 0.5f, 0x1.fffffep-1f, 0.25f, 0.75f};
+        lanes.ux[i] = trial < 25 ? corners[trial % 5] : unit(k + 5);
+        lanes.uy[i] = trial < 25 ? corners[trial / 5] : unit(k + 6);
+      }
+      RayPacket16 packet;
+      float weight[16];
+      rt::buildShadowRays(light, lanes, count, epsilon, packet, weight);
+      for (int i = 0; i < count; ++i) expectLaneMatches(light, lanes, i, packet, weight, epsilon);
+    }
+  }
+}
+
+TEST(ShadowPacket, DegenerateLanesTakeTheScalarPathExactly) {
+  const float epsilon = 1e-3f;
+  const Light sphere = Light::sphere(Vec3(0.0f, 2.0f, 0.0f), 0.5f);
+  const Light rect = Light::rect(Vec3(0.0f, 2.0f, 0.0f), Vec3(1.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 1.0f));
+  rt::ShadowLanes lanes;
+  // Lane 0: inside the sphere light (nothing can occlude: a ray of length 0). Lane 1: on the rect
+  // light's sample point itself. Lane 2: an ordinary point below both.
+  const Vec3 points[3] = {Vec3(0.1f, 2.1f, 0.0f), Vec3(0.0f, 2.0f, 0.0f), Vec3(0.3f, 0.0f, 0.2f)};
+  for (int i = 0; i < 3; ++i) {
+    lanes.setPoint(i, points[i], points[i] + Vec3(0.0f, epsilon, 0.0f));
+    lanes.ux[i] = 0.5f;
+    lanes.uy[i] = 0.5f;
+  }
+  // The sphere's degenerate lanes are 0 and 1 (the sphere's centre is inside it too), the rect's lane 1.
+  const std::pair<const Light*, std::vector<int>> cases[2] = {{&sphere, {0, 1}}, {&rect, {1}}};
+  for (const auto& [light, degenerate] : cases) {
+    RayPacket16 packet;
+    float weight[16];
+    rt::buildShadowRays(*light, lanes, 3, epsilon, packet, weight);
+    for (const int i : degenerate) {
+      const LightSample s = light->sample(points[i], Vec2(0.5f));
+      const Ray ray =
+          rt::shadowRay(points[i], points[i] + Vec3(0.0f, epsilon, 0.0f), s.wsDirection, s.distance, epsilon);
+      EXPECT_EQ(packet.dirX[i], ray.direction.x) << i;
+      EXPECT_EQ(packet.dirY[i], ray.direction.y) << i;
+      EXPECT_EQ(packet.dirZ[i], ray.direction.z) << i;
+      EXPECT_EQ(packet.tMax[i], ray.tMax) << i;
+      EXPECT_EQ(packet.tMax[i], 0.0f) << i;  // inside the sphere or on the rect's point: an empty segment
+    }
+    expectLaneMatches(*light, lanes, 2, packet, weight, epsilon);
+  }
+}
+
+TEST(ShadowPacket, PolynomialSineAndCosineWithinAFewUlp) {
+  float worst = 0.0f;
+  for (int k = -100000; k <= 100000; ++k) {
+    const float a = (kPi / 4.0f) * static_cast<float>(k) / 100000.0f;
+    float s, c;
+    rt::sinCosQuarterPi(a, s, c);
+    worst = std::max({worst, std::abs(s - static_cast<float>(std::sin(static_cast<double>(a)))),
+                      std::abs(c - static_cast<float>(std::cos(static_cast<double>(a))))});
+  }
+  EXPECT_LT(worst, 3e-7f);  // a few ulp of values up to 1
+}
+
+TEST(ShadowPacket, PacketsBuiltInPlaceTraceAsSingleRays) {
+  // A quad occluder halfway to a rect light: some lanes blocked, some not; occluded16 and
+  // intersect16 on the packets agree with occluded() and intersect() on the same rays.
+  Scene scene = testing::makeScene(
+      {testing::makeObject(4, testing::quadMesh(Vec3(0.3f, 1.5f, 0.0f), Vec3(0.6f, 0, 0), Vec3(0, 0, 0.6f)), "quad")});
+  const RayScene rays(scene);
+  const Light light = Light::rect(Vec3(0.0f, 3.0f, 0.0f), Vec3(1.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 1.0f));
+  const float epsilon = 1e-4f;
+  int blocked = 0, total = 0;
+  for (uint32_t trial = 0; trial < 40; ++trial) {
+    rt::ShadowLanes lanes;
+    const int count = 1 + static_cast<int>(trial % 16);
+    for (int i = 0; i < count; ++i) {
+      const uint32_t k = trial * 131 + static_cast<uint32_t>(i) * 5;
+      const Vec3 p(3.0f * unit(k) - 1.5f, 0.0f, 3.0f * unit(k + 1) - 1.5f);
+      lanes.setPoint(i, p, p + Vec3(0.0f, epsilon, 0.0f));
+      lanes.ux[i] = unit(k + 2);
+      lanes.uy[i] = unit(k + 3);
+    }
+    RayHitPacket16 packet;
+    float weight[16];
+    rt::buildShadowRays(light, lanes, count, epsilon, packet.ray, weight);
+    const RayPacket16 built = packet.ray;
+    RayPacket16 occlusion = packet.ray;
+    rays.occluded16(occlusion, count);
+    rays.intersect16(packet, count);
+    for (int i = 0; i < count; ++i) {
+      Ray ray;
+      ray.origin = Vec3(built.orgX[i], built.orgY[i], built.orgZ[i]);
+      ray.direction = Vec3(built.dirX[i], built.dirY[i], built.dirZ[i]);
+      ray.tMin = built.tMin[i];
+      ray.tMax = built.tMax[i];
+      const bool single = rays.occluded(ray);
+      EXPECT_EQ(occlusion.blocked(i), single) << "trial " << trial << " lane " << i;
+      const auto hit = rays.intersect(ray);
+      ASSERT_EQ(packet.hit.geomId[i] != HitPacket16::kNoHit, hit.has_value()) << "trial " << trial << " lane " << i;
+      if (hit) {
+        EXPECT_NEAR(packet.ray.tMax[i], hit->t, 1e-5f);
+      }
+      blocked += single;
+      ++total;
+    }
+  }
+  EXPECT_GT(blocked, total / 10);  // both answers occur
+  EXPECT_LT(blocked, total - total / 10);
+}
+
+}  // namespace
+}  // namespace penumbra
