@@ -66,10 +66,6 @@ class RayScene {
   // The closest hits of lanes [0, count) of a packet built in place (count <= 16): afterwards
   // packet.ray.tMax[i] is ray i's hit distance where packet.hit.geomId[i] != HitPacket16::kNoHit.
   void intersect16(RayHitPacket16& packet, int count) const;
-  // The closest hit's distance of `count` <= 16 rays at once (one Embree packet): tHit[i] is the ray
-  // parameter of ray i's first hit within [tMin, tMax], kInfinity where it hits nothing. For shadow
-  // rays that need the blocker's distance (a penumbra's width), at the cost of a closest-hit query.
-  void intersect16(const Ray* rays, int count, float* tHit) const;
   // The closest hit within [tMin, tMax], or nothing. Thread-safe.
   std::optional<RayHit> intersect(const Ray& ray) const;
 

@@ -77,11 +77,6 @@ static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1 && sizeof(RayHitPacket16) == siz
               offsetof(HitPacket16, instId) == offsetof(RTCHit16, instID));
 static_assert(HitPacket16::kNoHit == RTC_INVALID_GEOMETRY_ID);
 
-// The valid mask of lanes [0, count).
-inline void validLanes(int count, int* valid) {
-  for (int i = 0; i < 16; ++i) valid[i] = i < count ? -1 : 0;
-}
-
 // Embree's single-ray layout from ours. mask = all bits so no geometry masking applies.
 inline void fillRay(RTCRay& r, const Ray& ray) {
   r.org_x = ray.origin.x;
@@ -98,26 +93,34 @@ inline void fillRay(RTCRay& r, const Ray& ray) {
   r.flags = 0;
 }
 
-// Embree's 16-ray layout from `count` <= 16 of ours, with the valid mask. Inactive lanes copy ray 0,
-// so they hold valid numbers; the mask keeps Embree from tracing them.
-inline void fillPacket(RTCRay16& packet, int* valid, const Ray* rays, int count) {
-  for (int i = 0; i < 16; ++i) {
-    const Ray& ray = rays[i < count ? i : 0];
-    valid[i] = i < count ? -1 : 0;
-    packet.org_x[i] = ray.origin.x;
-    packet.org_y[i] = ray.origin.y;
-    packet.org_z[i] = ray.origin.z;
-    packet.tnear[i] = ray.tMin;
-    packet.dir_x[i] = ray.direction.x;
-    packet.dir_y[i] = ray.direction.y;
-    packet.dir_z[i] = ray.direction.z;
-    packet.time[i] = 0.0f;
-    packet.tfar[i] = ray.tMax;
-    packet.mask[i] = 0xffffffffu;
-    packet.id[i] = static_cast<unsigned>(i);
-    packet.flags[i] = 0;
+// A packet of `count` <= 16 of our rays; the other lanes keep the packet's valid empty rays, and
+// the valid mask keeps Embree from tracing them.
+inline void toPacket(const Ray* rays, int count, RayPacket16& packet) {
+  for (int i = 0; i < count; ++i) {
+    packet.orgX[i] = rays[i].origin.x;
+    packet.orgY[i] = rays[i].origin.y;
+    packet.orgZ[i] = rays[i].origin.z;
+    packet.tMin[i] = rays[i].tMin;
+    packet.dirX[i] = rays[i].direction.x;
+    packet.dirY[i] = rays[i].direction.y;
+    packet.dirZ[i] = rays[i].direction.z;
+    packet.tMax[i] = rays[i].tMax;
   }
 }
+
+// What a packet query passes besides the rays: a coherent context (the callers group rays that share
+// an origin region and a direction cone) and the valid mask of lanes [0, count).
+struct PacketQuery {
+  RTCIntersectContext context;
+  alignas(64) int valid[16];
+
+  explicit PacketQuery(int count) {
+    if (count > 16) fail("internal: a packet holds at most 16 rays (got {})", count);
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int i = 0; i < 16; ++i) valid[i] = i < count ? -1 : 0;
+  }
+};
 
 }  // namespace
 
@@ -205,60 +208,26 @@ bool RayScene::occluded(const Ray& ray) const {
 
 void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
   if (count <= 0) return;
-  if (count > 16) fail("internal: occluded16 takes at most 16 rays (got {})", count);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  // The caller groups rays that share an origin region and direction cone (one pixel's shadow rays).
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  alignas(64) int valid[16];
-  RTCRay16 packet;  // 64-byte aligned by its declaration
-  fillPacket(packet, valid, rays, count);
-  rtcOccluded16(valid, impl_->scene, &context, &packet);
-  for (int i = 0; i < count; ++i) out[i] = packet.tfar[i] < 0.0f;
+  RayPacket16 packet;
+  toPacket(rays, std::min(count, 16), packet);
+  occluded16(packet, count);
+  for (int i = 0; i < count; ++i) out[i] = packet.blocked(i);
 }
 
 void RayScene::occluded16(RayPacket16& packet, int count) const {
   if (count <= 0) return;
-  if (count > 16) fail("internal: occluded16 takes at most 16 rays (got {})", count);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  alignas(64) int valid[16];
-  validLanes(count, valid);
-  rtcOccluded16(valid, impl_->scene, &context, reinterpret_cast<RTCRay16*>(&packet));
+  PacketQuery query(count);
+  rtcOccluded16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRay16*>(&packet));
 }
 
 void RayScene::intersect16(RayHitPacket16& packet, int count) const {
   if (count <= 0) return;
-  if (count > 16) fail("internal: intersect16 takes at most 16 rays (got {})", count);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  alignas(64) int valid[16];
-  validLanes(count, valid);
+  PacketQuery query(count);
   for (int i = 0; i < 16; ++i) {
     packet.hit.geomId[i] = HitPacket16::kNoHit;
     packet.hit.instId[i] = HitPacket16::kNoHit;
   }
-  rtcIntersect16(valid, impl_->scene, &context, reinterpret_cast<RTCRayHit16*>(&packet));
-}
-
-void RayScene::intersect16(const Ray* rays, int count, float* tHit) const {
-  if (count <= 0) return;
-  if (count > 16) fail("internal: intersect16 takes at most 16 rays (got {})", count);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  alignas(64) int valid[16];
-  RTCRayHit16 packet;  // 64-byte aligned by its declaration
-  fillPacket(packet.ray, valid, rays, count);
-  for (int i = 0; i < 16; ++i) {
-    packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-  }
-  rtcIntersect16(valid, impl_->scene, &context, &packet);
-  for (int i = 0; i < count; ++i)
-    tHit[i] = packet.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID ? kInfinity : packet.ray.tfar[i];
+  rtcIntersect16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRayHit16*>(&packet));
 }
 
 std::optional<RayHit> RayScene::intersect(const Ray& ray) const {
