@@ -70,7 +70,7 @@ struct Out {
 
 void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon, const Out& out) {
   for (int i = 0; i < count; ++i) {
-    // Light::samplerAt's set-up: the silhouette disk seen from P, its frame around P -> centre.
+    // Light::sample's set-up: the silhouette disk seen from P, its frame around P -> centre.
     const float tx = k.center.x - in.px[i], ty = k.center.y - in.py[i], tz = k.center.z - in.pz[i];
     const float d2 = tx * tx + ty * ty + tz * tz;
     const float invD = 1.0f / std::sqrt(d2);
@@ -83,7 +83,7 @@ void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int 
     const float h2 = d2 - k.r2;
     const float diskRadius = k.radius * std::sqrt(h2) * invD;
     const float axial = h2 * invD;
-    // Light::Sampler::sample: a point of the disk, the direction to it, the sphere's front surface.
+    // Then a point of the disk, the direction to it, the sphere's front surface.
     float qx, qy;
     concentric(in.ux[i], in.uy[i], qx, qy);
     qx *= diskRadius;
