@@ -114,7 +114,7 @@ std::vector<Packet> makePackets(const bench::BenchScene& s, int spp, bool blocks
       if (g.hit(pixels[i].first, pixels[i].second)) members.push_back(pixels[i]);
     auto rayOf = [&](int x, int y, int sample) {
       const Vec3 p = g.wsPosition(x, y), n = g.wsGeometricNormal(x, y);
-      const Vec3 origin = rt::offsetOrigin(p, n, rt::lightSide(light, p, n), epsilon);
+      const Vec3 origin = rt::offsetOrigin(light, p, n, epsilon);
       const LightSample ls = light.sample(
           p, sampler.sample(static_cast<uint32_t>(sample), hashCombine(1, static_cast<uint64_t>(y) * g.width() + x)));
       return rt::shadowRay(p, origin, ls.wsDirection, ls.distance, epsilon);

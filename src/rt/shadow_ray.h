@@ -31,6 +31,11 @@ inline float lightSide(const Light& light, const Vec3& wsP, const Vec3& wsGeomet
   return glm::dot(wsGeometricNormal, light.directionToCenter(wsP)) >= 0.0f ? 1.0f : -1.0f;
 }
 
+// The origin of shadow rays from wsP towards `light`: offset to the side of the light's centre.
+inline Vec3 offsetOrigin(const Light& light, const Vec3& wsP, const Vec3& wsGeometricNormal, float epsilon) {
+  return offsetOrigin(wsP, wsGeometricNormal, lightSide(light, wsP, wsGeometricNormal), epsilon);
+}
+
 // The segment from the offset origin to the sample seen from wsP (unit direction, t in world units),
 // stopping epsilon short of it. Re-aiming at the sample from the offset origin (rather than keeping
 // the direction seen from wsP) halves the ray's displacement where it passes an occluder halfway to

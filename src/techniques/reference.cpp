@@ -126,7 +126,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin) {
       wsP = gbuffer.wsPosition(px, y);
       const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
-      wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+      wsOrigin = rt::offsetOrigin(light, wsP, wsNg, epsilon);
       return hashCombine(seed, static_cast<uint64_t>(y) * width + px);
     };
     // Lanes [lane, lane + count): one pixel's samples first .. first + count - 1.

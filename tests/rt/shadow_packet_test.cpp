@@ -80,7 +80,7 @@ TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
         const uint32_t k = trial * 97 + static_cast<uint32_t>(i) * 7;
         const Vec3 p(4.0f * unit(k) - 2.0f, 0.5f * unit(k + 1), 4.0f * unit(k + 2) - 2.0f);
         const Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, 1.0f, unit(k + 4) - 0.5f));
-        lanes.setPoint(i, p, rt::offsetOrigin(p, n, rt::lightSide(light, p, n), epsilon));
+        lanes.setPoint(i, p, rt::offsetOrigin(light, p, n, epsilon));
         // The corners and the centre of [0,1)^2 as well as random points: the concentric map's axes
         // and diagonals, where its wedge changes.
         const float corners[5] = {0.0f, 0.5f, 0x1.fffffep-1f, 0.25f, 0.75f};

@@ -127,7 +127,7 @@ int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const 
     const int x = xs[i], y = ys[i];
     const Vec3 wsP = gbuffer.wsPosition(x, y);
     const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-    lanes.setPoint(i, wsP, rt::offsetOrigin(wsP, wsNg, rt::lightSide(light_, wsP, wsNg), epsilon_));
+    lanes.setPoint(i, wsP, rt::offsetOrigin(light_, wsP, wsNg, epsilon_));
     const uint64_t pixel = static_cast<uint64_t>(y) * frame.width + x;
     offsetX[i] = unitFloat(hashCombine(seed_, 2 * pixel));
     offsetY[i] = unitFloat(hashCombine(seed_, 2 * pixel + 1));

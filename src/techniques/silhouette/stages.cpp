@@ -235,7 +235,7 @@ std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& pla
 int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon) {
   const Vec3 wsP = gbuffer.wsPosition(x, y);
   const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-  const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, rt::lightSide(light, wsP, wsNg), epsilon);
+  const Vec3 wsOrigin = rt::offsetOrigin(light, wsP, wsNg, epsilon);
   const std::optional<RayHit> hit =
       rays.intersect(rt::shadowRay(wsP, wsOrigin, light.directionToCenter(wsP), light.distanceToCenter(wsP), epsilon));
   return hit ? hit->objectId : kNoObject;

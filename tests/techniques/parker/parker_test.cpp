@@ -88,7 +88,7 @@ float sinusoid(float tau) { return 0.5f * (1.0f + std::sin(kPi * tau - 0.5f * kP
 Ray groundShadowRay(const Scene& scene, const Light& light, const Vec3& p, float* toLight) {
   const float eps = shadowRayEpsilon(scene.bounds());
   const Vec3 n(0.0f, 1.0f, 0.0f);
-  const Vec3 origin = rt::offsetOrigin(p, n, rt::lightSide(light, p, n), eps);
+  const Vec3 origin = rt::offsetOrigin(light, p, n, eps);
   const Ray ray = rt::shadowRay(p, origin, light.directionToCenter(p), light.distanceToCenter(p), eps);
   *toLight = light.isDirectional() ? kInfinity : ray.tMax + eps;
   return ray;
