@@ -7,6 +7,7 @@
 #include "techniques/shadow_map/brabec.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -48,9 +49,9 @@ inline int32_t texelKey(const float* depth, const int32_t* id, const float* js, 
 
 // The smallest key of texels [s0, s1] of one row: the vectorized inner loop of the search.
 template <bool kInner, bool kIdTest, bool kJitter>
-int32_t rowMinKey(const float* __restrict depth, const int32_t* __restrict id, const float* __restrict js,
-                  const float* __restrict jt, int s0, int s1, float ps, float tc, float pt, float zRow, float dzds,
-                  int32_t objectId, float r2) {
+__attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
+    const float* __restrict depth, const int32_t* __restrict id, const float* __restrict js, const float* __restrict jt,
+    int s0, int s1, float ps, float tc, float pt, float zRow, float dzds, int32_t objectId, float r2) {
   int32_t best = kNoKey;
   for (int s = s0; s <= s1; ++s) {
     const int32_t key = texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, ps, tc, pt, zRow, dzds, objectId, r2);
@@ -106,13 +107,41 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
   int firstOpen[kGrid], lastOpen[kGrid];
   if (gridded) {
     for (int j = 0; j < tilesY; ++j) {
-      firstOpen[j] = kGrid;
-      lastOpen[j] = -1;
-      for (int i = 0; i < tilesX; ++i)
-        if (tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty0 + j)) {
-          firstOpen[j] = std::min(firstOpen[j], i);
-          lastOpen[j] = i;
+      int first = kGrid, last = -1;
+      if constexpr (kInner) {
+        // tileMayQualify's inner test, term by term in its order, as selects (see the outer one).
+        const size_t row = static_cast<size_t>(ty0 + j) * m.tilesPerRow + tx0;
+        const float* __restrict farthest = m.tileMaxDepth + row;
+        const int32_t* __restrict ids = m.tileObjectId + row;
+        const int ty = ty0 + j;
+        const float tA = static_cast<float>(ty << kTileShift) + 0.5f;
+        const float tB = static_cast<float>(std::min(m.size - 1, (ty << kTileShift) + kTileSize - 1)) + 0.5f;
+        const float rowA = q.zLayer + q.dzdt * (tA - q.t), rowB = q.zLayer + q.dzdt * (tB - q.t);
+        for (int i = 0; i < tilesX; ++i) {
+          const int tx = tx0 + i;
+          const float sA = static_cast<float>(tx << kTileShift) + 0.5f;
+          const float sB = static_cast<float>(std::min(m.size - 1, (tx << kTileShift) + kTileSize - 1)) + 0.5f;
+          const float colA = q.dzds * (sA - q.s), colB = q.dzds * (sB - q.s);
+          const float lo = std::min(std::min(rowA + colA, rowA + colB), std::min(rowB + colA, rowB + colB));
+          const bool idOpen = !kIdTest || ids[i] == kMixedTile || ids[i] == q.objectId;
+          const bool open = idOpen && farthest[i] >= lo;
+          first = std::min(first, open ? i : kGrid);
+          last = std::max(last, open ? i : -1);
         }
+      } else {
+        // tileMayQualify's outer test, written as selects into two reductions so the loop vectorizes
+        // (most searches are outer, and their grid spans up to kGrid^2 tiles).
+        const size_t row = static_cast<size_t>(ty0 + j) * m.tilesPerRow + tx0;
+        const float* __restrict nearest = m.tileMinDepth + row;
+        const int32_t* __restrict ids = m.tileObjectId + row;
+        for (int i = 0; i < tilesX; ++i) {
+          const bool open = nearest[i] < q.zLayer && !(kIdTest && ids[i] == q.objectId);
+          first = std::min(first, open ? i : kGrid);
+          last = std::max(last, open ? i : -1);
+        }
+      }
+      firstOpen[j] = first;
+      lastOpen[j] = last;
     }
   }
 
@@ -270,39 +299,78 @@ int countRowBlocked(const float* __restrict depth, int a, int b, int stride, flo
   return blocked;
 }
 
-// The smallest multiple of k >= x (k > 0, any sign of x).
-int multipleAtOrAbove(int x, int k) {
-  const int q = x / k;
-  return (q * k >= x ? q : q + 1) * k;
+// The same count from a lattice row (lattice[m] is texel m * stride): lattice columns a/k .. b/k, the
+// texel's s computed as above, so each compare is the strided loop's.
+int countLatticeRowBlocked(const float* __restrict lattice, int a, int b, int stride, float s, float zRow, float dzds) {
+  int blocked = 0;
+  for (int m = a / stride; m <= b / stride; ++m)
+    blocked += lattice[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s);
+  return blocked;
 }
+
+// Division by the lattice's stride k, the same for every row of a count: a multiply by 1/k and an
+// exact correction instead of an integer division per row (|x| far below 2^31 / k here: map texels).
+struct StrideDivider {
+  explicit StrideDivider(int k) : k(k), inverse(1.0 / k) {}
+  int floorDiv(int x) const {
+    int q = static_cast<int>(std::floor(static_cast<double>(x) * inverse));
+    if (q * k > x) --q;
+    if ((q + 1) * k <= x) ++q;
+    return q;
+  }
+  int multipleAtOrAbove(int x) const { return -floorDiv(-x) * k; }  //!< the smallest multiple of k >= x
+  int k;
+  double inverse;
+};
 
 // The count over a footprint given row by row: span(j, i0, i1) sets the texels of row j inside it
 // (false: none). With stride k > 1 only texels whose s and t are multiples of k count (a lattice fixed
 // in the map, so the count moves smoothly with P').
 template <class Span>
-Coverage countRows(const LightMap& map, int tLo, int tHi, int stride, float s, float t, float zLayer, float dzds,
-                   float dzdt, const Span& span) {
+Coverage countRows(const LightMap& map, const LatticeDepths* lattices, int tLo, int tHi, int stride, float s, float t,
+                   float zLayer, float dzds, float dzdt, const Span& span) {
   Coverage c;
   const int n = map.size;
-  for (int j = multipleAtOrAbove(tLo, stride); j <= tHi; j += stride) {
+  const StrideDivider divider(stride);
+  for (int j = divider.multipleAtOrAbove(tLo); j <= tHi; j += stride) {
     int i0, i1;
     if (!span(j, i0, i1)) continue;
-    i0 = multipleAtOrAbove(i0, stride);
+    if (stride > 1) i0 = divider.multipleAtOrAbove(i0);
     if (i0 > i1) continue;
-    c.total += (i1 - i0) / stride + 1;
+    c.total += stride > 1 ? divider.floorDiv(i1 - i0) + 1 : i1 - i0 + 1;
     if (j < 0 || j >= n) continue;
-    const int a = i0 >= 0 ? i0 : multipleAtOrAbove(0, stride), b = std::min(i1, n - 1);
+    const int a = i0 >= 0 ? i0 : 0, b = std::min(i1, n - 1);
     if (a > b) continue;
     const float zRow = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t);
-    c.blocked += countRowBlocked(map.lsDepth.row(j), a, b, stride, s, zRow, dzds);
+    // a is a multiple of the stride, and so is j: both lie on the lattice.
+    const float* lattice = stride > 1 && lattices ? lattices->row(stride, j / stride) : nullptr;
+    c.blocked += lattice ? countLatticeRowBlocked(lattice, a, b, stride, s, zRow, dzds)
+                         : countRowBlocked(map.lsDepth.row(j), a, b, stride, s, zRow, dzds);
   }
   return c;
 }
 
 }  // namespace
 
+void LatticeDepths::build(const LightMap& map, int maxStride) {
+  size_ = map.size;
+  lattices_.resize(static_cast<size_t>(std::max(maxStride + 1, 0)));
+  for (int k = 2; k <= maxStride; ++k) {
+    const int m = columns(k);
+    std::vector<float>& lattice = lattices_[static_cast<size_t>(k)];
+    lattice.resize(static_cast<size_t>(m) * m);
+    tbb::parallel_for(tbb::blocked_range<int>(0, m), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        const float* depth = map.lsDepth.row(j * k);
+        float* out = lattice.data() + static_cast<size_t>(j) * m;
+        for (int i = 0; i < m; ++i) out[i] = depth[i * k];
+      }
+    });
+  }
+}
+
 Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, float radius,
-                      int stride) {
+                      int stride, const LatticeDepths* lattices) {
   if (!(radius > 0.0f) || stride < 1) return {};
   const float r2 = radius * radius;
   // Row j's chord: the texel centres s_c with |s_c - s| <= sqrt(r^2 - dy^2).
@@ -316,11 +384,12 @@ Coverage countBlocked(const LightMap& map, float s, float t, float zLayer, float
     return i0 <= i1;
   };
   const int tLo = static_cast<int>(std::ceil(t - radius - 0.5f)), tHi = static_cast<int>(std::floor(t + radius - 0.5f));
-  return countRows(map, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
+  return countRows(map, lattices, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
 }
 
 Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt,
-                               const std::vector<Vec2>& vertices, float scale, int stride) {
+                               const std::vector<Vec2>& vertices, float scale, int stride,
+                               const LatticeDepths* lattices) {
   const size_t count = vertices.size();
   if (count < 3 || !(scale > 0.0f) || stride < 1) return {};
   float area2 = 0.0f, yLo = kInfinity, yHi = -kInfinity;
@@ -332,20 +401,44 @@ Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLay
     yHi = std::max(yHi, a.y * scale);
   }
   const float orientation = area2 > 0.0f ? 1.0f : -1.0f;
+  // Inside every edge's half-plane: orientation * cross(e, p - a) >= 0 for edge a -> a + e. A slanted
+  // edge bounds x on row y at a.x + (e.x / e.y)(y - a.y), below (cx = -orientation e.y > 0) or above;
+  // that is scale * offset + slope * y, set up once per count rather than divided out per row. A
+  // level edge (e.y = 0) bounds the rows instead: orientation * e.x * (y - a.y) >= 0.
+  struct EdgeLine {
+    float slope, offset;  //!< x bound = scale * offset + slope * y; level edges: offset is a.y
+    int8_t side;          //!< +1 lower bound, -1 upper bound, 0 a level edge
+    float levelSign;      //!< level edges: orientation * e.x
+  };
+  std::array<EdgeLine, 16> local;
+  std::vector<EdgeLine> heap;
+  EdgeLine* lines = local.data();
+  if (count > local.size()) {
+    heap.resize(count);
+    lines = heap.data();
+  }
+  for (size_t k = 0; k < count; ++k) {
+    const Vec2& a = vertices[k];
+    const Vec2 e = vertices[(k + 1) % count] - a;
+    const float cx = -orientation * e.y;
+    if (cx == 0.0f) {
+      lines[k] = {0.0f, a.y * scale, 0, orientation * e.x};
+    } else {
+      const float slope = e.x / e.y;
+      lines[k] = {slope, a.x - slope * a.y, static_cast<int8_t>(cx > 0.0f ? 1 : -1), 0.0f};
+    }
+  }
   auto span = [&](int j, int& i0, int& i1) {
     const float y = static_cast<float>(j) + 0.5f - t;
-    // Inside every edge's half-plane: orientation * cross(e, p - a) >= 0 for edge a -> a + e, i.e.
-    // cx x + rest >= 0, a bound on x at this row.
     float xLo = -kInfinity, xHi = kInfinity;
     for (size_t k = 0; k < count; ++k) {
-      const Vec2 a = vertices[k] * scale;
-      const Vec2 e = vertices[(k + 1) % count] * scale - a;
-      const float cx = -orientation * e.y, rest = orientation * (e.x * (y - a.y) + e.y * a.x);
-      if (cx > 0.0f)
-        xLo = std::max(xLo, -rest / cx);
-      else if (cx < 0.0f)
-        xHi = std::min(xHi, -rest / cx);
-      else if (rest < 0.0f)
+      const EdgeLine& line = lines[k];
+      const float bound = scale * line.offset + line.slope * y;
+      if (line.side > 0)
+        xLo = std::max(xLo, bound);
+      else if (line.side < 0)
+        xHi = std::min(xHi, bound);
+      else if (line.levelSign * (y - line.offset) < 0.0f)
         return false;
     }
     if (!(xLo <= xHi)) return false;
@@ -354,7 +447,7 @@ Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLay
     return i0 <= i1;
   };
   const int tLo = static_cast<int>(std::ceil(t + yLo - 0.5f)), tHi = static_cast<int>(std::floor(t + yHi - 0.5f));
-  return countRows(map, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
+  return countRows(map, lattices, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
 }
 
 Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half) {
@@ -395,6 +488,58 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
         objectId[k] = kMixedTile;
       seen[k] = 1;
     }
+}
+
+TileNearestTable::Entry TileNearestTable::merge(const Entry& a, const Entry& b) {
+  const Entry& first = b.nearest < a.nearest ? b : a;
+  const Entry& second = b.nearest < a.nearest ? a : b;
+  // Every tile of `second` lies at or beyond second.nearest; those with an id other than first.id
+  // are all of them when second's nearest tile has another id, else its own `other`.
+  return {first.nearest, first.id, std::min(first.other, second.id == first.id ? second.other : second.nearest)};
+}
+
+void TileNearestTable::build(const std::vector<float>& tileMinDepth, const std::vector<int32_t>& tileObjectId,
+                             int tilesPerRow) {
+  n_ = tilesPerRow;
+  const size_t count = static_cast<size_t>(n_) * n_;
+  int levelCount = 1;
+  while ((1 << levelCount) <= n_) ++levelCount;
+  levels_.resize(static_cast<size_t>(levelCount));
+  levels_[0].resize(count);
+  for (size_t k = 0; k < count; ++k) levels_[0][k] = {tileMinDepth[k], tileObjectId[k], kInfinity};
+  for (int level = 1; level < levelCount; ++level) {
+    const std::vector<Entry>& below = levels_[static_cast<size_t>(level - 1)];
+    std::vector<Entry>& here = levels_[static_cast<size_t>(level)];
+    here.resize(count);
+    const int half = 1 << (level - 1);
+    // Squares that would reach past the grid are never read (queries fit their level's size).
+    const int last = n_ - (1 << level);
+    for (int ty = 0; ty <= last; ++ty)
+      for (int tx = 0; tx <= last; ++tx) {
+        auto at = [&](int x, int y) -> const Entry& { return below[static_cast<size_t>(y) * n_ + x]; };
+        here[static_cast<size_t>(ty) * n_ + tx] =
+            merge(merge(at(tx, ty), at(tx + half, ty)), merge(at(tx, ty + half), at(tx + half, ty + half)));
+      }
+  }
+}
+
+float TileNearestTable::nearest(int tx0, int tx1, int ty0, int ty1, int32_t objectId, bool idTest) const {
+  const int w = tx1 - tx0 + 1, h = ty1 - ty0 + 1;
+  int level = 0;
+  while ((2 << level) <= std::min(w, h)) ++level;
+  const int side = 1 << level;
+  const std::vector<Entry>& entries = levels_[static_cast<size_t>(level)];
+  float result = kInfinity;
+  // Squares at tx0, tx0 + side, ... and one flush with tx1 (likewise in t): they cover the rectangle.
+  for (int y = ty0;; y = std::min(y + side, ty1 - side + 1)) {
+    for (int x = tx0;; x = std::min(x + side, tx1 - side + 1)) {
+      const Entry& e = entries[static_cast<size_t>(y) * n_ + x];
+      result = std::min(result, idTest && e.id == objectId ? e.other : e.nearest);
+      if (x == tx1 - side + 1) break;
+    }
+    if (y == ty1 - side + 1) break;
+  }
+  return result;
 }
 
 }  // namespace brabec
@@ -468,6 +613,16 @@ void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
   }
   minDepth_ = minMapDepth(map_);
   brabec::buildTiles(map_, tileMinDepth_, tileMaxDepth_, tileObjectId_, tilesPerRow_);
+  tileNearest_.build(tileMinDepth_, tileObjectId_, tilesPerRow_);
+  if (options_.coverageBound && !segmentLight_) {
+    // The largest stride boundByCoverage can ask for: its footprint is at most max_radius texels.
+    const float radius = static_cast<float>(options_.maxRadius);
+    const float area = radius * radius * (polygon_.empty() ? 3.14159265f : polygonArea_);
+    const float samples = static_cast<float>(options_.coverageSamples);
+    lattices_.build(map_, area > samples ? static_cast<int>(std::ceil(std::sqrt(area / samples))) : 1);
+  } else {
+    lattices_.build(map_, 1);
+  }
   if (options_.jitter > 0.0f) {
     const int n = map_.size;
     jitterS_ = Image<float>(n, n);
@@ -556,14 +711,10 @@ float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) con
     const int tx1 = std::min(map_.size - 1, static_cast<int>(std::ceil(p.s + reach - 0.5f))) >> brabec::kTileShift;
     const int ty0 = std::max(0, static_cast<int>(std::floor(p.t - reach - 0.5f))) >> brabec::kTileShift;
     const int ty1 = std::min(map_.size - 1, static_cast<int>(std::ceil(p.t + reach - 0.5f))) >> brabec::kTileShift;
-    float nearest = kInfinity;
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx) {
-        const size_t k = static_cast<size_t>(ty) * tilesPerRow_ + tx;
-        const bool mayBlock = tileMinDepth_[k] < p.zLayer && !(options_.idTest && tileObjectId_[k] == p.objectId);
-        if (mayBlock) nearest = std::min(nearest, tileMinDepth_[k]);
-      }
-    radius = nearest < kInfinity ? std::min(radius, widthTexels(nearest)) : 0.0f;
+    // The nearest of the tiles that are not P's own object's alone: below the layer it is the
+    // nearest tile that may block, else no tile may.
+    const float nearest = tileNearest_.nearest(tx0, tx1, ty0, ty1, p.objectId, options_.idTest);
+    radius = nearest < p.zLayer ? std::min(radius, widthTexels(nearest)) : 0.0f;
   }
 
   brabec::SearchMap m;
@@ -659,8 +810,9 @@ float BrabecTechnique::boundByCoverage(const Pixel& p, float v, float zb) const 
   const brabec::Coverage c =
       segmentLight_ ? brabec::countBlockedAlong(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, footprint * segmentAxis_)
       : !polygon_.empty()
-          ? brabec::countBlockedInPolygon(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, polygon_, footprint, stride)
-          : brabec::countBlocked(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, footprint, stride);
+          ? brabec::countBlockedInPolygon(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, polygon_, footprint, stride,
+                                          &lattices_)
+          : brabec::countBlocked(map_, p.s, p.t, p.zLayer, p.dzds, p.dzdt, footprint, stride, &lattices_);
   // A footprint of few texels cannot resolve how much of it the blockers cover (contact shadows,
   // small maps): the paper's V stands there.
   if (c.total * stride * stride < options_.coverageMinTexels) return v;
@@ -804,19 +956,28 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
         *searchCountPtr += searched(p);
       };
     };
-    // Columns first (every 4th and the last), then every row between those columns.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, columns.size()), [&](const tbb::blocked_range<size_t>& range) {
+    // Columns first (every 4th and the last), then every row between those columns. A pixel's
+    // solution depends on no other pixel, so the order is free: the corners where border rows cross
+    // border columns are solved first, then each group of rows is refined along every border column
+    // at once (its few rows stay in cache, where a column at a time reads a new line per pixel).
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rowBorders.size()), [&](const tbb::blocked_range<size_t>& range) {
       int64_t searchCount = 0;
       const auto solve = makeSolve(searchCount);
-      for (size_t c = range.begin(); c < range.end(); ++c) {
-        const int x = columns[c];
-        auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
-        for (size_t g = 0; g + 1 < rowBorders.size(); ++g)
-          refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, known.data());
-        if (rowBorders.size() == 1) solve(at(0));
-      }
+      for (size_t r = range.begin(); r < range.end(); ++r)
+        for (const int x : columns) solve(static_cast<size_t>(rowBorders[r]) * width + x);
       searches += searchCount;
     });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, rowBorders.size() - 1), [&](const tbb::blocked_range<size_t>& range) {
+          int64_t searchCount = 0;
+          const auto solve = makeSolve(searchCount);
+          for (size_t g = range.begin(); g < range.end(); ++g)
+            for (const int x : columns) {
+              auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
+              refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, known.data());
+            }
+          searches += searchCount;
+        });
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t searchCount = 0;
       const auto solve = makeSolve(searchCount);

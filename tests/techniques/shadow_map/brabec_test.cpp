@@ -120,6 +120,37 @@ TEST(BrabecSearch, VectorizedMatchesScalarOracleOnRandomMaps) {
   EXPECT_LT(found, queries * 4 / 5);
 }
 
+// The table's nearest tile over a rectangle is the plain loop's, for every size of grid (powers of
+// two and not), rectangle (squares, strips, single tiles, the whole grid) and id.
+TEST(BrabecSearch, TileNearestTableMatchesTheLoopOverTiles) {
+  for (int n : {1, 5, 16, 23}) {
+    std::vector<float> depth(static_cast<size_t>(n) * n);
+    std::vector<int32_t> id(depth.size());
+    for (size_t k = 0; k < depth.size(); ++k) {
+      const uint32_t h = hashCombine(static_cast<uint64_t>(n), static_cast<uint64_t>(k));
+      // ids in runs (objects), some mixed tiles and some empty ones; repeated depths make ties.
+      id[k] = h % 7 == 0 ? brabec::kMixedTile : static_cast<int32_t>((k / 3) % 4);
+      depth[k] = h % 13 == 0 ? kInfinity : 1.0f + static_cast<float>((h >> 8) % 50) * 0.1f;
+    }
+    brabec::TileNearestTable table;
+    table.build(depth, id, n);
+    for (uint32_t i = 0; i < 3000; ++i) {
+      const int x0 = static_cast<int>(hashCombine(i, 1) % n), x1 = x0 + static_cast<int>(hashCombine(i, 2) % (n - x0));
+      const int y0 = static_cast<int>(hashCombine(i, 3) % n), y1 = y0 + static_cast<int>(hashCombine(i, 4) % (n - y0));
+      const int32_t object = static_cast<int32_t>(hashCombine(i, 5) % 5);
+      const bool idTest = (i & 1) != 0;
+      float expected = kInfinity;
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const size_t k = static_cast<size_t>(y) * n + x;
+          if (!(idTest && id[k] == object)) expected = std::min(expected, depth[k]);
+        }
+      ASSERT_EQ(table.nearest(x0, x1, y0, y1, object, idTest), expected)
+          << "grid " << n << " tiles [" << x0 << ", " << x1 << "] x [" << y0 << ", " << y1 << "] object " << object;
+    }
+  }
+}
+
 TEST(BrabecSearch, ZeroRadiusFindsNothing) {
   LightMap map;
   map.size = 16;
@@ -665,6 +696,40 @@ TEST(BrabecCoverage, PolygonAndSegmentFootprints) {
   const brabec::Coverage seg = brabec::countBlockedAlong(map, 32.0f, 20.5f, 5.0f, 0.0f, 0.0f, Vec2(10.0f, 0.0f));
   EXPECT_EQ(seg.total, 21);
   EXPECT_EQ(seg.blocked, 10);
+}
+
+// The lattices hold the strided texels: a count read from them is the strided count, for disks and
+// polygons, strides 2..9, footprints that leave the map, on a map of random depths.
+TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
+  LightMap map;
+  map.size = 101;  // no stride divides it: partial lattice rows and columns
+  map.lsDepth = Image<float>(map.size, map.size);
+  map.objectId = Image<int32_t>(map.size, map.size, 0);
+  for (int t = 0; t < map.size; ++t)
+    for (int s = 0; s < map.size; ++s)
+      map.lsDepth(s, t) =
+          2.0f + static_cast<float>(hashCombine(static_cast<uint64_t>(s), static_cast<uint64_t>(t)) % 1000) * 0.002f;
+  brabec::LatticeDepths lattices;
+  lattices.build(map, 9);
+  const std::vector<Vec2> quad = {{-1.0f, -0.6f}, {0.9f, -1.0f}, {1.0f, 0.8f}, {-0.7f, 1.0f}};
+  int compared = 0;
+  for (uint32_t i = 0; i < 2000; ++i) {
+    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
+    const float s = -10.0f + 121.0f * u(1), t = -10.0f + 121.0f * u(2), z = 2.0f + 2.0f * u(3);
+    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f), radius = 1.0f + 60.0f * u(6);
+    const int stride = 2 + static_cast<int>(hashCombine(i, 7) % 8);
+    const brabec::Coverage diskPlain = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride);
+    const brabec::Coverage diskLattice = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride, &lattices);
+    ASSERT_EQ(diskLattice.total, diskPlain.total) << i;
+    ASSERT_EQ(diskLattice.blocked, diskPlain.blocked) << i;
+    const brabec::Coverage quadPlain = brabec::countBlockedInPolygon(map, s, t, z, dzds, dzdt, quad, radius, stride);
+    const brabec::Coverage quadLattice =
+        brabec::countBlockedInPolygon(map, s, t, z, dzds, dzdt, quad, radius, stride, &lattices);
+    ASSERT_EQ(quadLattice.total, quadPlain.total) << i;
+    ASSERT_EQ(quadLattice.blocked, quadPlain.blocked) << i;
+    compared += diskPlain.blocked > 0 && diskPlain.blocked < diskPlain.total;
+  }
+  EXPECT_GT(compared, 1000);  // most counts are partial, so a wrong texel would show
 }
 
 // The too-dark measure of docs/small-occluders.md: over the error mask, the pixels where the
