@@ -45,6 +45,13 @@ class Image {
     height_ = height;
     data_.assign(static_cast<size_t>(width) * height, value);
   }
+  // Becomes a width x height image whose pixels the caller is about to write, every one: what it
+  // held is kept where the storage is large enough, so no pass fills it first.
+  void resizeForOverwrite(int width, int height) {
+    width_ = width;
+    height_ = height;
+    data_.resize(static_cast<size_t>(width) * height);
+  }
   auto begin() { return data_.begin(); }
   auto end() { return data_.end(); }
   auto begin() const { return data_.begin(); }

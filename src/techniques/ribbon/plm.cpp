@@ -670,11 +670,16 @@ class PlmTechnique final : public ShadowTechnique {
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;
-    limits_.reset(n, n, PlmTexel{});
-    std::vector<int>& needLower = needLower_;  // texels whose ribbon needs the lower limit b
+    limits_.resizeForOverwrite(n, n);
+    // Texels whose ribbon needs the lower limit b, row by row as the parallel pass finds them, then
+    // in row-major order.
+    std::vector<int>& needLower = needLower_;
     needLower.clear();
+    coveredInRow_.resize(static_cast<size_t>(n));
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
-      for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        std::vector<int>& covered = coveredInRow_[static_cast<size_t>(j)];
+        covered.clear();
         for (int i = 0; i < n; ++i) {
           const float depth = map_.lsDepth(i, j);
           const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
@@ -686,22 +691,21 @@ class PlmTechnique final : public ShadowTechnique {
             texel.edge = r.edge;
             if (r.w > 0.0f)  // raise g (step 2; see the file comment)
               texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
+            covered.push_back(j * n + i);
           }
           limits_(i, j) = texel;
         }
+      }
     });
-    for (int j = 0; j < n; ++j) {
-      const plm::RibbonTexel* row = ribbons.row(j);
-      for (int i = 0; i < n; ++i)
-        if (row[i].covered()) needLower.push_back(j * n + i);
-    }
+    for (const std::vector<int>& covered : coveredInRow_)
+      needLower.insert(needLower.end(), covered.begin(), covered.end());
     if (!needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
     // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
     // at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without the
     // depth test of b, which needs the receiver), or neither.
-    g_.reset(n, n, 0.0f);
-    footprint2x2_.reset(n, n, kFootprintMixed);
+    g_.resizeForOverwrite(n, n);
+    footprint2x2_.resizeForOverwrite(n, n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         const int j1 = std::min(j + 1, n - 1);
@@ -713,6 +717,8 @@ class PlmTechnique final : public ShadowTechnique {
             footprint2x2_(i, j) = kFootprintRibbonFree;
           else if (continuousRibbon(t00, t10, t01, t11))
             footprint2x2_(i, j) = kFootprintOneRibbon;
+          else
+            footprint2x2_(i, j) = kFootprintMixed;
         }
       }
     });
@@ -902,8 +908,9 @@ class PlmTechnique final : public ShadowTechnique {
   VisibilityToIllumination table_;
   std::optional<Light> light_;  //!< the light the last prepare()'s map looks from (lightAtMapOrigin)
   Image<PlmTexel> limits_;
-  Image<float> g_;               //!< limits_' g alone, for the lit fast path
-  Image<uint8_t> footprint2x2_;  //!< kFootprint* of the 2x2 texels whose top-left this is
+  std::vector<std::vector<int>> coveredInRow_;  //!< prepare's scratch: each row's ribbon texels
+  Image<float> g_;                              //!< limits_' g alone, for the lit fast path
+  Image<uint8_t> footprint2x2_;                 //!< kFootprint* of the 2x2 texels whose top-left this is
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
