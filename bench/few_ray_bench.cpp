@@ -23,8 +23,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "penumbra/ray_scene.h"
 #include "penumbra/sampling.h"
+#include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {

@@ -4,9 +4,9 @@
 // >= 20 M rays/s (single precision, 16-ray coherent packets).
 #include <benchmark/benchmark.h>
 
-#include "penumbra/ray_scene.h"
 #include "penumbra/reference.h"
 #include "penumbra/scene_io.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {

@@ -30,13 +30,13 @@
 #include <fmt/ranges.h>
 
 #include "cli.h"
+#include "eval/report_figures.h"
 #include "penumbra/error.h"
 #include "penumbra/image_io.h"
 #include "penumbra/metrics.h"
 #include "penumbra/motion.h"
 #include "penumbra/raster.h"
 #include "penumbra/report.h"
-#include "penumbra/report_figures.h"
 #include "penumbra/scene_io.h"
 #include "penumbra/shade.h"
 #include "penumbra/temporal_metrics.h"

@@ -18,8 +18,8 @@
 #include <tbb/global_control.h>
 
 #include "cli.h"
+#include "core/output_file.h"
 #include "penumbra/error.h"
-#include "penumbra/output_file.h"
 #include "penumbra/scene_io.h"
 
 namespace penumbra::cli {

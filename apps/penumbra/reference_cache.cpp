@@ -9,7 +9,7 @@
 // and a checksum of its pixels in its header, so an image copied or edited over the entry (another
 // technique's V, say) is caught and rendered anew, saying why. A cache entry that cannot be read
 // (truncated, edited) is reported and rendered anew, not trusted. Each file is written beside its
-// target and renamed into place (penumbra/output_file.h), the image first, so an interrupted run
+// target and renamed into place (src/core/output_file.h), the image first, so an interrupted run
 // leaves no half-written entry.
 #include <unistd.h>
 

@@ -23,6 +23,6 @@ Image<float> readExr(const std::string& path);
 // Also returns the header's text attributes (OpenEXR's own and the writer's).
 Image<float> readExr(const std::string& path, ExrAttributes* attributes);
 
-// Every file above is written beside its target and renamed into place (penumbra/output_file.h).
+// Every file above is written beside its target and renamed into place, so a file is the old one or the whole new one.
 
 }  // namespace penumbra

@@ -11,7 +11,7 @@
 //    that emit from both faces, so a ceiling light works whichever way its normal points. A
 //    polygon's centre sample is its area centroid, which for a concave polygon (an L, a U) can lie
 //    off the emitter; it is sampled uniformly by area over a triangulation (a fan from vertex 0 when
-//    convex, ear clipping otherwise: include/penumbra/planar_polygon.h).
+//    convex, ear clipping otherwise).
 //  - segment {a, b}: a linear light (Heidrich et al. 2000); sampled uniformly along its length.
 //  - directional {direction, angular_diameter, profile}: `direction` points from the scene towards
 //    the light (the sun direction); its emitting area is the solar disk, a disk of radius

@@ -11,10 +11,11 @@
 #include "penumbra/image.h"
 #include "penumbra/light.h"
 #include "penumbra/options.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/technique.h"
 
 namespace penumbra {
+
+class RayScene;  // the Embree scene the rays are traced in (internal)
 
 struct ReferenceOptions {
   uint32_t samplesPerPixel = 256;  //!< shadow rays per pixel (CMJ-stratified over the light)
@@ -32,6 +33,7 @@ struct ReferenceOptions {
 class ReferenceTechnique final : public ShadowTechnique {
  public:
   explicit ReferenceTechnique(const ReferenceOptions& options);
+  ~ReferenceTechnique() override;
 
   std::string_view name() const override { return "reference"; }
   // "rays", "rays_per_second", "mean_std_error", "max_std_error" (the last two over pixels that hit

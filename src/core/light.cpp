@@ -3,8 +3,8 @@
 
 #include <cmath>
 
+#include "core/planar_polygon.h"
 #include "penumbra/error.h"
-#include "penumbra/planar_polygon.h"
 #include "penumbra/sampling.h"
 
 namespace penumbra {

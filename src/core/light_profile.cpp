@@ -1,5 +1,5 @@
-// The visibility-to-illumination table (Lawlor 2006, Appendix A): see include/penumbra/light_profile.h.
-#include "penumbra/light_profile.h"
+// The visibility-to-illumination table (Lawlor 2006, Appendix A): see src/core/light_profile.h.
+#include "core/light_profile.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
-// Output files written beside their target and renamed into place (include/penumbra/output_file.h).
-#include "penumbra/output_file.h"
+// Output files written beside their target and renamed into place (src/core/output_file.h).
+#include "core/output_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,6 +1,6 @@
 // Simple planar polygons: validation, ear clipping and convex partitions. See
-// include/penumbra/planar_polygon.h for the algorithms and the tolerances.
-#include "penumbra/planar_polygon.h"
+// src/core/planar_polygon.h for the algorithms and the tolerances.
+#include "core/planar_polygon.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,8 +15,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "eval/report_figures.h"
 #include "penumbra/report.h"
-#include "penumbra/report_figures.h"
 
 namespace penumbra {
 

@@ -12,8 +12,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/output_file.h"
 #include "penumbra/error.h"
-#include "penumbra/output_file.h"
 
 namespace penumbra {
 

@@ -1,7 +1,7 @@
-// Signed error maps and scan-line choice for comparison reports (include/penumbra/report_figures.h).
+// Signed error maps and scan-line choice for comparison reports (src/eval/report_figures.h).
 // The colour map interpolates ColorBrewer's RdBu in sRGB, as the page's legend (an SVG gradient of
 // the same stops) does, so a colour in a map reads the same on the legend.
-#include "penumbra/report_figures.h"
+#include "eval/report_figures.h"
 
 #include <algorithm>
 #include <cmath>

@@ -20,8 +20,8 @@
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
 
+#include "core/output_file.h"
 #include "penumbra/error.h"
-#include "penumbra/output_file.h"
 
 namespace penumbra {
 

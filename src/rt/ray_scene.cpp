@@ -1,4 +1,4 @@
-// RayScene: the Embree 3 wrapper of include/penumbra/ray_scene.h. One device and one scene per
+// RayScene: the Embree 3 wrapper of src/rt/ray_scene.h. One device and one scene per
 // RayScene, one triangle geometry per object whose geometry id is the object's index, so a hit maps
 // to (object id, triangle index) without a lookup table keyed by Embree's own numbering.
 //
@@ -8,7 +8,7 @@
 // Embree's error callback only records the message; it is turned into a penumbra::Error after each
 // call that can fail, because throwing through Embree's C frames is not allowed.
 // Single precision throughout, as Embree is.
-#include "penumbra/ray_scene.h"
+#include "rt/ray_scene.h"
 
 #include <algorithm>
 #include <cstddef>

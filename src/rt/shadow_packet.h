@@ -16,7 +16,7 @@
 #pragma once
 
 #include "penumbra/light.h"
-#include "penumbra/ray_scene.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra::rt {
 

@@ -1,4 +1,4 @@
-// traceGBuffer: the camera G-buffer by ray casting (include/penumbra/ray_scene.h), one primary ray
+// traceGBuffer: the camera G-buffer by ray casting (src/rt/ray_scene.h), one primary ray
 // through each pixel centre. It is the independent oracle the rasterizer's G-buffer is tested
 // against: the same Camera::generateRay pixels, Embree's watertight hits instead of edge functions.
 // Positions are interpolated from the triangle's vertices (float precision, world units); view depth
@@ -10,7 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra {
 

@@ -32,10 +32,13 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
+#include "rt/ray_scene.h"
 #include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {
+
+ReferenceTechnique::~ReferenceTechnique() = default;
 
 ReferenceTechnique::ReferenceTechnique(const ReferenceOptions& options) : options_(options) {
   if (options_.samplesPerPixel < 1) fail("reference: spp must be >= 1 (got {})", options_.samplesPerPixel);

@@ -1,10 +1,10 @@
-// Tests of the visibility-to-illumination table (include/penumbra/light_profile.h, Lawlor 2006
+// Tests of the visibility-to-illumination table (src/core/light_profile.h, Lawlor 2006
 // Appendix A): the table against its closed forms, the closed forms against a Monte Carlo estimate
 // over the light's own samples (Light::sample, with the limb-darkening weights the reference uses),
 // the paper's stated properties (complementarity, "covering up the first 10% of the diameter of a
 // disk light source decreases the delivered illumination by less than 6%", limb darkening flattens
 // the curve), and which lights ask for which profile.
-#include "penumbra/light_profile.h"
+#include "core/light_profile.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // Tests of src/core/output_file.cpp: safe file-name slugs, and files replaced only once complete.
-#include "penumbra/output_file.h"
+#include "core/output_file.h"
 
 #include <unistd.h>
 

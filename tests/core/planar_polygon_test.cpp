@@ -1,4 +1,4 @@
-// Tests of include/penumbra/planar_polygon.h on an L, a U and seeded random star-shaped polygons:
+// Tests of src/core/planar_polygon.h on an L, a U and seeded random star-shaped polygons:
 // the ear triangulation and every convex partition tile the polygon (areas add up, and random
 // points inside it fall in exactly one piece), every piece is convex and counter-clockwise; the
 // partition along diagonals has as few pieces, and among those as short cuts, as an exhaustive
@@ -7,7 +7,7 @@
 // most 180 degrees); cuts that continue an edge split an L into two rectangles and a U into three,
 // and never give more pieces; Hertel–Mehlhorn stays within its bounds (at most 2r + 1 pieces, r the
 // reflex corners, and at most 4 times the optimum).
-#include "penumbra/planar_polygon.h"
+#include "core/planar_polygon.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // end colours at -1/+1 (blue below the reference, red above), saturates beyond, and darkens
 // monotonically away from 0 on each side; a signed error map written as PNG reads back as exactly
 // the colour map's bytes; the scan-line choice counts reference penumbra pixels inside the mask.
-#include "penumbra/report_figures.h"
+#include "eval/report_figures.h"
 
 #include <cmath>
 #include <filesystem>

@@ -18,8 +18,8 @@
 #include "penumbra/error.h"
 #include "penumbra/motion.h"
 #include "penumbra/raster.h"
-#include "penumbra/ray_scene.h"
 #include "raster_test_scenes.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {

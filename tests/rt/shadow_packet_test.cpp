@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "penumbra/light.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/sampling.h"
+#include "rt/ray_scene.h"
 #include "rt/rt_test_scenes.h"
 #include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"

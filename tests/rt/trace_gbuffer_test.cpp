@@ -9,7 +9,7 @@
 #include <cstring>
 
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
+#include "rt/ray_scene.h"
 #include "rt/rt_test_scenes.h"
 
 namespace penumbra {

@@ -25,9 +25,9 @@
 #include "penumbra/metrics.h"
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "penumbra/scene_io.h"
+#include "rt/ray_scene.h"
 #include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {

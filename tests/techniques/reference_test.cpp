@@ -20,6 +20,7 @@
 #include "penumbra/error.h"
 #include "penumbra/reference.h"
 #include "penumbra/registry.h"
+#include "rt/ray_scene.h"
 #include "rt/rt_test_scenes.h"
 
 namespace penumbra {

@@ -49,8 +49,8 @@
 #include <tbb/parallel_invoke.h>
 
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
+#include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 #include "techniques/parker/outer_objects.h"
 

@@ -32,10 +32,10 @@
 #include "penumbra/image.h"
 #include "penumbra/light.h"
 #include "penumbra/options.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/sampling.h"
 #include "penumbra/scene.h"
 #include "penumbra_filter.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra::raytraced {
 

@@ -35,8 +35,8 @@
 #include "../shadow_map/shadow_map.h"
 #include "few_ray.h"
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {

@@ -11,8 +11,8 @@
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
+#include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {

@@ -29,8 +29,8 @@
 
 #include "few_ray.h"
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {

@@ -34,8 +34,8 @@
 #include <cmath>
 #include <memory>
 
+#include "core/light_profile.h"
 #include "penumbra/error.h"
-#include "penumbra/light_profile.h"
 #include "penumbra/registry.h"
 #include "techniques/ribbon/plm.h"
 #include "techniques/shadow_map/shadow_map.h"

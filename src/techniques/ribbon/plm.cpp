@@ -84,11 +84,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "core/light_profile.h"
 #include "penumbra/error.h"
-#include "penumbra/light_profile.h"
-#include "penumbra/ray_scene.h"
 #include "penumbra/registry.h"
 #include "raster/rasterizer.h"
+#include "rt/ray_scene.h"
 #include "techniques/mesh_edges.h"
 #include "techniques/shadow_map/shadow_map.h"
 

@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "penumbra/error.h"
-#include "penumbra/ray_scene.h"
+#include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra {

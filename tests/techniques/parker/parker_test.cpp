@@ -18,6 +18,7 @@
 #include "penumbra/reference.h"
 #include "penumbra/registry.h"
 #include "penumbra/scene_io.h"
+#include "rt/ray_scene.h"
 #include "rt/rt_test_scenes.h"
 #include "rt/shadow_ray.h"
 #include "techniques/shadow_map_fixture.h"

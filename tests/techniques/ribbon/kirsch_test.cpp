@@ -9,7 +9,7 @@
 
 #include <cmath>
 
-#include "penumbra/light_profile.h"
+#include "core/light_profile.h"
 #include "penumbra/primitives.h"
 #include "penumbra/registry.h"
 #include "techniques/shadow_map_fixture.h"
