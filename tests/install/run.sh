@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The installed package from a consumer's side: installs the build into a fresh prefix, builds the
+# examples that use find_package(penumbra) against it, runs them, and checks what they print; then
+# configures a parent project that adds penumbra as a subdirectory.
+#   tests/install/run.sh BUILD_DIR SOURCE_DIR WORK_DIR
+set -euo pipefail
+build=$1 source=$2 work=$3
+rm -rf "$work"
+mkdir -p "$work"
+cmake --install "$build" --prefix "$work/prefix" >/dev/null
+# Nothing of the source tree may leak into the package: its headers come from the prefix alone.
+if grep -rq "$source" "$work/prefix/lib/cmake/penumbra"; then
+  echo "install: the package names the source tree:" >&2
+  grep -rl "$source" "$work/prefix/lib/cmake/penumbra" >&2
+  exit 1
+fi
+for example in minimal; do
+  cmake -S "$source/examples/$example" -B "$work/$example" -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+  cmake --build "$work/$example" -j 2 >/dev/null
+done
+out=$("$work/minimal/minimal" torus)
+echo "$out"
+grep -Eq '^torus: pcss RMSE8 [0-9]+\.[0-9]+, penumbra RMSE8 [0-9]+\.[0-9]+ \(reference at 64 spp\)$' <<<"$out"
+# A bad scene name is an error message and a non-zero exit, not a crash.
+if "$work/minimal/minimal" no-such-scene 2>"$work/error.txt"; then
+  echo "install: minimal accepted an unknown scene" >&2
+  exit 1
+fi
+grep -q "no-such-scene" "$work/error.txt"
+# As a subproject: configured only (tests/install/subproject/CMakeLists.txt checks what it must not touch).
+cmake -S "$source/tests/install/subproject" -B "$work/subproject" -DPENUMBRA_SOURCE="$source" >"$work/subproject.txt" 2>&1 ||
+  { cat "$work/subproject.txt" >&2; exit 1; }
+grep -q "penumbra as a subproject: ok" "$work/subproject.txt"
+echo "install: ok"
