@@ -28,6 +28,11 @@
 
 namespace penumbra::cli {
 
+// Parses and runs one command line as the `penumbra` program does (argv[0] is the program's name) and
+// returns its exit code. With `rethrow`, bad input (a malformed command line included) propagates as
+// penumbra::Error with the message the program would print, instead of being printed (run.cpp).
+int runCommandLine(int argc, const char* const* argv, bool rethrow);
+
 // A registered subcommand and what runs it once the command line is parsed. run() returns the exit code.
 struct Command {
   CLI::App* app = nullptr;
