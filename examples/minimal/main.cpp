@@ -1,5 +1,5 @@
-// Loads a built-in scene (or a scene file), runs pcss and the reference for its first light on a
-// 256 x 256 G-buffer, and prints pcss's RMSE8 against the reference.
+// Loads a built-in scene (or a scene file), runs pcss (512 x 512 map) and the reference for its first
+// light on a 256 x 256 G-buffer, and prints pcss's RMSE8 against the reference.
 //
 //   minimal [scene]        scene: a built-in name (penumbra scenes) or a scene file; default torus
 #include <cstdio>
@@ -9,8 +9,8 @@
 #include "penumbra/metrics.h"
 #include "penumbra/raster.h"
 #include "penumbra/reference.h"
-#include "penumbra/registry.h"
 #include "penumbra/scene_io.h"
+#include "penumbra/techniques/shadow_map.h"
 
 int main(int argc, char** argv) {
   try {
@@ -20,8 +20,11 @@ int main(int argc, char** argv) {
     const penumbra::Light& light = scene.lights.front();
     const penumbra::GBuffer gbuffer = penumbra::renderGBuffer(scene, 256, 256);
 
-    // A technique by name, with its defaults (penumbra techniques lists them and their parameters).
-    const std::unique_ptr<penumbra::ShadowTechnique> pcss = penumbra::createTechnique("pcss");
+    // A technique from its typed options (penumbra/techniques/*.h): the defaults but for the map's size.
+    // The same by name: penumbra::createTechnique("pcss", params) with map_size=512.
+    penumbra::PcssOptions pcssOptions;
+    pcssOptions.lightMap.size = 512;
+    const std::unique_ptr<penumbra::ShadowTechnique> pcss = penumbra::makeTechnique(pcssOptions);
     penumbra::Image<float> v;
     pcss->prepare(scene, light);
     pcss->visibility(gbuffer, v);

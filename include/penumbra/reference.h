@@ -60,4 +60,7 @@ class ReferenceTechnique final : public ShadowTechnique {
   double maxStdError_ = 0.0;
 };
 
+// The technique made from its options (the registry's `reference` made from parameters by name).
+std::unique_ptr<ShadowTechnique> makeTechnique(const ReferenceOptions& options);
+
 }  // namespace penumbra

@@ -206,12 +206,16 @@ std::vector<std::pair<std::string, double>> ReferenceTechnique::stats() const {
           {"max_std_error", maxStdError_}};
 }
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const ReferenceOptions& o) {
+  return std::make_unique<ReferenceTechnique>(o);
+}
+
 TechniqueInfo referenceTechniqueInfo() {
   TechniqueInfo info;
   info.name = "reference";
   info.summary = "stratified Monte Carlo ray tracing over the light's emitting area (Embree occlusion rays)";
   info.source = "ground truth";
-  info.setOptions<ReferenceOptions>([](const ReferenceOptions& o) { return std::make_unique<ReferenceTechnique>(o); });
+  info.setOptions<ReferenceOptions>([](const ReferenceOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -58,12 +58,13 @@
 #include "penumbra/light.h"
 #include "penumbra/math.h"
 #include "penumbra/scene.h"
+#include "penumbra/techniques/parker.h"
 #include "techniques/mesh_edges.h"
 
 namespace penumbra::rt {
 
-enum class OuterFalloff { Bernstein, Sinusoid };  //!< s = 3 tau^2 - 2 tau^3, or (1 + sin(pi tau - pi/2)) / 2
-enum class OuterCombine { Min, Product, Sum };
+using penumbra::OuterCombine;  // include/penumbra/techniques/parker.h
+using penumbra::OuterFalloff;
 
 struct OuterObjectOptions {
   float lightDiameter = 1.0f;   //!< D: world units; for a directional light, per unit distance

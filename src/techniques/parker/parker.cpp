@@ -50,42 +50,13 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/parker.h"
 #include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 #include "techniques/parker/outer_objects.h"
 
 namespace penumbra {
 namespace {
-
-struct ParkerOptions {
-  rt::OuterFalloff falloff = rt::OuterFalloff::Bernstein;
-  rt::OuterCombine combine = rt::OuterCombine::Min;
-  bool analyticSpheres = true;
-  std::optional<float> lightDiameter;  //!< world units (directional: per unit distance); nullopt = derived
-
-  static void describe(OptionFields<ParkerOptions>& f) {
-    f.add(&ParkerOptions::falloff,
-          OptionDecl("falloff").help("attenuation across the outer object: bernstein s = 3 tau^2 - 2 tau^3 (the "
-                                     "paper's), or the exact sinusoid (1 + sin(pi tau - pi/2)) / 2 of a straight edge "
-                                     "under a spherical light"),
-          {{"bernstein", rt::OuterFalloff::Bernstein}, {"sinusoid", rt::OuterFalloff::Sinusoid}});
-    f.add(&ParkerOptions::combine,
-          OptionDecl("combine").help("how the attenuations of several grazed objects combine: min (the paper's "
-                                     "thresholding, never darker than it should be), product s1 s2, or sum 1 - ((1 - "
-                                     "s1) + (1 - s2)) (at least 0)"),
-          {{"min", rt::OuterCombine::Min}, {"product", rt::OuterCombine::Product}, {"sum", rt::OuterCombine::Sum}});
-    f.add(&ParkerOptions::analyticSpheres,
-          OptionDecl("analytic_spheres")
-              .help("objects made from a sphere primitive are the true sphere (inner radius "
-                    "R, outer R + b) instead of their tessellated mesh"));
-    f.add(&ParkerOptions::lightDiameter,
-          OptionDecl("light_diameter")
-              .range(1e-6, 1e6)
-              .unit("world units (directional: per unit distance)")
-              .help("D of b = D t0 / |l - o|; auto: the light's bounding diameter (sphere: 2 radius; directional: 2 "
-                    "tan(angular_diameter / 2))"));
-  }
-};
 
 class ParkerTechnique final : public ShadowTechnique {
  public:
@@ -264,6 +235,8 @@ class ParkerTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const ParkerOptions& o) { return std::make_unique<ParkerTechnique>(o); }
+
 TechniqueInfo parkerTechniqueInfo() {
   TechniqueInfo info;
   info.name = "parker";
@@ -271,7 +244,7 @@ TechniqueInfo parkerTechniqueInfo() {
       "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the "
       "penumbra";
   info.source = "Parker, Shirley & Smits 1998, Single sample soft shadows";
-  info.setOptions<ParkerOptions>([](const ParkerOptions& o) { return std::make_unique<ParkerTechnique>(o); });
+  info.setOptions<ParkerOptions>([](const ParkerOptions& o) { return makeTechnique(o); });
   return info;
 }
 

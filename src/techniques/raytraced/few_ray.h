@@ -34,10 +34,14 @@
 #include "penumbra/options.h"
 #include "penumbra/sampling.h"
 #include "penumbra/scene.h"
+#include "penumbra/techniques/raytraced.h"
 #include "penumbra_filter.h"
 #include "rt/ray_scene.h"
 
 namespace penumbra::raytraced {
+
+using penumbra::PenumbraFilterOptions;  // include/penumbra/techniques/raytraced.h
+using penumbra::TemporalOptions;
 
 inline constexpr int kTile = 8;  //!< pixels per tile side
 
@@ -117,42 +121,6 @@ int64_t tracePenumbraTiles(const GBuffer& gbuffer, const TileRayTracer& tracer, 
 void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& light, int samplesPerPixel,
                        const PenumbraFilterOptions& filter, float tanHalfFovY, const Image<float>* fallbackRatio,
                        Image<float>& v);
-
-// Temporal accumulation, for a technique instance run frame after frame (a sequence: the light or the
-// camera moving). Engines' shadow denoisers do it (SIGMA, FidelityFX): each pixel's V is blended with
-// its history, found by reprojecting the pixel's world position into the previous frame's camera
-// (valid where that pixel saw the same object within two pixel footprints of it), and clamped to the
-// range of this frame's V over the pixel's 3 x 3 neighbourhood (same object), widened by a margin, so
-// that a shadow that moved leaves no ghost behind:
-//     V = h + alpha (V_now - h),   h = clamp(V_prev(reprojected), min3x3(V_now) - m, max3x3(V_now) + m).
-// The margin m is there because a few rays' filtered V still carries noise wider than a 3 x 3 range:
-// clamped to that range alone, the history follows this frame's noise, and the sequence flickers as
-// much as without it (tests/techniques/raytraced/raytraced_soft_test.cpp measures both).
-// Where the history is not valid (disocclusion, the first frame) V_now is kept. With it on, each frame
-// draws new sample patterns (the seed combined with the frame's index), so the history averages
-// independent noise. A frame then depends on the frames before it: a sequence run from its first
-// frame is deterministic, one frame run alone is not the same as that frame in a sequence.
-struct TemporalOptions {
-  bool enabled = false;      //!< blend with the reprojected history
-  float alpha = 0.2f;        //!< weight of the new frame
-  float clampMargin = 0.1f;  //!< widening of the history's clamp range, V
-
-  static void describe(OptionFields<TemporalOptions>& f) {
-    f.add(&TemporalOptions::enabled,
-          OptionDecl("temporal")
-              .help("accumulate over frames: blend V with its history, reprojected through world positions and "
-                    "clamped to this frame's 3x3 range widened by temporal_clamp_margin; new sample patterns each "
-                    "frame"));
-    f.add(&TemporalOptions::alpha, OptionDecl("temporal_alpha")
-                                       .range(0.01, 1.0)
-                                       .help("weight of the new frame in the temporal blend (1: no history)"));
-    f.add(&TemporalOptions::clampMargin,
-          OptionDecl("temporal_clamp_margin")
-              .range(0.0, 1.0)
-              .help("the history is clamped to this frame's 3x3 range of V widened by this much (V units): 0 follows "
-                    "this frame's noise, 1 keeps ghosts"));
-  }
-};
 
 class TemporalHistory {
  public:

@@ -36,37 +36,11 @@
 #include "few_ray.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/raytraced.h"
 #include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {
-
-struct HybridOptions {
-  LightMapOptions lightMap;  //!< the light map: size and fit
-  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
-  int blockerSamples = 16;   //!< taps of the blocker search
-  int samplesPerPixel = 2;   //!< rays per pixel of a penumbra tile
-  uint64_t seed = 1;         //!< selects the sample patterns
-  raytraced::PenumbraFilterOptions filter;
-  raytraced::TemporalOptions temporal;
-
-  static void describe(OptionFields<HybridOptions>& f) {
-    f.nest(&HybridOptions::lightMap);
-    f.nest(&HybridOptions::bias);
-    f.add(&HybridOptions::blockerSamples,
-          OptionDecl("blocker_samples")
-              .range(1, 1024)
-              .unit("samples")
-              .help("taps of the blocker search that classifies a pixel lit, umbra or uncertain (Vogel disk)"));
-    f.add(&HybridOptions::samplesPerPixel,
-          OptionDecl("spp").range(1, 16).unit("rays").help(
-              "shadow rays per pixel of a penumbra tile (CMJ-stratified over the light; none elsewhere)"));
-    f.add(&HybridOptions::seed,
-          OptionDecl("seed").range(0, 4294967295.0).help("random seed; the same seed gives bit-identical output"));
-    f.nest(&HybridOptions::filter);
-    f.nest(&HybridOptions::temporal);
-  }
-};
 
 class HybridTechnique final : public ShadowTechnique {
  public:
@@ -180,12 +154,14 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const HybridOptions& o) { return std::make_unique<HybridTechnique>(o); }
+
 TechniqueInfo hybridTechniqueInfo() {
   TechniqueInfo info;
   info.name = "hybrid";
   info.summary = "a shadow map's blocker search answers lit and umbra; rays and the penumbra filter run elsewhere";
   info.source = "engine practice (FidelityFX Hybrid Shadows; PCSS's blocker search, Fernando 2005)";
-  info.setOptions<HybridOptions>([](const HybridOptions& o) { return std::make_unique<HybridTechnique>(o); });
+  info.setOptions<HybridOptions>([](const HybridOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -34,47 +34,12 @@
 #include "penumbra/gbuffer.h"
 #include "penumbra/image.h"
 #include "penumbra/options.h"
+#include "penumbra/techniques/raytraced.h"
 
 namespace penumbra::raytraced {
 
-struct PenumbraFilterOptions {
-  float filterScale = 0.25f;     //!< filter radius over the estimated penumbra width (both in pixels)
-  float minRadius = 2.0f;        //!< filter radius floor in penumbra tiles, pixels
-  float maxRadius = 48.0f;       //!< filter radius cap, pixels
-  int tapsPerSide = 8;           //!< taps on each side of the centre per pass
-  float planeTolerance = 0.25f;  //!< plane distance tolerated, in pixel footprints per pixel of distance
-  int normalPower = 16;          //!< exponent of the normal weight
-
-  static void describe(OptionFields<PenumbraFilterOptions>& f) {
-    f.add(&PenumbraFilterOptions::filterScale,
-          OptionDecl("filter_scale")
-              .range(0.0, 4.0)
-              .help("filter radius as a multiple of the estimated penumbra width (0 turns the filter off)"));
-    f.add(
-        &PenumbraFilterOptions::minRadius,
-        OptionDecl("min_radius")
-            .range(0.0, 256.0)
-            .unit("pixels")
-            .help("smallest filter radius of a penumbra tile's pixel that has a lit ray, so that a penumbra a pixel or "
-                  "two wide still averages its neighbours' rays (2: taps 1 pixel away weigh 0.56; at 2 rays per pixel, "
-                  "scaled by sqrt(2 / spp)); a pixel all of "
-                  "whose rays were blocked keeps its own radius, so umbra does not light up at sharp contacts"));
-    f.add(&PenumbraFilterOptions::maxRadius,
-          OptionDecl("max_radius").range(1.0, 256.0).unit("pixels").help("largest filter radius"));
-    f.add(&PenumbraFilterOptions::tapsPerSide,
-          OptionDecl("taps_per_side")
-              .range(1, 64)
-              .unit("taps")
-              .help("taps on each side of a pixel per separable pass (wider radii read every stride-th pixel)"));
-    f.add(&PenumbraFilterOptions::planeTolerance,
-          OptionDecl("plane_tolerance")
-              .range(0.01, 1000.0)
-              .unit("pixel footprints per pixel")
-              .help("edge stop: distance of a tap from the pixel's tangent plane tolerated, per pixel of distance"));
-    f.add(&PenumbraFilterOptions::normalPower,
-          OptionDecl("normal_power").range(0, 1024).help("edge stop: exponent of max(0, n_p . n_q)"));
-  }
-};
+using penumbra::PenumbraFilterOptions;  // include/penumbra/techniques/raytraced.h
+using penumbra::TemporalOptions;
 
 // What the filter reads per pixel besides the G-buffer.
 struct PenumbraFilterInput {

@@ -30,34 +30,11 @@
 #include "few_ray.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/raytraced.h"
 #include "rt/ray_scene.h"
 
 namespace penumbra {
 namespace {
-
-struct RaytracedSoftOptions {
-  int samplesPerPixel = 2;       //!< rays per pixel of a penumbra tile
-  bool skipUniformTiles = true;  //!< tiles whose probes agree with their neighbours' trace no more rays
-  uint64_t seed = 1;             //!< selects the sample patterns
-  raytraced::PenumbraFilterOptions filter;
-  raytraced::TemporalOptions temporal;
-
-  static void describe(OptionFields<RaytracedSoftOptions>& f) {
-    f.add(
-        &RaytracedSoftOptions::samplesPerPixel,
-        OptionDecl("spp").range(1, 16).unit("rays").help(
-            "shadow rays per pixel of a penumbra tile (CMJ-stratified over the light); elsewhere one probe ray per 2x2 "
-            "pixels"));
-    f.add(&RaytracedSoftOptions::skipUniformTiles,
-          OptionDecl("skip_uniform_tiles")
-              .help("8x8 tiles whose probe rays are all lit or all blocked, as are their neighbours', keep the "
-                    "probe's answer: no more rays, no filter"));
-    f.add(&RaytracedSoftOptions::seed,
-          OptionDecl("seed").range(0, 4294967295.0).help("random seed; the same seed gives bit-identical output"));
-    f.nest(&RaytracedSoftOptions::filter);
-    f.nest(&RaytracedSoftOptions::temporal);
-  }
-};
 
 class RaytracedSoftTechnique final : public ShadowTechnique {
  public:
@@ -114,13 +91,16 @@ void RaytracedSoftTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const RaytracedSoftOptions& o) {
+  return std::make_unique<RaytracedSoftTechnique>(o);
+}
+
 TechniqueInfo raytracedSoftTechniqueInfo() {
   TechniqueInfo info;
   info.name = "raytraced-soft";
   info.summary = "a few shadow rays per pixel in penumbra tiles, filtered along the penumbra width their hits give";
   info.source = "engine practice (axis-aligned filtering, Mehta et al. 2012; SIGMA; FidelityFX shadow denoiser)";
-  info.setOptions<RaytracedSoftOptions>(
-      [](const RaytracedSoftOptions& o) { return std::make_unique<RaytracedSoftTechnique>(o); });
+  info.setOptions<RaytracedSoftOptions>([](const RaytracedSoftOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -37,25 +37,12 @@
 #include "core/light_profile.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/ribbon.h"
 #include "techniques/ribbon/plm.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
 namespace {
-
-struct KirschOptions {
-  LightMapOptions lightMap;   //!< the light map: size and fit
-  DepthBias bias;             //!< of the hard compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every ribbon's width
-  bool illuminationTable = true;
-
-  static void describe(OptionFields<KirschOptions>& f) {
-    f.nest(&KirschOptions::lightMap);
-    f.nest(&KirschOptions::bias);
-    f.add(&KirschOptions::marginTexels, ribbonMarginOption());
-    f.add(&KirschOptions::illuminationTable, illuminationTableOption());
-  }
-};
 
 class KirschTechnique final : public ShadowTechnique {
  public:
@@ -103,12 +90,14 @@ class KirschTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const KirschOptions& o) { return std::make_unique<KirschTechnique>(o); }
+
 TechniqueInfo kirschTechniqueInfo() {
   TechniqueInfo info;
   info.name = "kirsch";
   info.summary = "hard shadow map plus a shadow-width map that fades the shadow inwards (inner penumbra only)";
   info.source = "Kirsch & Döllner 2003, Real-time soft shadows using a single light sample (baseline in Lawlor 2006)";
-  info.setOptions<KirschOptions>([](const KirschOptions& o) { return std::make_unique<KirschTechnique>(o); });
+  info.setOptions<KirschOptions>([](const KirschOptions& o) { return makeTechnique(o); });
   return info;
 }
 

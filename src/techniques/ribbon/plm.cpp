@@ -70,6 +70,7 @@
 // Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
 // (texels added to every ribbon's half-width), illumination_table (bool).
 #include "techniques/ribbon/plm.h"
+#include "penumbra/techniques/ribbon.h"
 
 #include <algorithm>
 #include <cmath>
@@ -609,20 +610,6 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
 
 namespace {
 
-struct PlmOptions {
-  LightMapOptions lightMap;       //!< the light map g: size and fit
-  DepthBias bias;                 //!< of the compares with g, c and b (shadow_map.h)
-  float marginTexels = 2.0f;      //!< added to every ribbon's half-width
-  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
-
-  static void describe(OptionFields<PlmOptions>& f) {
-    f.nest(&PlmOptions::lightMap);
-    f.nest(&PlmOptions::bias);
-    f.add(&PlmOptions::marginTexels, ribbonMarginOption());
-    f.add(&PlmOptions::illuminationTable, illuminationTableOption());
-  }
-};
-
 // The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
 // parameter square, one packet), the share of Equation 1's prediction below which a receiver is
 // taken as shadowed by more than the ribbon's edge, and how many surfaces along a texel's ray are
@@ -924,13 +911,15 @@ class PlmTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const PlmOptions& o) { return std::make_unique<PlmTechnique>(o); }
+
 TechniqueInfo plmTechniqueInfo() {
   TechniqueInfo info;
   info.name = "plm";
   info.summary =
       "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
   info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
-  info.setOptions<PlmOptions>([](const PlmOptions& o) { return std::make_unique<PlmTechnique>(o); });
+  info.setOptions<PlmOptions>([](const PlmOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -165,17 +165,3 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
                       Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm
-
-namespace penumbra {
-// Parameters shared by the ribbon techniques (plm, smoothies, kirsch), declared once (options.h).
-inline OptionDecl ribbonMarginOption() {
-  return OptionDecl("margin").range(0, 64).unit("texels").help(
-      "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon");
-}
-inline OptionDecl illuminationTableOption() {
-  return OptionDecl("illumination_table")
-      .help(
-          "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A table for the "
-          "light's profile (disk lights; identity for rect, polygon)");
-}
-}  // namespace penumbra

@@ -34,25 +34,12 @@
 #include "core/light_profile.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/ribbon.h"
 #include "techniques/ribbon/plm.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
 namespace {
-
-struct SmoothiesOptions {
-  LightMapOptions lightMap;   //!< the light map: size and fit
-  DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every smoothie's width
-  bool illuminationTable = true;
-
-  static void describe(OptionFields<SmoothiesOptions>& f) {
-    f.nest(&SmoothiesOptions::lightMap);
-    f.nest(&SmoothiesOptions::bias);
-    f.add(&SmoothiesOptions::marginTexels, ribbonMarginOption());
-    f.add(&SmoothiesOptions::illuminationTable, illuminationTableOption());
-  }
-};
 
 class SmoothiesTechnique final : public ShadowTechnique {
  public:
@@ -100,12 +87,16 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const SmoothiesOptions& o) {
+  return std::make_unique<SmoothiesTechnique>(o);
+}
+
 TechniqueInfo smoothiesTechniqueInfo() {
   TechniqueInfo info;
   info.name = "smoothies";
   info.summary = "hard shadow map plus silhouette strips that fade the shadow outwards (outer penumbra only)";
   info.source = "Chan & Durand 2003, Rendering fake soft shadows with smoothies (baseline in Lawlor 2006)";
-  info.setOptions<SmoothiesOptions>([](const SmoothiesOptions& o) { return std::make_unique<SmoothiesTechnique>(o); });
+  info.setOptions<SmoothiesOptions>([](const SmoothiesOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -999,6 +999,8 @@ std::vector<std::pair<std::string, double>> BrabecTechnique::stats() const {
           {"map_min_depth", minDepth_}};
 }
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const BrabecOptions& o) { return std::make_unique<BrabecTechnique>(o); }
+
 TechniqueInfo brabecTechniqueInfo() {
   TechniqueInfo info;
   info.name = "brabec";
@@ -1006,7 +1008,7 @@ TechniqueInfo brabecTechniqueInfo() {
       "single-sample soft shadows: nearest blocker / lit texel search in a depth + object-id map, inner and outer "
       "penumbra";
   info.source = "Brabec & Seidel 2002, Single sample soft shadows using depth maps";
-  info.setOptions<BrabecOptions>([](const BrabecOptions& o) { return std::make_unique<BrabecTechnique>(o); });
+  info.setOptions<BrabecOptions>([](const BrabecOptions& o) { return makeTechnique(o); });
   return info;
 }
 

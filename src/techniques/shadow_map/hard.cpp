@@ -11,19 +11,10 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/shadow_map.h"
 #include "shadow_map.h"
 
 namespace penumbra {
-
-struct HardShadowOptions {
-  LightMapOptions lightMap;  //!< the light map: size and fit
-  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
-
-  static void describe(OptionFields<HardShadowOptions>& f) {
-    f.nest(&HardShadowOptions::lightMap);
-    f.nest(&HardShadowOptions::bias);
-  }
-};
 
 class HardShadowTechnique final : public ShadowTechnique {
  public:
@@ -48,13 +39,16 @@ class HardShadowTechnique final : public ShadowTechnique {
   LightMap map_;
 };
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const HardShadowOptions& o) {
+  return std::make_unique<HardShadowTechnique>(o);
+}
+
 TechniqueInfo hardTechniqueInfo() {
   TechniqueInfo info;
   info.name = "hard";
   info.summary = "shadow map from the light's centre sample, one depth compare per pixel (hard shadow)";
   info.source = "Williams 1978 (baseline)";
-  info.setOptions<HardShadowOptions>(
-      [](const HardShadowOptions& o) { return std::make_unique<HardShadowTechnique>(o); });
+  info.setOptions<HardShadowOptions>([](const HardShadowOptions& o) { return makeTechnique(o); });
   return info;
 }
 

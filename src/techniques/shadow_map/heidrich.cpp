@@ -665,6 +665,10 @@ std::vector<std::pair<std::string, double>> HeidrichTechnique::stats() const {
           {"visibility_maps_ms", visibilityMapsMs_}};
 }
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const HeidrichOptions& o) {
+  return std::make_unique<HeidrichTechnique>(o);
+}
+
 TechniqueInfo heidrichTechniqueInfo() {
   TechniqueInfo info;
   info.name = "heidrich";
@@ -672,7 +676,7 @@ TechniqueInfo heidrichTechniqueInfo() {
       "soft shadow maps for linear lights: a depth + visibility map per sample point, skin polygons of the "
       "depth discontinuities warped into the other view and Gouraud-shaded (segment lights)";
   info.source = "Heidrich, Brabec & Seidel 2000, Soft shadow maps for linear lights";
-  info.setOptions<HeidrichOptions>([](const HeidrichOptions& o) { return std::make_unique<HeidrichTechnique>(o); });
+  info.setOptions<HeidrichOptions>([](const HeidrichOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -14,33 +14,10 @@
 #include "penumbra/image.h"
 #include "penumbra/raster.h"
 #include "penumbra/technique.h"
+#include "penumbra/techniques/shadow_map.h"
 #include "shadow_map.h"
 
 namespace penumbra {
-
-struct HeidrichOptions {
-  LightMapOptions lightMap;    //!< each sample point's shadow and visibility map: size and fit
-  int subdivisions = 1;        //!< k: sub-segments of the light (k + 1 sample points)
-  float edgeThreshold = 4.0f;  //!< smallest depth gap that is a discontinuity, in texel sizes at its depth
-  DepthBias bias;              //!< depth-compare bias of the shadow-map channel (shadow_map.h)
-
-  static void describe(OptionFields<HeidrichOptions>& f) {
-    f.nest(&HeidrichOptions::lightMap);
-    f.add(&HeidrichOptions::subdivisions,
-          OptionDecl("subdivisions")
-              .range(1, 64)
-              .unit("sub-segments")
-              .help("k: the segment is split into k linear lights (k + 1 sample points, one shadow map each); raise it "
-                    "where part of the light shows between occluders that hide both end points"));
-    f.add(&HeidrichOptions::edgeThreshold,
-          OptionDecl("edge_threshold")
-              .range(0.01, 1000)
-              .unit("texels")
-              .help("smallest depth gap treated as a discontinuity (skin polygons), in world sizes of one texel at its "
-                    "depth"));
-    f.nest(&HeidrichOptions::bias);
-  }
-};
 
 namespace heidrich {
 

@@ -21,25 +21,10 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
+#include "penumbra/techniques/shadow_map.h"
 #include "shadow_map.h"
 
 namespace penumbra {
-
-struct MultisampleOptions {
-  LightMapOptions lightMap;  //!< each sample's light map: size and fit
-  int samples = 16;          //!< light samples = shadow maps
-  uint32_t seed = 1;         //!< selects the stratified sample pattern
-  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
-
-  static void describe(OptionFields<MultisampleOptions>& f) {
-    f.nest(&MultisampleOptions::lightMap);
-    f.add(&MultisampleOptions::samples, OptionDecl("samples").range(1, 1024).unit("samples").help(
-                                            "light samples, one shadow map each (CMJ-stratified over the emitter)"));
-    f.add(&MultisampleOptions::seed,
-          OptionDecl("seed").range(0, 4294967295.0).help("selects the stratified sample pattern"));
-    f.nest(&MultisampleOptions::bias);
-  }
-};
 
 namespace {
 
@@ -117,13 +102,16 @@ class MultisampleTechnique final : public ShadowTechnique {
   std::vector<float> weights_;
 };
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const MultisampleOptions& o) {
+  return std::make_unique<MultisampleTechnique>(o);
+}
+
 TechniqueInfo multisampleTechniqueInfo() {
   TechniqueInfo info;
   info.name = "multisample";
   info.summary = "N hard shadow maps from N stratified light samples, averaged";
   info.source = "baseline (Lawlor 2006's \"16 samples\" row)";
-  info.setOptions<MultisampleOptions>(
-      [](const MultisampleOptions& o) { return std::make_unique<MultisampleTechnique>(o); });
+  info.setOptions<MultisampleOptions>([](const MultisampleOptions& o) { return makeTechnique(o); });
   return info;
 }
 

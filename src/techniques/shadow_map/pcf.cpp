@@ -16,22 +16,10 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/shadow_map.h"
 #include "shadow_map.h"
 
 namespace penumbra {
-
-struct PcfOptions {
-  LightMapOptions lightMap;  //!< the light map: size and fit
-  int kernel = 3;            //!< width of the box kernel in texels, odd
-  DepthBias bias;            //!< depth-compare bias (shadow_map.h)
-
-  static void describe(OptionFields<PcfOptions>& f) {
-    f.nest(&PcfOptions::lightMap);
-    f.add(&PcfOptions::kernel, OptionDecl("kernel").range(1, 63).unit("texels").help(
-                                   "width of the box kernel (odd); border texels weigh their covered fraction"));
-    f.nest(&PcfOptions::bias);
-  }
-};
 
 class PcfTechnique final : public ShadowTechnique {
  public:
@@ -61,12 +49,14 @@ class PcfTechnique final : public ShadowTechnique {
   LightMap map_;
 };
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const PcfOptions& o) { return std::make_unique<PcfTechnique>(o); }
+
 TechniqueInfo pcfTechniqueInfo() {
   TechniqueInfo info;
   info.name = "pcf";
   info.summary = "percentage-closer filtering of the shadow-map compare over a fixed box kernel";
   info.source = "Reeves, Salesin, Cook 1987 (baseline)";
-  info.setOptions<PcfOptions>([](const PcfOptions& o) { return std::make_unique<PcfTechnique>(o); });
+  info.setOptions<PcfOptions>([](const PcfOptions& o) { return makeTechnique(o); });
   return info;
 }
 

@@ -54,51 +54,10 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/shadow_map.h"
 #include "shadow_map.h"
 
 namespace penumbra {
-
-struct PcssOptions {
-  LightMapOptions lightMap;        //!< the light map: size and fit
-  int blockerSamples = 16;         //!< taps of the blocker search
-  int filterSamples = 32;          //!< taps of the PCF filter
-  std::optional<float> lightSize;  //!< light radius, world units (directional: tan of the half angle); empty =
-                                   //!< Light::extent() (segment, rect: as the map sees it, file comment)
-  bool rotate = true;              //!< rotate the sample disks per pixel by a hash
-  float bilinearMaxRadius = 4.0f;  //!< filter radius, texels, up to which taps are bilinear (wider: nearest texel)
-  DepthBias bias;                  //!< depth-compare bias (shadow_map.h)
-
-  static void describe(OptionFields<PcssOptions>& f) {
-    f.nest(&PcssOptions::lightMap);
-    f.add(&PcssOptions::blockerSamples,
-          OptionDecl("blocker_samples").range(1, 1024).unit("samples").help("taps of the blocker search (Vogel disk)"));
-    f.add(&PcssOptions::filterSamples,
-          OptionDecl("filter_samples")
-              .range(1, 1024)
-              .unit("samples")
-              .help("taps of the PCF filter (Vogel disk; bilinear compares up to bilinear_max_radius)"));
-    f.add(
-        &PcssOptions::lightSize,
-        OptionDecl("light_size")
-            .range(1e-6, 1e6)
-            .unit("world units")
-            .help(
-                "light radius (directional: tan of half the angular diameter); auto = the light's extent (segment: its "
-                "half-length, rect: its larger half-diagonal, both foreshortened as the map sees them); a search or "
-                "filter radius wider than the map is clamped to the map's size (stat frac_clamped_to_map)"));
-    f.add(
-        &PcssOptions::rotate,
-        OptionDecl("rotate").help("rotate the sample disks per pixel by a hash (noise instead of banding); segment and "
-                                  "rect lights keep their orientation"));
-    f.add(&PcssOptions::bilinearMaxRadius,
-          OptionDecl("bilinear_max_radius")
-              .range(0, kMaxShadowMapSize)
-              .unit("texels")
-              .help("filter radius up to which each filter tap is a bilinear 2x2 compare; wider filters use one "
-                    "nearest-texel compare per tap (8192: always bilinear)"));
-    f.nest(&PcssOptions::bias);
-  }
-};
 
 class PcssTechnique final : public ShadowTechnique {
  public:
@@ -259,12 +218,14 @@ class PcssTechnique final : public ShadowTechnique {
   std::array<double, kPathCount + 1> pathFractions_{};
 };
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const PcssOptions& o) { return std::make_unique<PcssTechnique>(o); }
+
 TechniqueInfo pcssTechniqueInfo() {
   TechniqueInfo info;
   info.name = "pcss";
   info.summary = "percentage-closer soft shadows: blocker search, penumbra width by similar triangles, PCF";
   info.source = "Fernando 2005 (modern baseline)";
-  info.setOptions<PcssOptions>([](const PcssOptions& o) { return std::make_unique<PcssTechnique>(o); });
+  info.setOptions<PcssOptions>([](const PcssOptions& o) { return makeTechnique(o); });
   return info;
 }
 

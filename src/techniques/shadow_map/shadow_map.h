@@ -48,53 +48,12 @@
 #include "penumbra/raster.h"
 #include "penumbra/sampling.h"
 #include "penumbra/scene.h"
+#include "penumbra/techniques/shadow_map.h"
 
 namespace penumbra {
 
-inline constexpr int kMinShadowMapSize = 16;
-inline constexpr int kMaxShadowMapSize = 8192;
 // Receiver-plane slope limit, in texel sizes of depth per texel (tan 84 degrees ~ 9.5).
 inline constexpr float kMaxDepthSlope = 10.0f;
-
-// Depth bias of the compare (see the file comment); every shadow-map technique nests it in its
-// options, so bias_constant and bias_slope read the same everywhere.
-struct DepthBias {
-  float constantTexels = 0.5f;  //!< in texel sizes at the receiver's depth (world size of one texel)
-  float slope = 1.0f;           //!< multiplies the receiver plane's depth change per texel
-
-  static void describe(OptionFields<DepthBias>& f) {
-    f.add(&DepthBias::constantTexels,
-          OptionDecl("bias_constant")
-              .range(0, 64)
-              .unit("texels")
-              .help("constant depth bias, in world sizes of one texel at the receiver's depth"));
-    f.add(&DepthBias::slope, OptionDecl("bias_slope")
-                                 .range(0, 64)
-                                 .help("slope-scaled depth bias: multiplies the receiver's depth change per texel"));
-  }
-};
-
-// The light map every light-map technique renders: its size and how it is fitted to the scene
-// (renderLightMap). Every light-map technique nests it in its options, so map_size and map_fit read
-// the same everywhere.
-struct LightMapOptions {
-  int size = 1024;                       //!< texels per side
-  LightMapFit fit = LightMapFit::Tight;  //!< how the map is fitted each frame (raster.h)
-
-  static void describe(OptionFields<LightMapOptions>& f) {
-    f.add(&LightMapOptions::size, OptionDecl("map_size")
-                                      .range(kMinShadowMapSize, kMaxShadowMapSize)
-                                      .unit("texels")
-                                      .help("width and height of the square light-space depth map"));
-    f.add(&LightMapOptions::fit,
-          OptionDecl("map_fit").help(
-              "how the light map is fitted to the scene each frame: tight (refitted from the light's centre: finest "
-              "texels, the grid moves with the light) or stable (quantized axis and extent, origin snapped to whole "
-              "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
-              "plus what the quantized axis's tilt costs)"),
-          {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}});
-  }
-};
 
 // The light-space depth + object-id map of `light` seen from its centre sample (renderLightMap).
 // Throws Error if the size is outside [kMinShadowMapSize, kMaxShadowMapSize].

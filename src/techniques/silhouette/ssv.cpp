@@ -108,6 +108,7 @@
 // Parameters: integration ("slicing" | "8x8" | "16x16"), merge_tolerance (fraction of the light's
 // side, [0, 0.25], default 0.01), grid (cells per side of the light-space binning grid, default 64),
 // edge_visibility ("linear" | "area").
+#include "penumbra/techniques/silhouette.h"
 #include "techniques/silhouette/stages.h"
 
 #include <algorithm>
@@ -130,39 +131,7 @@ namespace {
 
 using namespace silhouette;
 
-enum class Integration { Slicing, Fixed8, Fixed16 };
-
-struct SsvOptions {
-  Integration integration = Integration::Slicing;
-  float mergeTolerance = 0.01f;     //!< slicing: cuts closer than this (fraction of the light's side) merge
-  int grid = 64;                    //!< cells per side of the light-space binning grid
-  bool areaEdgeVisibility = false;  //!< per edge, the exact light area past its line instead of the linear ramp
-
-  static void describe(OptionFields<SsvOptions>& f) {
-    f.add(&SsvOptions::integration,
-          OptionDecl("integration")
-              .help("visible fraction from the visibility curves: slicing (variable "
-                    "quantization, Section 3.2.4.4) or fixed 8x8 / 16x16 sampling (Fig. 4-8)"),
-          {{"slicing", Integration::Slicing}, {"8x8", Integration::Fixed8}, {"16x16", Integration::Fixed16}});
-    f.add(&SsvOptions::mergeTolerance,
-          OptionDecl("merge_tolerance")
-              .range(0, 0.25)
-              .unit("fraction of the light's side")
-              .help("slicing: two cut coordinates closer than this count as one (0.01 in the thesis, Section 4.2.6)"));
-    f.add(&SsvOptions::grid,
-          OptionDecl("grid")
-              .range(1, 1024)
-              .unit("cells per side")
-              .help("resolution of the light-space (direction from the light's centre) grid that bins the "
-                    "edge shadows"));
-    f.add(&SsvOptions::areaEdgeVisibility,
-          OptionDecl("edge_visibility")
-              .help("visible fraction past one edge shadow: linear between its front and "
-                    "back planes (the thesis, Section 3.3) or the exact area of the light "
-                    "past the edge's line"),
-          {{"linear", false}, {"area", true}});
-  }
-};
+using Integration = SsvIntegration;  // include/penumbra/techniques/silhouette.h
 
 constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping plane (no silhouette edge)
 
@@ -1002,6 +971,11 @@ class SsvTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const SsvOptions& o) {
+  // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
+  return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
+}
+
 TechniqueInfo ssvTechniqueInfo() {
   TechniqueInfo info;
   info.name = "ssv";
@@ -1009,10 +983,7 @@ TechniqueInfo ssvTechniqueInfo() {
       "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its "
       "fewest convex parts)";
   info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
-  info.setOptions<SsvOptions>([](const SsvOptions& o) {
-    // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
-    return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
-  });
+  info.setOptions<SsvOptions>([](const SsvOptions& o) { return makeTechnique(o); });
   return info;
 }
 

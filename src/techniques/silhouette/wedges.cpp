@@ -56,6 +56,7 @@
 
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
+#include "penumbra/techniques/silhouette.h"
 #include "rt/ray_scene.h"
 #include "rt/shadow_ray.h"
 #include "techniques/silhouette/convex_parts.h"
@@ -110,19 +111,6 @@ struct Side {
   std::vector<WedgeRing> rings;
   UGrid grid;
   bool binned = false;
-};
-
-struct WedgesOptions {
-  int grid = 64;  //!< cells per side of the light-space binning grid
-
-  static void describe(OptionFields<WedgesOptions>& f) {
-    f.add(&WedgesOptions::grid,
-          OptionDecl("grid")
-              .range(1, 1024)
-              .unit("cells per side")
-              .help("resolution of the light-space (direction from the light's centre) grid that bins "
-                    "the silhouette rings"));
-  }
 };
 
 class WedgesTechnique final : public ShadowTechnique {
@@ -327,6 +315,11 @@ class WedgesTechnique final : public ShadowTechnique {
 
 }  // namespace
 
+std::unique_ptr<ShadowTechnique> makeTechnique(const WedgesOptions& o) {
+  // A concave light runs as its convex parts, V combined by area (convex_parts.h).
+  return overConvexParts("wedges", [o] { return std::make_unique<WedgesTechnique>(o); });
+}
+
 TechniqueInfo wedgesTechniqueInfo() {
   TechniqueInfo info;
   info.name = "wedges";
@@ -334,10 +327,7 @@ TechniqueInfo wedgesTechniqueInfo() {
       "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a "
       "concave polygonal light in its fewest convex parts)";
   info.source = "baseline in Rouf 2007 (Assarsson & Akenine-Moeller 2003)";
-  info.setOptions<WedgesOptions>([](const WedgesOptions& o) {
-    // A concave light runs as its convex parts, V combined by area (convex_parts.h).
-    return overConvexParts("wedges", [o] { return std::make_unique<WedgesTechnique>(o); });
-  });
+  info.setOptions<WedgesOptions>([](const WedgesOptions& o) { return makeTechnique(o); });
   return info;
 }
 

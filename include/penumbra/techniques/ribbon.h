@@ -1,0 +1,73 @@
+// The silhouette-ribbon family's typed options and factories (docs/techniques.md): plm (Lawlor 2006),
+// smoothies (Chan & Durand 2003) and kirsch (Kirsch & Döllner 2003) as rows of Lawlor's table. See
+// shadow_map.h of this folder for how options and factories are used.
+#pragma once
+
+#include <memory>
+
+#include "penumbra/options.h"
+#include "penumbra/technique.h"
+#include "penumbra/techniques/shadow_map.h"
+
+namespace penumbra {
+
+// Parameters shared by the ribbon techniques (plm, smoothies, kirsch), declared once (options.h).
+inline OptionDecl ribbonMarginOption() {
+  return OptionDecl("margin").range(0, 64).unit("texels").help(
+      "added to every silhouette ribbon's half-width, so bilinear lookups near a penumbra read one ribbon");
+}
+inline OptionDecl illuminationTableOption() {
+  return OptionDecl("illumination_table")
+      .help(
+          "map the visible fraction of the light's diameter to illumination with Lawlor's Appendix A table for the "
+          "light's profile (disk lights; identity for rect, polygon)");
+}
+
+struct PlmOptions {
+  LightMapOptions lightMap;       //!< the light map g: size and fit
+  DepthBias bias;                 //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;      //!< added to every ribbon's half-width
+  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
+
+  static void describe(OptionFields<PlmOptions>& f) {
+    f.nest(&PlmOptions::lightMap);
+    f.nest(&PlmOptions::bias);
+    f.add(&PlmOptions::marginTexels, ribbonMarginOption());
+    f.add(&PlmOptions::illuminationTable, illuminationTableOption());
+  }
+};
+
+struct SmoothiesOptions {
+  LightMapOptions lightMap;   //!< the light map: size and fit
+  DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every smoothie's width
+  bool illuminationTable = true;
+
+  static void describe(OptionFields<SmoothiesOptions>& f) {
+    f.nest(&SmoothiesOptions::lightMap);
+    f.nest(&SmoothiesOptions::bias);
+    f.add(&SmoothiesOptions::marginTexels, ribbonMarginOption());
+    f.add(&SmoothiesOptions::illuminationTable, illuminationTableOption());
+  }
+};
+
+struct KirschOptions {
+  LightMapOptions lightMap;   //!< the light map: size and fit
+  DepthBias bias;             //!< of the hard compare (shadow_map.h)
+  float marginTexels = 2.0f;  //!< added to every ribbon's width
+  bool illuminationTable = true;
+
+  static void describe(OptionFields<KirschOptions>& f) {
+    f.nest(&KirschOptions::lightMap);
+    f.nest(&KirschOptions::bias);
+    f.add(&KirschOptions::marginTexels, ribbonMarginOption());
+    f.add(&KirschOptions::illuminationTable, illuminationTableOption());
+  }
+};
+
+// The technique made from its options (the registry makes the same from parameters by name).
+std::unique_ptr<ShadowTechnique> makeTechnique(const PlmOptions& options);        // plm
+std::unique_ptr<ShadowTechnique> makeTechnique(const SmoothiesOptions& options);  // smoothies
+std::unique_ptr<ShadowTechnique> makeTechnique(const KirschOptions& options);     // kirsch
+
+}  // namespace penumbra
