@@ -121,10 +121,12 @@ struct TechniqueRun {
   Params params;
   Image<float> v;
   PassTimings timings;
+  double firstFrameMs = 0.0;  //!< prepare + visibility of the first run
   std::vector<std::pair<std::string, double>> stats;
 };
 // Builds the technique from `given` and runs prepare + visibility `repeat` times (timings: median of
-// each pass over the repeats; V and stats: the last run). With `instance`, the technique object is
+// each pass over the runs after the first when there are several, the first run alone otherwise;
+// firstFrameMs: the first run's total; V and stats: the last run). With `instance`, the technique object is
 // kept there and the next call with it reuses it instead of building another (a sequence's frames,
 // where a frame's prepare may reuse what the previous one built, as a renderer's would); `given`
 // must then be the same at every call.
