@@ -231,7 +231,9 @@ TEST(LightMap, StableFitHoldsTheSceneAtEveryFrameOfALongPath) {
       const LightMap m = renderLightMap(scene, light, size, LightMapFit::Stable);
       expectCornersInside(scene, m);
       // The origin is at most half a lattice diagonal from the centre sample: a texel at the scene.
-      if (!light.isDirectional()) EXPECT_LT(glm::distance(m.wsOrigin, light.center()), m.texelWorldSize(m.zFar));
+      if (!light.isDirectional()) {
+        EXPECT_LT(glm::distance(m.wsOrigin, light.center()), m.texelWorldSize(m.zFar));
+      }
     }
     ++frame;
   }

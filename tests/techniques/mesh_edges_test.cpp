@@ -63,7 +63,9 @@ TEST(MeshEdges, ClosedMeshEdgesAreUsedTwiceInOppositeDirections) {
   ASSERT_GT(e.edgeCount(), 0u);
   for (size_t k = 0; k < e.edgeCount(); ++k) {
     ASSERT_LT(e.low[k], e.high[k]);
-    if (k > 0) EXPECT_TRUE(std::pair(e.low[k - 1], e.high[k - 1]) < std::pair(e.low[k], e.high[k]));
+    if (k > 0) {
+      EXPECT_TRUE(std::pair(e.low[k - 1], e.high[k - 1]) < std::pair(e.low[k], e.high[k]));
+    }
     ASSERT_EQ(e.firstUse[k + 1] - e.firstUse[k], 2u);
     const auto from = [&](uint32_t u) { return e.weld[m.triangles[e.useTriangle[u]][e.useCorner[u]]]; };
     EXPECT_NE(from(e.firstUse[k]), from(e.firstUse[k] + 1));

@@ -426,7 +426,9 @@ TEST(Reference, PixelsSharingAPacketGetTheirOwnV) {
         EXPECT_EQ(std::memcmp(&fullError(x, y), &reference.standardError()(x, y), sizeof(float)), 0) << "spp " << spp;
       }
     EXPECT_GT(compared, 100);
-    if (spp > 1) EXPECT_GT(penumbra, 5) << "spp " << spp;
+    if (spp > 1) {
+      EXPECT_GT(penumbra, 5) << "spp " << spp;
+    }
   }
 }
 

@@ -169,7 +169,9 @@ TEST(Registry, EveryTechniqueEstimatesItsCost) {
           << info.name << ": a map of 2048^2 holds 4x the texels of 1024^2";
       EXPECT_NE(big.drivers.find("map_size=2048"), std::string::npos) << info.name << ": " << big.drivers;
     }
-    if (e.rays > 0.0) EXPECT_GE(info.estimate(defaults, 128, 32).rays, 2.0 * e.rays - 1e-9) << info.name;
+    if (e.rays > 0.0) {
+      EXPECT_GE(info.estimate(defaults, 128, 32).rays, 2.0 * e.rays - 1e-9) << info.name;
+    }
   }
   const TechniqueInfo& reference = findTechnique("reference");
   EXPECT_EQ(reference.estimate(resolveParams("reference", reference.params, {}), 64, 32).rays, 64.0 * 32.0 * 256.0);

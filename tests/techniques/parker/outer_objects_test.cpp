@@ -202,7 +202,9 @@ void expectOracle(const Light& light, float diameter, double bScaleTimesDistance
     rt::OuterObjects::Seeds seeds;
     const std::vector<float> seededSorted = attenuations(outer, sorted, combine, &seeds);
     for (size_t k = 0; k < order.size(); ++k) EXPECT_EQ(seededSorted[k], sortedS[k]);
-    if (combine == rt::OuterCombine::Min) EXPECT_EQ(seeds.owner, &outer);
+    if (combine == rt::OuterCombine::Min) {
+      EXPECT_EQ(seeds.owner, &outer);
+    }
     const std::vector<float> seededScattered = attenuations(outer, t, combine, &seeds);
     for (size_t i = 0; i < s.size(); ++i) EXPECT_EQ(seededScattered[i], s[i]);
     rt::OuterObjects::Seeds stale{&outer, 1, {}};
