@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <mutex>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -30,8 +31,10 @@ namespace {
 // A numpy view of `image` (rows, columns[, channels] of T), owned by a capsule that deletes it.
 template <class T>
 py::array ownedArray(Image<T>&& image, int channels = 1) {
-  auto* owned = new Image<T>(std::move(image));
+  auto held = std::make_unique<Image<T>>(std::move(image));
+  Image<T>* owned = held.get();
   py::capsule free(owned, [](void* p) { delete static_cast<Image<T>*>(p); });
+  held.release();  // the capsule owns it now
   const auto h = static_cast<py::ssize_t>(owned->height()), w = static_cast<py::ssize_t>(owned->width());
   if constexpr (std::is_arithmetic_v<T>) {
     return py::array_t<T>({h, w}, owned->data(), free);
@@ -81,26 +84,21 @@ py::object paramValue(const ParamValue& value) {
   return std::visit([](const auto& v) -> py::object { return py::cast(v); }, value);
 }
 
-// A technique made by name, as the CLI makes it: parameters validated against its schema, the ones the
-// scene file gives for it applied under the caller's.
+// A technique made by name, as the CLI makes it: parameters validated against its schema when it is
+// made, the ones the scene file gives for it applied under the caller's. One thread at a time uses
+// it: the passes run without the GIL, under the technique's own lock, so a second thread waits.
 class Technique {
  public:
   Technique(std::string name, const py::dict& params) : name_(std::move(name)) {
-    findTechnique(name_);  // an unknown name fails here, listing the known ones
-    for (const auto& [key, value] : params) {
-      const std::string k = py::str(key);
-      if (py::isinstance<py::bool_>(value))
-        given_.set(k, value.cast<bool>(), "Python");
-      else if (py::isinstance<py::int_>(value))
-        given_.set(k, value.cast<int64_t>(), "Python");
-      else if (py::isinstance<py::float_>(value))
-        given_.set(k, value.cast<double>(), "Python");
-      else
-        given_.set(k, std::string(py::str(value)), "Python");
-    }
+    const TechniqueInfo& info = findTechnique(name_);  // an unknown name fails here, listing the known ones
+    for (const auto& [key, value] : params) given_.set(py::str(key), paramValueOf(value), "Python");
+    resolveParams(name_, info.params, given_);  // a bad value fails here, with the CLI's message
   }
 
   void prepare(const Scene& scene, int light) {
+    const Light& l = lightOf(scene, light);
+    py::gil_scoped_release release;
+    std::lock_guard lock(mutex_);
     // One instance while the scene file is the same, so that what a technique keeps between frames
     // (BVHs, edge adjacency, its buffers) is kept, as in `penumbra bench`.
     if (!technique_ || preparedFor_ != scene.source) {
@@ -110,47 +108,74 @@ class Technique {
       technique_ = createTechnique(name_, merged);
       preparedFor_ = scene.source;
     }
-    const Light& l = lightOf(scene, light);
-    py::gil_scoped_release release;
     technique_->prepare(scene, l);
   }
 
   py::array visibility(const GBuffer& gbuffer) {
-    if (!technique_) throw Error(name_ + ": visibility() called before prepare(scene, light)");
     Image<float> v;
     {
       py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      if (!technique_) throw Error(name_ + ": visibility() called before prepare(scene, light)");
       technique_->visibility(gbuffer, v);
     }
     return ownedArray(std::move(v));
   }
 
-  py::object standardError() const {
-    const auto* reference = dynamic_cast<const ReferenceTechnique*>(technique_.get());
-    if (!reference) return py::none();
-    Image<float> copy = reference->standardError();
+  py::object standardError() {
+    Image<float> copy;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      const auto* reference = dynamic_cast<const ReferenceTechnique*>(technique_.get());
+      if (!reference) return py::none();
+      copy = reference->standardError();
+    }
     return ownedArray(std::move(copy));
   }
 
-  py::dict stats() const {
+  py::dict stats() {
+    std::vector<std::pair<std::string, double>> values;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      if (technique_) values = technique_->stats();
+    }
     py::dict d;
-    if (technique_)
-      for (const auto& [key, value] : technique_->stats()) d[py::str(key)] = value;
+    for (const auto& [key, value] : values) d[py::str(key)] = value;
     return d;
   }
 
-  py::dict timings() const {
+  py::dict timings() {
+    PassTimings values;
+    {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      if (technique_) values = technique_->timings();
+    }
     py::dict d;
-    if (technique_)
-      for (const auto& [pass, ms] : technique_->timings().passes) d[py::str(pass)] = ms;
+    for (const auto& [pass, ms] : values.passes) d[py::str(pass)] = ms;
     return d;
   }
 
   const std::string& name() const { return name_; }
 
  private:
+  // A keyword argument's value as a parameter value: bools (numpy's too), integers and floats by their
+  // Python protocols (numpy scalars included), None as "auto", anything else by its text.
+  static ParamValue paramValueOf(const py::handle& value) {
+    if (value.is_none()) return std::string("auto");
+    if (py::isinstance<py::bool_>(value) ||
+        py::str(py::type::of(value).attr("__name__")).cast<std::string>() == "bool_")
+      return value.cast<bool>();
+    if (py::hasattr(value, "__index__")) return value.attr("__index__")().cast<int64_t>();
+    if (py::isinstance<py::float_>(value) || py::hasattr(value, "__float__")) return value.cast<double>();
+    return std::string(py::str(value));
+  }
+
   std::string name_;
   ParamSet given_;
+  std::mutex mutex_;  //!< held, without the GIL, while technique_ is used
   std::unique_ptr<ShadowTechnique> technique_;
   std::string preparedFor_;  //!< the source of the scene technique_ was made for
 };
@@ -261,7 +286,9 @@ PYBIND11_MODULE(_penumbra, m) {
       py::arg("scene"), py::arg("width"), py::arg("height"), "Rasterizes the scene's camera view");
 
   py::class_<Technique>(m, "Technique", "A technique by name with parameters (techniques() lists them)")
-      .def(py::init([](const std::string& name, const py::kwargs& params) { return Technique(name, params); }),
+      .def(py::init([](const std::string& name, const py::kwargs& params) {
+             return std::make_unique<Technique>(name, params);
+           }),
            py::arg("name"))
       .def_property_readonly("name", &Technique::name)
       .def("prepare", &Technique::prepare, py::arg("scene"), py::arg("light") = 0,

@@ -83,16 +83,16 @@ int main() {
         penumbra::Light::disk(penumbra::Vec3(-0.5f, 4.0f, 0.5f), penumbra::Vec3(0, -1, 0), 0.6f);
     const int width = 320, height = 240;  // any size
 
-    // What the engine hands over: spans over its arrays, its G-buffer's pointers.
+    // What the engine hands over: spans over its arrays.
     std::vector<penumbra::EngineMesh> meshes;
     for (const EngineObject& o : objects) meshes.push_back({o.id, o.positions, o.indices});
     const EngineFrame frame = renderEngineFrame(objects, camera, width, height);
     penumbra::EngineGBuffer buffers;
     buffers.width = width;
     buffers.height = height;
-    buffers.wsPosition = frame.position.data();
-    buffers.wsNormal = frame.normal.data();
-    buffers.objectId = frame.id.data();
+    buffers.wsPosition = frame.position;
+    buffers.wsNormal = frame.normal;
+    buffers.objectId = frame.id;
 
     const penumbra::Scene scene = penumbra::makeScene(meshes, camera, light);
     const penumbra::GBuffer gbuffer = penumbra::makeGBuffer(buffers, camera, meshes);

@@ -20,14 +20,14 @@
 
 namespace penumbra {
 
-// The engine's G-buffer.
+// The engine's G-buffer: spans of width x height pixels (three floats a pixel for the vectors).
 struct EngineGBuffer {
   int width = 0, height = 0;
-  const float* wsPosition = nullptr;         //!< xyz per pixel, world units
-  const float* wsNormal = nullptr;           //!< xyz per pixel, shading normal (any length; made unit)
-  const int32_t* objectId = nullptr;         //!< per pixel: the id of the EngineMesh seen, kNoObject (-1) if none
-  const float* csDepth = nullptr;            //!< optional: view depth per pixel; else from wsPosition and the camera
-  const float* wsGeometricNormal = nullptr;  //!< optional: face normal per pixel; else the shading normal
+  std::span<const float> wsPosition;         //!< xyz per pixel, world units
+  std::span<const float> wsNormal;           //!< xyz per pixel, shading normal (any length; made unit)
+  std::span<const int32_t> objectId;         //!< per pixel: the id of the EngineMesh seen, kNoObject (-1) if none
+  std::span<const float> csDepth;            //!< optional (empty): view depth per pixel; else from the camera
+  std::span<const float> wsGeometricNormal;  //!< optional (empty): face normal per pixel; else the shading normal
 };
 
 // One of the engine's meshes, in world space: an occluder, and a receiver where its id is in the
@@ -44,8 +44,9 @@ Scene makeScene(const std::vector<EngineMesh>& meshes, const Camera& camera, con
 
 // penumbra's G-buffer from the engine's. Normals are made unit and turned towards the camera, as
 // penumbra's own G-buffer has them. Throws Error naming the buffer, the pixel and what was expected:
-// a missing buffer, a size outside [1, 16384], an id that is no mesh's, a position or normal that is
-// not finite (or a zero normal) where the pixel sees something.
+// a buffer missing or of the wrong length, a size outside [1, 16384], an id that is no mesh's, a
+// position, normal or depth that is not finite (a zero normal, a depth not above 0) where the pixel
+// sees something.
 GBuffer makeGBuffer(const EngineGBuffer& buffers, const Camera& camera, const std::vector<EngineMesh>& meshes);
 
 }  // namespace penumbra

@@ -199,4 +199,16 @@ Options optionsFromParams(const Params& params) {
   return options;
 }
 
+// Checks every member of `options` against its declaration (range, choices) exactly as the registry
+// checks parameters given by name (resolveParams): throws Error naming the technique and the parameter.
+// The typed factories (makeTechnique) call it, so a struct filled by hand is held to the same ranges.
+template <class Options>
+void validateOptions(const std::string& technique, const Options& options) {
+  ParamSet given;
+  for (const auto& field : optionFields<Options>().fields())
+    if (const std::optional<ParamValue> value = field.value(options))
+      given.set(field.spec.name, *value, "the options struct");
+  resolveParams(technique, paramSchema<Options>(), given);
+}
+
 }  // namespace penumbra

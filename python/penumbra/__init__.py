@@ -33,11 +33,17 @@ def compare(scene, techniques=None, out="out", width=None, height=None, spp=None
             cache_dir=None):
     """Runs `penumbra compare` in this process and returns its compare.json as a dict.
 
+    `scene` is a built-in name, a scene file or a loaded Scene; `techniques` one name or a list.
+
     The report (index.html, compare.md, compare.json, images) goes to OUT/report, as the command
     writes it; `params` maps "technique.key" (or "*.key") to a value. A technique named in
     `techniques` that cannot run on the scene keeps its row with the reason, and the exit status the
     command would return is in the result as "exit_status".
     """
+    if isinstance(scene, Scene):  # the name it was loaded by: a built-in's, or its file
+        scene = scene.name if scene.source.startswith("built-in:") else scene.source
+    if isinstance(techniques, str):
+        techniques = [techniques]
     args = ["compare", "--scene", str(scene), "--out", str(out), "--light", str(light)]
     if techniques:
         args += ["--techniques", ",".join(techniques)]

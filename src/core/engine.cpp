@@ -54,11 +54,20 @@ Scene makeScene(const std::vector<EngineMesh>& meshes, const Camera& camera, con
 
 GBuffer makeGBuffer(const EngineGBuffer& b, const Camera& camera, const std::vector<EngineMesh>& meshes) {
   checkImageSize(b.width, b.height, "engine G-buffer");
-  if (!b.wsPosition || !b.wsNormal || !b.objectId)
-    fail("engine G-buffer: {} is missing: expected world positions, shading normals and object ids",
-         !b.wsPosition ? "wsPosition"
-         : !b.wsNormal ? "wsNormal"
-                       : "objectId");
+  const size_t pixels = static_cast<size_t>(b.width) * b.height;
+  auto checkLength = [&](const char* name, size_t length, size_t perPixel, bool optional) {
+    if (optional && length == 0) return;
+    if (length == 0)
+      fail("engine G-buffer: {} is missing: expected world positions, shading normals and object ids", name);
+    if (length != pixels * perPixel)
+      fail("engine G-buffer: {} holds {} values: expected {} ({} x {} pixels, {} a pixel)", name, length,
+           pixels * perPixel, b.width, b.height, perPixel);
+  };
+  checkLength("wsPosition", b.wsPosition.size(), 3, false);
+  checkLength("wsNormal", b.wsNormal.size(), 3, false);
+  checkLength("objectId", b.objectId.size(), 1, false);
+  checkLength("csDepth", b.csDepth.size(), 1, true);
+  checkLength("wsGeometricNormal", b.wsGeometricNormal.size(), 3, true);
   camera.validate();
   std::set<int32_t> ids;
   for (const EngineMesh& m : meshes) ids.insert(m.id);
@@ -92,12 +101,18 @@ GBuffer makeGBuffer(const EngineGBuffer& b, const Camera& camera, const std::vec
             x, y, id);
       g.objectId(x, y) = id;
       g.wsPosition(x, y) = p;
-      g.wsNormal(x, y) = unitTowardsCamera(b.wsNormal + 3 * i, p, x, y, "wsNormal");
-      g.wsGeometricNormal(x, y) = b.wsGeometricNormal
-                                      ? unitTowardsCamera(b.wsGeometricNormal + 3 * i, p, x, y, "wsGeometricNormal")
-                                      : g.wsNormal(x, y);
+      g.wsNormal(x, y) = unitTowardsCamera(b.wsNormal.data() + 3 * i, p, x, y, "wsNormal");
+      g.wsGeometricNormal(x, y) = b.wsGeometricNormal.empty() ? g.wsNormal(x, y)
+                                                              : unitTowardsCamera(b.wsGeometricNormal.data() + 3 * i, p,
+                                                                                  x, y, "wsGeometricNormal");
       g.triangleId(x, y) = -1;  // not known from the engine's buffers; no technique needs it
-      g.csDepth(x, y) = b.csDepth ? b.csDepth[i] : -(cameraFromWs * Vec4(p, 1.0f)).z;
+      const float depth = b.csDepth.empty() ? -(cameraFromWs * Vec4(p, 1.0f)).z : b.csDepth[i];
+      if (!std::isfinite(depth) || !(depth > 0.0f))
+        fail(
+            "engine G-buffer: {} at pixel ({}, {}) is {}: expected a finite view depth above 0 (in front of the "
+            "camera)",
+            b.csDepth.empty() ? "the view depth of wsPosition" : "csDepth", x, y, depth);
+      g.csDepth(x, y) = depth;
     }
   return g;
 }

@@ -207,6 +207,8 @@ std::vector<std::pair<std::string, double>> ReferenceTechnique::stats() const {
 }
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const ReferenceOptions& o) {
+  validateOptions("reference", o);
+
   return std::make_unique<ReferenceTechnique>(o);
 }
 

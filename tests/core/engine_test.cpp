@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -59,12 +60,12 @@ TEST(Engine, ArraysAndBackAreTheGBufferAndTheVOfPenumbrasOwn) {
   std::vector<float> gn;
   for (const Vec3& v : own.wsGeometricNormal) gn.insert(gn.end(), {v.x, v.y, v.z});
   EngineGBuffer buffers;
-  buffers.wsGeometricNormal = gn.data();
+  buffers.wsGeometricNormal = gn;
   buffers.width = own.width();
   buffers.height = own.height();
-  buffers.wsPosition = p.data();
-  buffers.wsNormal = n.data();
-  buffers.objectId = own.objectId.data();
+  buffers.wsPosition = p;
+  buffers.wsNormal = n;
+  buffers.objectId = std::span<const int32_t>(own.objectId.data(), own.objectId.size());
   const GBuffer g = makeGBuffer(buffers, original.camera, meshes);
   size_t hits = 0;
   for (int y = 0; y < own.height(); ++y)
@@ -102,7 +103,7 @@ TEST(Engine, NormalsTurnTowardsTheCamera) {
   std::vector<float> p, n;
   for (const Vec3& v : own.wsPosition) p.insert(p.end(), {v.x, v.y, v.z});
   for (const Vec3& v : own.wsNormal) n.insert(n.end(), {-v.x, -v.y, -v.z});  // facing away
-  EngineGBuffer buffers{32, 32, p.data(), n.data(), own.objectId.data()};
+  EngineGBuffer buffers{32, 32, p, n, std::span<const int32_t>(own.objectId.data(), own.objectId.size())};
   const GBuffer g = makeGBuffer(buffers, original.camera, meshes);
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x)
@@ -135,7 +136,7 @@ TEST(Engine, BadMeshesAndBuffersAreRefusedByName) {
   const std::vector<EngineMesh> meshes = {{0, tri, ok}};
   std::vector<float> p = {0.2f, 0.0f, 0.2f}, n = {0.0f, 1.0f, 0.0f};
   std::vector<int32_t> id = {0};
-  EngineGBuffer b{1, 1, p.data(), n.data(), id.data()};
+  EngineGBuffer b{1, 1, p, n, id};
   EXPECT_NO_THROW(makeGBuffer(b, camera, meshes));
   id[0] = 7;
   EXPECT_NE(messageOf([&] {
@@ -149,9 +150,19 @@ TEST(Engine, BadMeshesAndBuffersAreRefusedByName) {
   p[1] = std::numeric_limits<float>::infinity();
   EXPECT_NE(messageOf([&] { makeGBuffer(b, camera, meshes); }).find("wsPosition at pixel (0, 0) is not finite"),
             std::string::npos);
-  b.wsNormal = nullptr;
+  p[1] = 0.0f;
+  const std::vector<float> behind = {-1.0f};
+  b.csDepth = behind;
+  EXPECT_NE(messageOf([&] { makeGBuffer(b, camera, meshes); }).find("csDepth at pixel (0, 0) is -1"),
+            std::string::npos);
+  b.csDepth = {};
+  b.wsNormal = {};
   EXPECT_NE(messageOf([&] { makeGBuffer(b, camera, meshes); }).find("wsNormal is missing"), std::string::npos);
-  b.wsNormal = n.data();
+  const std::vector<float> shortNormals = {0.0f, 1.0f};
+  b.wsNormal = shortNormals;
+  EXPECT_NE(messageOf([&] { makeGBuffer(b, camera, meshes); }).find("wsNormal holds 2 values: expected 3"),
+            std::string::npos);
+  b.wsNormal = n;
   b.width = 0;
   EXPECT_NE(messageOf([&] { makeGBuffer(b, camera, meshes); }).find("engine G-buffer"), std::string::npos);
 }

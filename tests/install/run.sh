@@ -8,10 +8,14 @@ build=$1 source=$2 work=$3
 rm -rf "$work"
 mkdir -p "$work"
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
-# Nothing of the source tree may leak into the package: its headers come from the prefix alone.
-if grep -rq "$source" "$work/prefix/lib/cmake/penumbra"; then
+# The package (lib/ or a multiarch lib/<triplet>/). Nothing of the source tree may leak into it: its
+# headers come from the prefix alone.
+config=$(find "$work/prefix" -name penumbraConfig.cmake -print -quit)
+[ -n "$config" ] || { echo "install: no penumbraConfig.cmake in the prefix" >&2; exit 1; }
+package=$(dirname "$config")
+if grep -rq "$source" "$package"; then
   echo "install: the package names the source tree:" >&2
-  grep -rl "$source" "$work/prefix/lib/cmake/penumbra" >&2
+  grep -rl "$source" "$package" >&2
   exit 1
 fi
 for example in minimal engine; do

@@ -1,6 +1,7 @@
 """The Python module against independent evidence: the CLI's listings and compare.json, numpy's own
 arithmetic, the README's table, and its error messages. Run by ctest ('python') with
 PYTHONPATH=build/python, PENUMBRA_CLI (the program) and PENUMBRA_SOURCE_DIR set."""
+import gc
 import json
 import os
 import pathlib
@@ -55,6 +56,23 @@ def test_gbuffer_fields_are_read_only_views(torus):
     assert np.all(np.isinf(gbuffer.depth[~hit]))
 
 
+def test_views_outlive_their_gbuffer_and_parameters_convert():
+    scene = penumbra.load_scene("torus")
+    gbuffer = penumbra.render_gbuffer(scene, 40, 30)
+    position, expected = gbuffer.position, np.array(gbuffer.position)
+    del gbuffer
+    gc.collect()
+    assert np.array_equal(position, expected)  # the view kept its G-buffer alive
+    gbuffer = penumbra.render_gbuffer(scene, 40, 30)
+    a = penumbra.visibility("pcss", scene, gbuffer, map_size=np.int64(256), light_size=None)  # numpy int, "auto"
+    b = penumbra.visibility("pcss", scene, gbuffer, map_size=256)
+    assert np.array_equal(a, b)
+    c = penumbra.visibility("brabec", scene, gbuffer, coverage_bound=np.bool_(False), meet=np.float32(0.5))
+    assert c.shape == (30, 40)
+    with pytest.raises(penumbra.Error, match="map_size"):
+        penumbra.Technique("pcss", map_size=3)  # refused when made, not at prepare
+
+
 def test_rmse8_is_numpys_and_the_clis(torus, tmp_path):
     scene, gbuffer = torus
     v = penumbra.visibility("pcss", scene, gbuffer)
@@ -71,7 +89,7 @@ def test_rmse8_is_numpys_and_the_clis(torus, tmp_path):
     assert error["rmse8"] == pytest.approx(np.sqrt(np.mean(d * d)) * 255.0, rel=1e-6)
     assert error["mask_pixels"] == int(mask.sum())
     # The command-line tool's compare on the same pixels and reference: the same RMSE8.
-    result = penumbra.compare("torus", techniques=["pcss"], out=tmp_path, width=96, height=96, spp=64)
+    result = penumbra.compare(scene, techniques="pcss", out=tmp_path, width=96, height=96, spp=64)
     assert result["exit_status"] == 0
     row = next(t for t in result["techniques"] if t["name"] == "pcss")
     assert row["rmse8"] == pytest.approx(error["rmse8"], abs=5e-3)
@@ -96,7 +114,7 @@ def test_errors_carry_the_clis_messages(torus):
     with pytest.raises(penumbra.Error, match="no-such-scene: neither a built-in scene"):
         penumbra.load_scene("no-such-scene")
     with pytest.raises(penumbra.Error, match=r"pcss.map_size = 3 is not valid: expected int in \[16, 8192\]"):
-        penumbra.Technique("pcss", map_size=3).prepare(scene)
+        penumbra.Technique("pcss", map_size=3)
     with pytest.raises(penumbra.Error, match="unknown technique|not a technique|no technique"):
         penumbra.Technique("no-such-technique")
     with pytest.raises(penumbra.Error, match="light 5 does not exist"):

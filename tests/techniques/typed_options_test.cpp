@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/error.h"
 #include "penumbra/primitives.h"
 #include "penumbra/reference.h"
 #include "penumbra/registry.h"
@@ -108,9 +109,11 @@ TEST(TypedOptions, EveryTechniqueFromItsStructGivesTheRegistrysV) {
     covered.push_back(c.name);
   }
   // Every registered technique with options is covered (none and raytraced-hard have none).
-  for (const TechniqueInfo& info : techniqueRegistry())
-    if (!info.params.empty())
+  for (const TechniqueInfo& info : techniqueRegistry()) {
+    if (!info.params.empty()) {
       EXPECT_NE(std::find(covered.begin(), covered.end(), info.name), covered.end()) << info.name;
+    }
+  }
 }
 
 // A member changed in the struct changes V as the parameter does (not a struct the factory ignores).
@@ -126,6 +129,35 @@ TEST(TypedOptions, ChangedMembersChangeV) {
   size_t differ = 0;
   for (size_t i = 0; i < va.size(); ++i) differ += va[i] != vb[i];
   EXPECT_GT(differ, 50u);
+}
+
+// A struct filled by hand is held to the ranges of its parameters, with the registry's message.
+TEST(TypedOptions, OutOfRangeMembersAreRefusedByName) {
+  auto messageOf = [](auto options) -> std::string {
+    try {
+      makeTechnique(options);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  MultisampleOptions multisample;
+  multisample.samples = -1;
+  EXPECT_NE(messageOf(multisample).find("multisample.samples = -1 is not valid"), std::string::npos)
+      << messageOf(multisample);
+  PcssOptions pcss;
+  pcss.blockerSamples = 0;
+  EXPECT_NE(messageOf(pcss).find("pcss.blocker_samples = 0 is not valid"), std::string::npos) << messageOf(pcss);
+  HardShadowOptions hard;
+  hard.lightMap.size = 100000;
+  EXPECT_NE(messageOf(hard).find("hard.map_size = 100000 is not valid"), std::string::npos) << messageOf(hard);
+  RaytracedSoftOptions soft;
+  soft.samplesPerPixel = 0;
+  EXPECT_NE(messageOf(soft).find("raytraced-soft.spp = 0 is not valid"), std::string::npos) << messageOf(soft);
+  SsvOptions ssv;
+  ssv.integration = static_cast<SsvIntegration>(9);  // no such value
+  EXPECT_NE(messageOf(ssv).find("ssv.integration"), std::string::npos) << messageOf(ssv);
+  EXPECT_EQ(messageOf(PcssOptions{}), "");
 }
 
 }  // namespace

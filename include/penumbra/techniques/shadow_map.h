@@ -153,7 +153,7 @@ struct BrabecOptions {
   float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees
   float jitter = 0.0f;                //!< texel position jitter amplitude, texels
   bool idTest = true;                 //!< the object-id test of Sec. 3.2 (false reproduces Fig. 3's self-shadowing)
-  bool scalarSearch = false;          //!< use the scalar oracle search (tests)
+  bool scalarSearch = false;          //!< not a parameter: the scalar search that checks the vectorized one (same V)
   bool accelerate = true;             //!< tiles + local search radius (cost only); false: the plain Sec. 4.2 search
   bool coverageBound = true;   //!< our extension: V >= 1 - blocked fraction of the light's footprint (file comment)
   int coverageMinTexels = 32;  //!< coverage bound: smallest footprint applied at, texels (segment: samples)

@@ -235,7 +235,10 @@ class ParkerTechnique final : public ShadowTechnique {
 
 }  // namespace
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const ParkerOptions& o) { return std::make_unique<ParkerTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const ParkerOptions& o) {
+  validateOptions("parker", o);
+  return std::make_unique<ParkerTechnique>(o);
+}
 
 TechniqueInfo parkerTechniqueInfo() {
   TechniqueInfo info;

@@ -154,7 +154,10 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
 
 }  // namespace
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const HybridOptions& o) { return std::make_unique<HybridTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const HybridOptions& o) {
+  validateOptions("hybrid", o);
+  return std::make_unique<HybridTechnique>(o);
+}
 
 TechniqueInfo hybridTechniqueInfo() {
   TechniqueInfo info;

@@ -92,6 +92,7 @@ void RaytracedSoftTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>
 }  // namespace
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const RaytracedSoftOptions& o) {
+  validateOptions("raytraced-soft", o);
   return std::make_unique<RaytracedSoftTechnique>(o);
 }
 

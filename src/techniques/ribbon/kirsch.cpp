@@ -90,7 +90,10 @@ class KirschTechnique final : public ShadowTechnique {
 
 }  // namespace
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const KirschOptions& o) { return std::make_unique<KirschTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const KirschOptions& o) {
+  validateOptions("kirsch", o);
+  return std::make_unique<KirschTechnique>(o);
+}
 
 TechniqueInfo kirschTechniqueInfo() {
   TechniqueInfo info;

@@ -911,7 +911,10 @@ class PlmTechnique final : public ShadowTechnique {
 
 }  // namespace
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const PlmOptions& o) { return std::make_unique<PlmTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const PlmOptions& o) {
+  validateOptions("plm", o);
+  return std::make_unique<PlmTechnique>(o);
+}
 
 TechniqueInfo plmTechniqueInfo() {
   TechniqueInfo info;

@@ -88,6 +88,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
 }  // namespace
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const SmoothiesOptions& o) {
+  validateOptions("smoothies", o);
+
   return std::make_unique<SmoothiesTechnique>(o);
 }
 

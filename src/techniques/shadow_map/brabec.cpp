@@ -999,7 +999,10 @@ std::vector<std::pair<std::string, double>> BrabecTechnique::stats() const {
           {"map_min_depth", minDepth_}};
 }
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const BrabecOptions& o) { return std::make_unique<BrabecTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const BrabecOptions& o) {
+  validateOptions("brabec", o);
+  return std::make_unique<BrabecTechnique>(o);
+}
 
 TechniqueInfo brabecTechniqueInfo() {
   TechniqueInfo info;

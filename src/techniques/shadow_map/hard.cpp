@@ -40,6 +40,8 @@ class HardShadowTechnique final : public ShadowTechnique {
 };
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const HardShadowOptions& o) {
+  validateOptions("hard", o);
+
   return std::make_unique<HardShadowTechnique>(o);
 }
 

@@ -666,6 +666,8 @@ std::vector<std::pair<std::string, double>> HeidrichTechnique::stats() const {
 }
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const HeidrichOptions& o) {
+  validateOptions("heidrich", o);
+
   return std::make_unique<HeidrichTechnique>(o);
 }
 

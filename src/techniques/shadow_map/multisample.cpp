@@ -103,6 +103,8 @@ class MultisampleTechnique final : public ShadowTechnique {
 };
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const MultisampleOptions& o) {
+  validateOptions("multisample", o);
+
   return std::make_unique<MultisampleTechnique>(o);
 }
 

@@ -49,7 +49,10 @@ class PcfTechnique final : public ShadowTechnique {
   LightMap map_;
 };
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const PcfOptions& o) { return std::make_unique<PcfTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const PcfOptions& o) {
+  validateOptions("pcf", o);
+  return std::make_unique<PcfTechnique>(o);
+}
 
 TechniqueInfo pcfTechniqueInfo() {
   TechniqueInfo info;

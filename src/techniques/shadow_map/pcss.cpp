@@ -218,7 +218,10 @@ class PcssTechnique final : public ShadowTechnique {
   std::array<double, kPathCount + 1> pathFractions_{};
 };
 
-std::unique_ptr<ShadowTechnique> makeTechnique(const PcssOptions& o) { return std::make_unique<PcssTechnique>(o); }
+std::unique_ptr<ShadowTechnique> makeTechnique(const PcssOptions& o) {
+  validateOptions("pcss", o);
+  return std::make_unique<PcssTechnique>(o);
+}
 
 TechniqueInfo pcssTechniqueInfo() {
   TechniqueInfo info;

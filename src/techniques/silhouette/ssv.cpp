@@ -972,6 +972,8 @@ class SsvTechnique final : public ShadowTechnique {
 }  // namespace
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const SsvOptions& o) {
+  validateOptions("ssv", o);
+
   // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
   return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
 }

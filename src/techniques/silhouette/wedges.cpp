@@ -316,6 +316,8 @@ class WedgesTechnique final : public ShadowTechnique {
 }  // namespace
 
 std::unique_ptr<ShadowTechnique> makeTechnique(const WedgesOptions& o) {
+  validateOptions("wedges", o);
+
   // A concave light runs as its convex parts, V combined by area (convex_parts.h).
   return overConvexParts("wedges", [o] { return std::make_unique<WedgesTechnique>(o); });
 }
