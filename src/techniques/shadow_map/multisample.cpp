@@ -68,16 +68,24 @@ class MultisampleTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    maps_.clear();
     weights_.clear();
     const CmjSampler sampler(static_cast<uint32_t>(options_.samples));
+    maps_.resize(sampler.count());
     float weightSum = 0.0f;
     for (uint32_t k = 0; k < sampler.count(); ++k) {
       const auto [pointLight, weight] =
           pointLightAtSample(light, scene, sampler.sample(k, options_.seed), options_.lightMap.fit);
-      LightMap map = createShadowMap(scene, pointLight, options_.lightMap);
-      map.objectId = Image<int32_t>();  // only depths are compared; halves the memory of N maps
-      maps_.push_back(std::move(map));
+      // Rendered into the scratch map, whose depth and id storage persist across samples and frames.
+      // The sample keeps the map but its ids (only depths are compared: half the memory of N maps),
+      // which go back to the scratch map with the depth storage the sample had before: a steady
+      // prepare touches no fresh page.
+      createShadowMap(scene, pointLight, options_.lightMap, scratch_);
+      LightMap& map = maps_[k];
+      Image<float> previousDepth = std::move(map.lsDepth);
+      map = std::move(scratch_);
+      scratch_.objectId = std::move(map.objectId);
+      scratch_.lsDepth = std::move(previousDepth);
+      map.objectId = Image<int32_t>();
       weights_.push_back(weight);
       weightSum += weight;
       reportProgress(static_cast<double>(k + 1) / sampler.count());
@@ -98,6 +106,7 @@ class MultisampleTechnique final : public ShadowTechnique {
   }
 
   MultisampleOptions options_;
+  LightMap scratch_;  //!< each sample's map is rendered here first (its storage kept across frames)
   std::vector<LightMap> maps_;
   std::vector<float> weights_;
 };
