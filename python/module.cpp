@@ -9,11 +9,14 @@
 
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
 
 #include "cli.h"
+#include "penumbra/engine.h"
 #include "penumbra/error.h"
 #include "penumbra/metrics.h"
 #include "penumbra/raster.h"
@@ -25,6 +28,9 @@
 
 namespace py = pybind11;
 using namespace penumbra;
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using IdArray = py::array_t<int32_t, py::array::c_style | py::array::forcecast>;
 
 namespace {
 
@@ -284,6 +290,41 @@ PYBIND11_MODULE(_penumbra, m) {
         return renderGBuffer(scene, width, height);
       },
       py::arg("scene"), py::arg("width"), py::arg("height"), "Rasterizes the scene's camera view");
+
+  m.def(
+      "make_gbuffer",
+      [](const Scene& scene, const FloatArray& position, const FloatArray& normal, const IdArray& objectId,
+         const std::optional<FloatArray>& depth, const std::optional<FloatArray>& geometricNormal) {
+        // The caller's own G-buffer of the scene (a renderer of its own, of any size), as engine.h takes
+        // it: the scene gives the camera and the meshes' ids.
+        if (objectId.ndim() != 2)
+          throw Error("make_gbuffer: object_id: expected a 2-D array (height, width) of int32 ids");
+        const auto h = objectId.shape(0), w = objectId.shape(1);
+        auto check = [&](const FloatArray& a, int channels, const char* name) {
+          const bool ok = channels == 1 ? a.ndim() == 2 && a.shape(0) == h && a.shape(1) == w
+                                        : a.ndim() == 3 && a.shape(0) == h && a.shape(1) == w && a.shape(2) == channels;
+          if (!ok)
+            throw Error(std::string("make_gbuffer: ") + name + ": expected shape (" + std::to_string(h) + ", " +
+                        std::to_string(w) + (channels == 1 ? ")" : ", 3)") + ", as object_id");
+          return std::span<const float>(a.data(), static_cast<size_t>(a.size()));
+        };
+        EngineGBuffer buffers;
+        buffers.width = static_cast<int>(w);
+        buffers.height = static_cast<int>(h);
+        buffers.wsPosition = check(position, 3, "position");
+        buffers.wsNormal = check(normal, 3, "normal");
+        buffers.objectId = std::span<const int32_t>(objectId.data(), static_cast<size_t>(objectId.size()));
+        if (depth) buffers.csDepth = check(*depth, 1, "depth");
+        if (geometricNormal) buffers.wsGeometricNormal = check(*geometricNormal, 3, "geometric_normal");
+        std::vector<EngineMesh> meshes;
+        for (const Object& o : scene.objects) meshes.push_back({o.id, {}, {}});
+        py::gil_scoped_release release;
+        return makeGBuffer(buffers, scene.camera, meshes);
+      },
+      py::arg("scene"), py::arg("position"), py::arg("normal"), py::arg("object_id"), py::arg("depth") = py::none(),
+      py::arg("geometric_normal") = py::none(),
+      "A G-buffer of the scene from your own arrays: position and normal (height, width, 3), object_id "
+      "(height, width; -1 where a pixel sees nothing); depth and geometric_normal optional");
 
   py::class_<Technique>(m, "Technique", "A technique by name with parameters (techniques() lists them)")
       .def(py::init([](const std::string& name, const py::kwargs& params) {

@@ -16,10 +16,10 @@ import json
 import os
 
 from ._penumbra import (Error, GBuffer, Scene, Technique, __version__, cli, compare_visibility, error_mask,
-                        load_scene, render_gbuffer, scenes, shade, techniques)
+                        load_scene, make_gbuffer, render_gbuffer, scenes, shade, techniques)
 
 __all__ = ["Error", "GBuffer", "Scene", "Technique", "__version__", "cli", "compare", "compare_visibility",
-           "error_mask", "load_scene", "render_gbuffer", "scenes", "shade", "techniques", "visibility"]
+           "error_mask", "load_scene", "make_gbuffer", "render_gbuffer", "scenes", "shade", "techniques", "visibility"]
 
 
 def visibility(technique, scene, gbuffer, light=0, **params):

@@ -73,6 +73,21 @@ def test_views_outlive_their_gbuffer_and_parameters_convert():
         penumbra.Technique("pcss", map_size=3)  # refused when made, not at prepare
 
 
+def test_your_own_gbuffer_arrays(torus):
+    scene, own = torus
+    # Arrays of your own renderer (here penumbra's, copied into plain numpy arrays): the same V.
+    g = penumbra.make_gbuffer(scene, np.array(own.position), np.array(own.normal), np.array(own.object_id),
+                              geometric_normal=np.array(own.geometric_normal))
+    assert (g.width, g.height) == (96, 96)
+    assert np.array_equal(penumbra.visibility("pcss", scene, g), penumbra.visibility("pcss", scene, own))
+    with pytest.raises(penumbra.Error, match=r"position: expected shape \(96, 96, 3\)"):
+        penumbra.make_gbuffer(scene, np.zeros((96, 95, 3)), np.array(own.normal), np.array(own.object_id))
+    ids = np.array(own.object_id)
+    ids[ids >= 0] = 77
+    with pytest.raises(penumbra.Error, match="is 77: expected kNoObject"):
+        penumbra.make_gbuffer(scene, np.array(own.position), np.array(own.normal), ids)
+
+
 def test_rmse8_is_numpys_and_the_clis(torus, tmp_path):
     scene, gbuffer = torus
     v = penumbra.visibility("pcss", scene, gbuffer)
