@@ -66,9 +66,11 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
 // the tile, at a corner: the float layer is monotone in s and in t) and, with ids, P's id.
 template <bool kInner, bool kIdTest>
 bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
+  // Written without early returns (the id test and the depth test combined), so that the loop over a
+  // row of tiles in searchRows vectorizes.
   const size_t k = static_cast<size_t>(ty) * m.tilesPerRow + tx;
   if constexpr (kInner) {
-    if (kIdTest && m.tileObjectId[k] != kMixedTile && m.tileObjectId[k] != q.objectId) return false;
+    const bool idOpen = !kIdTest || m.tileObjectId[k] == kMixedTile || m.tileObjectId[k] == q.objectId;
     const float sA = static_cast<float>(tx << kTileShift) + 0.5f;
     const float sB = static_cast<float>(std::min(m.size - 1, (tx << kTileShift) + kTileSize - 1)) + 0.5f;
     const float tA = static_cast<float>(ty << kTileShift) + 0.5f;
@@ -76,10 +78,9 @@ bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
     const float rowA = q.zLayer + q.dzdt * (tA - q.t), rowB = q.zLayer + q.dzdt * (tB - q.t);
     const float colA = q.dzds * (sA - q.s), colB = q.dzds * (sB - q.s);
     const float lo = std::min(std::min(rowA + colA, rowA + colB), std::min(rowB + colA, rowB + colB));
-    return m.tileMaxDepth[k] >= lo;
+    return idOpen && m.tileMaxDepth[k] >= lo;
   } else {
-    if (kIdTest && m.tileObjectId[k] == q.objectId) return false;
-    return m.tileMinDepth[k] < q.zLayer;
+    return m.tileMinDepth[k] < q.zLayer && !(kIdTest && m.tileObjectId[k] == q.objectId);
   }
 }
 
@@ -107,38 +108,13 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
   int firstOpen[kGrid], lastOpen[kGrid];
   if (gridded) {
     for (int j = 0; j < tilesY; ++j) {
+      // Two select reductions over the row, which the compiler vectorizes (a grid spans up to kGrid^2
+      // tiles, and most searches build one).
       int first = kGrid, last = -1;
-      if constexpr (kInner) {
-        // tileMayQualify's inner test, term by term in its order, as selects (see the outer one).
-        const size_t row = static_cast<size_t>(ty0 + j) * m.tilesPerRow + tx0;
-        const float* __restrict farthest = m.tileMaxDepth + row;
-        const int32_t* __restrict ids = m.tileObjectId + row;
-        const int ty = ty0 + j;
-        const float tA = static_cast<float>(ty << kTileShift) + 0.5f;
-        const float tB = static_cast<float>(std::min(m.size - 1, (ty << kTileShift) + kTileSize - 1)) + 0.5f;
-        const float rowA = q.zLayer + q.dzdt * (tA - q.t), rowB = q.zLayer + q.dzdt * (tB - q.t);
-        for (int i = 0; i < tilesX; ++i) {
-          const int tx = tx0 + i;
-          const float sA = static_cast<float>(tx << kTileShift) + 0.5f;
-          const float sB = static_cast<float>(std::min(m.size - 1, (tx << kTileShift) + kTileSize - 1)) + 0.5f;
-          const float colA = q.dzds * (sA - q.s), colB = q.dzds * (sB - q.s);
-          const float lo = std::min(std::min(rowA + colA, rowA + colB), std::min(rowB + colA, rowB + colB));
-          const bool idOpen = !kIdTest || ids[i] == kMixedTile || ids[i] == q.objectId;
-          const bool open = idOpen && farthest[i] >= lo;
-          first = std::min(first, open ? i : kGrid);
-          last = std::max(last, open ? i : -1);
-        }
-      } else {
-        // tileMayQualify's outer test, written as selects into two reductions so the loop vectorizes
-        // (most searches are outer, and their grid spans up to kGrid^2 tiles).
-        const size_t row = static_cast<size_t>(ty0 + j) * m.tilesPerRow + tx0;
-        const float* __restrict nearest = m.tileMinDepth + row;
-        const int32_t* __restrict ids = m.tileObjectId + row;
-        for (int i = 0; i < tilesX; ++i) {
-          const bool open = nearest[i] < q.zLayer && !(kIdTest && ids[i] == q.objectId);
-          first = std::min(first, open ? i : kGrid);
-          last = std::max(last, open ? i : -1);
-        }
+      for (int i = 0; i < tilesX; ++i) {
+        const bool open = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty0 + j);
+        first = std::min(first, open ? i : kGrid);
+        last = std::max(last, open ? i : -1);
       }
       firstOpen[j] = first;
       lastOpen[j] = last;
@@ -613,7 +589,7 @@ void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
   }
   minDepth_ = minMapDepth(map_);
   brabec::buildTiles(map_, tileMinDepth_, tileMaxDepth_, tileObjectId_, tilesPerRow_);
-  tileNearest_.build(tileMinDepth_, tileObjectId_, tilesPerRow_);
+  if (options_.accelerate) tileNearest_.build(tileMinDepth_, tileObjectId_, tilesPerRow_);
   if (options_.coverageBound && !segmentLight_) {
     // The largest stride boundByCoverage can ask for: its footprint is at most max_radius texels.
     const float radius = static_cast<float>(options_.maxRadius);
