@@ -44,6 +44,7 @@ Command addCompareCommand(CLI::App& parent);
 Command addBenchCommand(CLI::App& parent);
 Command addScenesCommand(CLI::App& parent);
 Command addTechniquesCommand(CLI::App& parent);
+Command addViewCommand(CLI::App& parent);
 
 // Options render, compare and bench share. Unset optionals mean "the scene's value" or "the
 // technique's default".

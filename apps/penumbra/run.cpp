@@ -17,8 +17,8 @@ int runCommandLine(int argc, const char* const* argv, bool rethrow) {
   CLI::App app{"penumbra: soft shadows from area lights, measured against a ray-traced reference", "penumbra"};
   app.set_version_flag("--version", PENUMBRA_VERSION);
   app.require_subcommand(1);
-  const std::vector<Command> commands = {addRenderCommand(app), addCompareCommand(app), addBenchCommand(app),
-                                         addScenesCommand(app), addTechniquesCommand(app)};
+  const std::vector<Command> commands = {addRenderCommand(app), addCompareCommand(app),    addBenchCommand(app),
+                                         addScenesCommand(app), addTechniquesCommand(app), addViewCommand(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

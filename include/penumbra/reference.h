@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "penumbra/image.h"
 #include "penumbra/light.h"
@@ -45,6 +46,10 @@ class ReferenceTechnique final : public ShadowTechnique {
   // this overestimates the true error, so it is a conservative bound.
   const Image<float>& standardError() const { return stdError_; }
   const ReferenceOptions& options() const { return options_; }
+  // New samples or seed for the next visibility() passes, keeping what prepare() built (the ray
+  // scene): a progressive caller traces batch after batch with a new seed each without rebuilding it.
+  // Throws Error for spp < 1.
+  void setOptions(const ReferenceOptions& options);
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override;
@@ -52,6 +57,9 @@ class ReferenceTechnique final : public ShadowTechnique {
 
   ReferenceOptions options_;
   std::unique_ptr<RayScene> rays_;
+  // What rays_ was built from: per object its id and meshFingerprint's two words. The ray scene
+  // depends on the geometry alone, so a prepare under another light (or camera) keeps it.
+  std::vector<uint64_t> raysKey_;
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
   Image<float> stdError_;

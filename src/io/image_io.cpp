@@ -71,19 +71,43 @@ void writeExrTo(const std::string& file, const std::string& path, const Image<fl
 
 }  // namespace
 
-void writePng(const std::string& path, const Image<Vec3>& linearRgb) {
-  requireNonEmpty(path, linearRgb.width(), linearRgb.height());
+std::vector<uint8_t> srgbBytes(const Image<Vec3>& linearRgb) {
   std::vector<uint8_t> bytes(linearRgb.size() * 3);
   for (size_t i = 0; i < linearRgb.size(); ++i)
     for (int c = 0; c < 3; ++c) bytes[3 * i + c] = toByte(srgbEncode(linearRgb[i][c]));
-  writePngBytes(path, linearRgb.width(), linearRgb.height(), 3, bytes);
+  return bytes;
+}
+
+std::vector<uint8_t> grayBytes(const Image<float>& values) {
+  std::vector<uint8_t> bytes(values.size());
+  for (size_t i = 0; i < values.size(); ++i) bytes[i] = toByte(values[i]);
+  return bytes;
+}
+
+std::vector<uint8_t> encodePng(int width, int height, int channels, const std::vector<uint8_t>& bytes) {
+  if (width <= 0 || height <= 0) fail("cannot encode a PNG of an empty image ({}x{})", width, height);
+  if ((channels != 1 && channels != 3) ||
+      bytes.size() != static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels))
+    fail("cannot encode a PNG: {} bytes for {}x{} pixels of {} channel(s)", bytes.size(), width, height, channels);
+  std::vector<uint8_t> png;
+  const auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    const auto* first = static_cast<const uint8_t*>(data);
+    out->insert(out->end(), first, first + size);
+  };
+  if (!stbi_write_png_to_func(append, &png, width, height, channels, bytes.data(), width * channels))
+    fail("cannot encode a PNG of {}x{} pixels", width, height);
+  return png;
+}
+
+void writePng(const std::string& path, const Image<Vec3>& linearRgb) {
+  requireNonEmpty(path, linearRgb.width(), linearRgb.height());
+  writePngBytes(path, linearRgb.width(), linearRgb.height(), 3, srgbBytes(linearRgb));
 }
 
 void writePngGray(const std::string& path, const Image<float>& values) {
   requireNonEmpty(path, values.width(), values.height());
-  std::vector<uint8_t> bytes(values.size());
-  for (size_t i = 0; i < values.size(); ++i) bytes[i] = toByte(values[i]);
-  writePngBytes(path, values.width(), values.height(), 1, bytes);
+  writePngBytes(path, values.width(), values.height(), 1, grayBytes(values));
 }
 
 void writeExr(const std::string& path, const Image<float>& values, const ExrAttributes& attributes) {

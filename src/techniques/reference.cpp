@@ -18,7 +18,8 @@
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
 // packing); the sample points and the rays are made sixteen at a time in vector form
 // (CmjSampler::sampleLanes, rt::buildShadowRays); the hot loop allocates nothing; rows run in
-// parallel with oneTBB.
+// parallel with oneTBB. The Embree scene is built by the first prepare and kept by later ones while
+// every object's id, positions and triangles are the same (a light or camera moving over a static scene).
 #include "penumbra/reference.h"
 
 #include <algorithm>
@@ -35,6 +36,7 @@
 #include "rt/ray_scene.h"
 #include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
+#include "techniques/mesh_edges.h"
 
 namespace penumbra {
 
@@ -44,9 +46,24 @@ ReferenceTechnique::ReferenceTechnique(const ReferenceOptions& options) : option
   if (options_.samplesPerPixel < 1) fail("reference: spp must be >= 1 (got {})", options_.samplesPerPixel);
 }
 
+void ReferenceTechnique::setOptions(const ReferenceOptions& options) {
+  if (options.samplesPerPixel < 1) fail("reference: spp must be >= 1 (got {})", options.samplesPerPixel);
+  options_ = options;
+}
+
 void ReferenceTechnique::prepareImpl(const Scene& scene, const Light& light) {
   // Every light shape offers Light::sample, so every shape is supported.
-  rays_ = std::make_unique<RayScene>(scene);
+  std::vector<uint64_t> key;
+  key.reserve(3 * scene.objects.size());
+  for (const Object& object : scene.objects) {
+    const MeshFingerprint fingerprint = meshFingerprint(object.mesh);
+    key.insert(key.end(), {static_cast<uint64_t>(static_cast<uint32_t>(object.id)), fingerprint.a, fingerprint.b});
+  }
+  if (!rays_ || key != raysKey_) {
+    rays_.reset();  // before the new one is built: never two scenes' BVHs in memory at once
+    rays_ = std::make_unique<RayScene>(scene);
+    raysKey_ = std::move(key);
+  }
   light_ = light;
   epsilon_ = shadowRayEpsilon(scene.bounds());
 }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The browser test of `penumbra compare`'s HTML report (report_test.mjs), as ctest runs it:
-#   tests/browser/run.sh PENUMBRA_BINARY OUT_DIR
+# The browser tests, as ctest runs them: `penumbra compare`'s HTML report (report_test.mjs, the default)
+# and the page of `penumbra view` (view_test.mjs):
+#   tests/browser/run.sh PENUMBRA_BINARY OUT_DIR [SCRIPT]
 # Needs Debian's Chromium and Node.js (scripts/install-deps installs both). playwright-core, pinned
 # by package-lock.json, is installed here with `npm ci` the first time (the only step that needs the
 # npm registry; later runs are offline). It drives /usr/bin/chromium; no browser is downloaded.
@@ -19,6 +20,9 @@ if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   exit 1
 fi
 wanted="$(node -p "require('$here/package-lock.json').packages['node_modules/playwright-core'].version")"
+# Under a lock: ctest runs the browser tests side by side, and two npm ci in one folder would collide.
+exec 9>"$here/node_modules.lock"
+flock 9
 installed="$(node -p "try { require('$here/node_modules/playwright-core/package.json').version } catch { '' }")"
 if [ "$installed" != "$wanted" ]; then
   echo "browser test: installing playwright-core $wanted (npm ci in $here)"
@@ -27,4 +31,6 @@ if [ "$installed" != "$wanted" ]; then
     exit 1
   fi
 fi
-exec node "$here/report_test.mjs" "$@"
+flock -u 9
+script="${3:-report_test.mjs}"
+exec node "$here/$script" "$1" "$2"

@@ -1,0 +1,200 @@
+// Browser test of `penumbra view` (apps/penumbra/view.cpp, view_page.html): starts the server on a free
+// loopback port, opens its page in headless Chromium (Debian's /usr/bin/chromium driven by playwright-core)
+// with every request outside that server refused, and checks what a person relies on:
+//   - the page loads with no script error and asks for nothing but its own server;
+//   - the progressive reference's sample count grows while nothing moves;
+//   - dragging the light changes the technique's image and its error, and restarts the reference;
+//   - switching techniques works, and a parameter value outside the schema's range gets the schema's message;
+//   - the split divider moves; the shaded and error displays arrive;
+//   - Ctrl-C (SIGINT) stops the server cleanly;
+// and saves screenshots to OUT/ (view.png, view_light_moved.png, view_split.png, view_error.png).
+//
+// Usage: node view_test.mjs PENUMBRA_BINARY OUT_DIR   (run.sh checks Chromium and installs playwright-core)
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import { chromium } from 'playwright-core';
+
+const [binary, outArg] = process.argv.slice(2);
+if (!binary || !outArg) {
+  console.error('usage: node view_test.mjs PENUMBRA_BINARY OUT_DIR');
+  process.exit(2);
+}
+const outDir = path.resolve(outArg);
+fs.rmSync(outDir, { recursive: true, force: true });
+fs.mkdirSync(outDir, { recursive: true });
+const executablePath = process.env.PENUMBRA_CHROMIUM || '/usr/bin/chromium';
+
+let passed = 0;
+let failed = 0;
+function check(ok, what, detail = '') {
+  if (ok) {
+    passed += 1;
+    console.log(`ok   ${what}`);
+  } else {
+    failed += 1;
+    console.log(`FAIL ${what}${detail ? `: ${detail}` : ''}`);
+  }
+}
+
+// The server: a small image and a short reference keep it to seconds; --max-seconds ends it should the
+// test hang.
+const server = spawn(binary, ['view', '--scene', 'crowded', '--width', '256', '--height', '256', '--port', '0',
+  '--technique', 'hard', '--reference-spp', '126', '--max-seconds', '240', '--threads', '2'],
+{ stdio: ['ignore', 'pipe', 'pipe'] });
+let serverOut = '';
+server.stdout.on('data', (d) => { serverOut += d; });
+server.stderr.on('data', (d) => { serverOut += d; });
+const exited = new Promise((resolve) => server.on('exit', (code, signal) => resolve({ code, signal })));
+const url = await new Promise((resolve, reject) => {
+  const timer = setInterval(() => {
+    const m = serverOut.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
+    if (m) { clearInterval(timer); resolve(m[0]); }
+  }, 50);
+  exited.then(() => { clearInterval(timer); reject(new Error(`penumbra view exited:\n${serverOut}`)); });
+});
+const origin = new URL(url).origin;
+
+const browser = await chromium.launch({
+  executablePath,
+  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync'],
+});
+try {
+  const context = await browser.newContext({ viewport: { width: 1100, height: 800 } });
+  const foreign = [];
+  await context.route('**/*', (route) => {
+    const requested = route.request().url();
+    if (requested.startsWith(origin + '/')) return route.continue();
+    foreign.push(requested);
+    return route.abort();
+  });
+  const page = await context.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  // The browser logs every 400 as an error; the one the bad parameter value draws is expected.
+  let badRequests = 0;
+  page.on('console', (m) => {
+    if (m.type() !== 'error') return;
+    if (/status of 400/.test(m.text())) badRequests += 1; else errors.push(m.text());
+  });
+
+  const frames = () => page.evaluate(() => window.penumbraView.stats.frames);
+  const waitFrames = async (after, what) => {
+    try {
+      await page.waitForFunction((n) => window.penumbraView.stats.frames > n, after, { timeout: 60000 });
+      return true;
+    } catch {
+      check(false, `a frame arrives (${what})`);
+      return false;
+    }
+  };
+  const text = (id) => page.$eval(`#${id}`, (e) => e.textContent);
+  const samples = async () => Number((await text('refSamples')).split('/')[0]);
+  // A checksum of the canvas's pixels in columns [x0, x1).
+  const region = (x0, x1) => page.evaluate(([a, b]) => {
+    const c = document.getElementById('view');
+    const d = c.getContext('2d').getImageData(Math.round(a * c.width), 0, Math.round((b - a) * c.width), c.height).data;
+    let sum = 0, sq = 0;
+    for (let i = 0; i < d.length; i += 4) { sum += d[i] + 3 * d[i + 1] + 7 * d[i + 2]; sq += d[i] * d[i]; }
+    return { sum, sq, pixels: d.length / 4 };
+  }, [x0, x1]);
+
+  await page.goto(url);
+  await waitFrames(0, 'first');
+  const first = await region(0, 0.5);
+  check(first.sq > 0, 'the technique side shows an image');
+  check((await text('leftLabel')) === 'hard', 'the technique shown first is --technique', await text('leftLabel'));
+  check(Number.isFinite(Number(await text('rmse8'))), 'RMSE8 against the reference is shown', await text('rmse8'));
+
+  // Still: the reference accumulates to --reference-spp.
+  const s0 = await samples();
+  await page.waitForFunction(() => /^126 \//.test(document.getElementById('refSamples').textContent), null,
+    { timeout: 120000 }).catch(() => {});
+  const s1 = await samples();
+  check(s1 > s0 && s1 === 126, 'the reference\'s sample count grows while the view is still', `${s0} -> ${s1}`);
+  const rmseStill = await text('rmse8');
+  await page.screenshot({ path: path.join(outDir, 'view.png'), fullPage: true });
+
+  // Drag the light: the technique's image and error change, the reference starts again.
+  await page.selectOption('#dragMode', 'light');
+  const box = await page.$eval('#view', (c) => { const r = c.getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; });
+  let n = await frames();
+  await page.mouse.move(box.x + box.w * 0.3, box.y + box.h * 0.5);
+  await page.mouse.down();
+  for (let k = 1; k <= 8; ++k) await page.mouse.move(box.x + box.w * 0.3 + 10 * k, box.y + box.h * 0.5 + 4 * k);
+  await page.mouse.up();
+  await waitFrames(n, 'after the light drag');
+  await page.waitForFunction(() => !document.getElementById('refSamples').textContent.startsWith('126'), null,
+    { timeout: 30000 }).catch(() => {});
+  const moved = await region(0, 0.5);
+  check(moved.sum !== first.sum, 'dragging the light changes the technique\'s image');
+  check((await samples()) < 126, 'moving the light restarts the reference', await text('refSamples'));
+  await page.waitForFunction(() => /^126 \//.test(document.getElementById('refSamples').textContent), null,
+    { timeout: 120000 }).catch(() => {});
+  check((await text('rmse8')) !== rmseStill, 'and changes its error', `${rmseStill} -> ${await text('rmse8')}`);
+  await page.screenshot({ path: path.join(outDir, 'view_light_moved.png') });
+
+  // Another technique.
+  n = await frames();
+  await page.selectOption('#technique', 'pcss');
+  await waitFrames(n, 'after switching to pcss');
+  await page.waitForFunction(() => window.penumbraView.stats.lastHeader.techniqueCached === false ||
+    document.getElementById('leftLabel').textContent === 'pcss', null, { timeout: 30000 });
+  check((await text('leftLabel')) === 'pcss', 'switching the technique shows it');
+  check((await text('message')) === '', 'pcss runs without a message', await text('message'));
+  check((await page.$$('#params .param')).length > 3, 'its parameters are listed from the schema');
+  const note = await page.$eval('#params .param small', (e) => e.textContent);
+  check(/default/.test(note), 'with their type, range, unit and default', note);
+
+  // A value outside the schema's range: the schema's message, and the server goes on.
+  await page.fill('#param-map_size', '3');
+  await page.dispatchEvent('#param-map_size', 'change');
+  await page.waitForFunction(() => document.getElementById('message').textContent !== '', null, { timeout: 30000 })
+    .catch(() => {});
+  const refused = await text('message');
+  check(/map_size/.test(refused) && /expected/.test(refused), 'a bad parameter value gets the schema\'s message', refused);
+  n = await frames();
+  await page.fill('#param-map_size', '');
+  await page.dispatchEvent('#param-map_size', 'change');
+  await waitFrames(n, 'after the value is cleared');
+  check((await text('message')) === '', 'clearing it renders again');
+
+  // The divider.
+  const divider = await page.$eval('#divider', (e) => { const r = e.getBoundingClientRect(); return { x: r.x + r.width / 2, y: r.y + r.height / 2 }; });
+  await page.mouse.move(divider.x, divider.y);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.w * 0.25, divider.y, { steps: 5 });
+  await page.mouse.up();
+  const split = await page.evaluate(() => window.penumbraView.split);
+  check(Math.abs(split - 0.25) < 0.03, 'the split divider moves', String(split));
+  await page.screenshot({ path: path.join(outDir, 'view_split.png') });
+
+  // Shaded and error displays.
+  for (const display of ['shaded', 'error']) {
+    n = await frames();
+    await page.check(`input[name=display][value=${display}]`);
+    await waitFrames(n, `the ${display} display`);
+    const header = await page.evaluate(() => window.penumbraView.stats.lastHeader);
+    const technique = header.images.find((i) => i.side === 'technique');
+    check(technique && technique.channels === 3, `the ${display} display arrives in colour`);
+  }
+  await page.screenshot({ path: path.join(outDir, 'view_error.png'), fullPage: true });
+
+  check(errors.length === 0, 'no script errors', errors.join('; '));
+  check(badRequests === 1, 'the only refused request is the bad parameter value', String(badRequests));
+  check(foreign.length === 0, 'nothing is fetched from outside the server', foreign.join(', '));
+  await context.close();
+} catch (e) {
+  check(false, 'the test ran to its end', String(e));
+} finally {
+  await browser.close();
+}
+
+server.kill('SIGINT');
+const end = await exited;
+check(end.code === 0 && /stopped \(Ctrl-C\)/.test(serverOut), 'Ctrl-C stops the server cleanly',
+  `exit ${end.code} ${end.signal ?? ''}: ${serverOut.trim().split('\n').pop()}`);
+
+console.log(`\n${passed} passed, ${failed} failed; screenshots in ${outDir}`);
+process.exit(failed ? 1 : 0);
