@@ -63,8 +63,10 @@ const browser = await chromium.launch({
 try {
   const context = await browser.newContext({ viewport: { width: 1100, height: 800 } });
   const foreign = [];
+  let frameRequests = 0;
   await context.route('**/*', (route) => {
     const requested = route.request().url();
+    if (requested === origin + '/api/frame') frameRequests += 1;
     if (requested.startsWith(origin + '/')) return route.continue();
     foreign.push(requested);
     return route.abort();
@@ -120,11 +122,17 @@ try {
   await page.selectOption('#dragMode', 'light');
   const box = await page.$eval('#view', (c) => { const r = c.getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; });
   let n = await frames();
+  const requestsBefore = frameRequests;
   await page.mouse.move(box.x + box.w * 0.3, box.y + box.h * 0.5);
   await page.mouse.down();
-  for (let k = 1; k <= 8; ++k) await page.mouse.move(box.x + box.w * 0.3 + 10 * k, box.y + box.h * 0.5 + 4 * k);
+  const moves = 30;
+  for (let k = 1; k <= moves; ++k) await page.mouse.move(box.x + box.w * 0.3 + 3 * k, box.y + box.h * 0.5 + k);
   await page.mouse.up();
+  const requestsDuringDrag = frameRequests - requestsBefore;
   await waitFrames(n, 'after the light drag');
+  check(requestsDuringDrag >= 1 && requestsDuringDrag < moves,
+    'a drag faster than the renderer asks for fewer frames than it makes moves (the rest are dropped)',
+    `${requestsDuringDrag} requests for ${moves} moves`);
   await page.waitForFunction(() => !document.getElementById('refSamples').textContent.startsWith('126'), null,
     { timeout: 30000 }).catch(() => {});
   const moved = await region(0, 0.5);
@@ -189,6 +197,45 @@ try {
   check(false, 'the test ran to its end', String(e));
 } finally {
   await browser.close();
+}
+
+// A scene with several lights: the light selector, and a polygon light's own shape.
+{
+  const several = spawn(binary, ['view', '--scene', 'concave', '--width', '128', '--height', '128', '--port', '0',
+    '--technique', 'hard', '--reference-spp', '2', '--max-seconds', '120', '--threads', '2'], { stdio: ['ignore', 'pipe', 'pipe'] });
+  let out = '';
+  several.stdout.on('data', (d) => { out += d; });
+  several.stderr.on('data', (d) => { out += d; });
+  const done = new Promise((resolve) => several.on('exit', (code) => resolve(code)));
+  const address = await new Promise((resolve, reject) => {
+    const timer = setInterval(() => {
+      const m = out.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
+      if (m) { clearInterval(timer); resolve(m[0]); }
+    }, 50);
+    done.then(() => { clearInterval(timer); reject(new Error(`penumbra view exited:\n${out}`)); });
+  });
+  const again = await chromium.launch({ executablePath, args: ['--no-sandbox', '--disable-gpu'] });
+  try {
+    const page = await again.newPage({ viewport: { width: 1100, height: 800 } });
+    await page.goto(address);
+    await page.waitForFunction(() => window.penumbraView.stats.frames > 0, null, { timeout: 60000 });
+    const lights = await page.$$eval('#light option', (o) => o.map((x) => x.textContent));
+    check(lights.length === 5 && await page.isVisible('#light'), 'a scene with 5 lights offers all 5', lights.join(', '));
+    const shapes = await page.$$eval('#shape option', (o) => o.map((x) => x.value));
+    check(shapes.includes('polygon'), 'a polygon light keeps its own shape among the choices', shapes.join(', '));
+    const before = await page.evaluate(() => window.penumbraView.stats.frames);
+    await page.selectOption('#light', '3');
+    await page.waitForFunction((k) => window.penumbraView.stats.frames > k, before, { timeout: 60000 });
+    check((await page.$eval('#shape', (e) => e.value)) === 'rect' &&
+      (await page.evaluate(() => window.penumbraView.state.light.index)) === 3, 'choosing light 3 (a rect) uses it');
+    await page.screenshot({ path: path.join(outDir, 'view_lights.png'), fullPage: true });
+  } catch (e) {
+    check(false, 'the several-lights part ran to its end', String(e));
+  } finally {
+    await again.close();
+  }
+  several.kill('SIGTERM');
+  check((await done) === 0 && /stopped \(SIGTERM\)/.test(out), 'SIGTERM stops the server cleanly', out.trim().split('\n').pop());
 }
 
 server.kill('SIGINT');

@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <regex>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -299,6 +301,45 @@ TEST(ViewServer, ServesOnlyItsPageAndApiOnLoopbackAndStops) {
   const int status = pclose(pipe);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
   EXPECT_NE(output.find("stopped (--max-seconds 6)"), std::string::npos) << output;
+}
+
+// Three requests at once: the first renders; of the two waiting, the older gives way to the newer.
+TEST(ViewServer, ARequestWaitingBehindANewerOneIsDropped) {
+  const std::string command =
+      std::string(PENUMBRA_CLI) + " view --scene crowded --width 1536 --height 1536 --port 0 --max-seconds 8 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char line[4096];
+  int port = 0;
+  while (port == 0 && std::fgets(line, sizeof line, pipe)) {
+    output += line;
+    std::smatch m;
+    const std::string text = line;
+    if (std::regex_search(text, m, std::regex(R"(http://127\.0\.0\.1:(\d+)/)"))) port = std::stoi(m[1]);
+  }
+  ASSERT_GT(port, 0) << output;
+  const std::string request =
+      R"({"camera": {"position": [0, 8, 10], "lookAt": [0, 0.5, 0], "up": [0, 1, 0], "fovY": 45},
+          "light": {"index": 0, "shape": "sphere", "position": [0.5, 8, -1], "size": 0.8},
+          "technique": "plm", "display": "v"})";
+  // The first frame (G-buffer, plm's first prepare, the reference's scene; about 0.6 s on 2 cores)
+  // takes far longer than the 200 ms the later two wait; the third leaves 100 ms after the second.
+  int status[3] = {0, 0, 0};
+  std::vector<std::thread> clients;
+  for (int k = 0; k < 3; ++k)
+    clients.emplace_back([&, k] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100 * k));
+      httplib::Client client("127.0.0.1", port);
+      client.set_read_timeout(std::chrono::seconds(15));
+      if (const auto response = client.Post("/api/frame", request, "application/json")) status[k] = response->status;
+    });
+  for (std::thread& t : clients) t.join();
+  EXPECT_EQ(status[0], 200);
+  EXPECT_EQ(status[1], 409) << "the second request was rendered although a newer one waited";
+  EXPECT_EQ(status[2], 200);
+  while (std::fgets(line, sizeof line, pipe)) output += line;
+  pclose(pipe);
 }
 
 TEST(ViewServer, ABusyPortIsRefusedByName) {
