@@ -1,7 +1,8 @@
 // Prepare against triangle count, for every single-sample technique, on a real mesh: the built-in
 // `wuson` scene (assimp-testmodels' Wuson, fitted onto its ground plane) with every triangle of
 // every object split into 4 (edge midpoints, shared between neighbours, so the mesh stays connected
-// and its shape is unchanged) 0 to 3 times: 1x, 4x, 16x and 64x the triangles (3.7k to 239k). The shape being the
+// and its shape is unchanged) 0 to 3 times: 1x, 4x, 16x and 64x the triangles (3.7k to 239k), and for
+// the ray-traced techniques 1 and 4 times (15k and 956k). The shape being the
 // same, the silhouette edges grow as the square root of the triangles (each silhouette edge is
 // split in two per level) while the welding, edge matching and rasterization grow with the
 // triangles themselves.
@@ -56,7 +57,7 @@ Mesh subdivide(const Mesh& mesh) {
   return out;
 }
 
-// `wuson` with its triangles times `factor` (1, 4 or 16); built once per factor.
+// `wuson` with its triangles times `factor` (a power of 4); built once per factor.
 const Scene& refinedWuson(int factor) {
   static std::map<int, Scene> cache;  // benchmark-only cache
   auto it = cache.find(factor);
@@ -109,6 +110,21 @@ PENUMBRA_PREPARE_SCALING(kirsch);
 PENUMBRA_PREPARE_SCALING(heidrich);
 PENUMBRA_PREPARE_SCALING(parker);
 
+// The ray-traced techniques keep their Embree scene while the geometry is the same: a steady prepare
+// builds no BVH, so at 1M triangles (256x) it should cost about what it costs at 16k (4x).
+#define PENUMBRA_PREPARE_SCALING_RAYS(name)                   \
+  BENCHMARK_CAPTURE(prepareScaling, name, std::string(#name)) \
+      ->Arg(4)                                                \
+      ->Arg(256)                                              \
+      ->Unit(benchmark::kMillisecond)                         \
+      ->UseRealTime()
+
+PENUMBRA_PREPARE_SCALING_RAYS(raytraced - hard);
+PENUMBRA_PREPARE_SCALING_RAYS(raytraced - soft);
+PENUMBRA_PREPARE_SCALING_RAYS(hybrid);
+PENUMBRA_PREPARE_SCALING_RAYS(reference);
+
+#undef PENUMBRA_PREPARE_SCALING_RAYS
 #undef PENUMBRA_PREPARE_SCALING
 
 }  // namespace

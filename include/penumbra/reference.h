@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <vector>
 
 #include "penumbra/image.h"
 #include "penumbra/light.h"
@@ -16,7 +15,8 @@
 
 namespace penumbra {
 
-class RayScene;  // the Embree scene the rays are traced in (internal)
+class RayScene;       // the Embree scene the rays are traced in (internal)
+class RaySceneCache;  // keeps it while the geometry is the same (internal)
 
 struct ReferenceOptions {
   uint32_t samplesPerPixel = 256;  //!< shadow rays per pixel (CMJ-stratified over the light)
@@ -56,10 +56,9 @@ class ReferenceTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
 
   ReferenceOptions options_;
-  std::unique_ptr<RayScene> rays_;
-  // What rays_ was built from: per object its id and meshFingerprint's two words. The ray scene
-  // depends on the geometry alone, so a prepare under another light (or camera) keeps it.
-  std::vector<uint64_t> raysKey_;
+  // The ray scene depends on the geometry alone: a prepare under another light (or camera) keeps it.
+  std::unique_ptr<RaySceneCache> raysCache_;
+  const RayScene* rays_ = nullptr;
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
   Image<float> stdError_;

@@ -18,6 +18,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "core/mesh_fingerprint.h"
 #include "penumbra/error.h"
 
 namespace penumbra {
@@ -194,6 +195,23 @@ RayPacket16::RayPacket16() {
 }
 
 RayScene::~RayScene() = default;
+const RayScene& RaySceneCache::get(const Scene& scene) {
+  std::vector<uint64_t> key;
+  key.reserve(3 * scene.objects.size());
+  for (const Object& object : scene.objects) {
+    const MeshFingerprint fingerprint = meshFingerprint(object.mesh);
+    key.insert(key.end(), {static_cast<uint64_t>(static_cast<uint32_t>(object.id)), fingerprint.a, fingerprint.b});
+  }
+  rebuilt_ = !rays_ || key != key_;
+  if (rebuilt_) {
+    rays_.reset();  // before the new one is built: never two BVHs of a large scene in memory at once
+    rays_ = std::make_unique<RayScene>(scene);
+    key_ = std::move(key);
+    bounds_ = scene.bounds();
+  }
+  return *rays_;
+}
+
 RayScene::RayScene(RayScene&&) noexcept = default;
 RayScene& RayScene::operator=(RayScene&&) noexcept = default;
 

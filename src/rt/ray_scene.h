@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "penumbra/gbuffer.h"
 #include "penumbra/math.h"
@@ -72,6 +73,25 @@ class RayScene {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+};
+
+// A RayScene kept while the geometry it was built from stays the same: every object's id, positions
+// and triangles the same to the bit (meshFingerprint), as under a light or camera moving over a static
+// scene. Each ray-traced technique holds one, so its steady prepare builds no BVH; any change to the
+// geometry (or another scene with other geometry) builds it afresh.
+class RaySceneCache {
+ public:
+  const RayScene& get(const Scene& scene);
+  // Whether the last get() built the scene (rather than keeping the one it had).
+  bool rebuilt() const { return rebuilt_; }
+  // The bounds of the geometry of the last get() (Scene::bounds, kept with the BVH).
+  const Bounds3& bounds() const { return bounds_; }
+
+ private:
+  std::vector<uint64_t> key_;  //!< per object: id, fingerprint.a, fingerprint.b
+  std::unique_ptr<RayScene> rays_;
+  bool rebuilt_ = false;
+  Bounds3 bounds_;
 };
 
 // The camera G-buffer by ray casting one primary ray through each pixel centre: the independent

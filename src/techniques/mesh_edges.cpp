@@ -12,34 +12,6 @@
 
 namespace penumbra {
 
-MeshFingerprint meshFingerprint(const Mesh& mesh) {
-  MeshFingerprint key{0x9E3779B97F4A7C15ull, 0xC2B2AE3D27D4EB4Full};
-  const auto mix = [&](uint64_t word) {
-    key.a = (key.a ^ word) * 0xFF51AFD7ED558CCDull;
-    key.a ^= key.a >> 32;
-    key.b = (key.b + word) * 0xC4CEB9FE1A85EC53ull;
-    key.b ^= key.b >> 29;
-  };
-  const auto words = [&](const void* data, size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i + 8 <= bytes; i += 8) {
-      uint64_t w;
-      std::memcpy(&w, p + i, 8);
-      mix(w);
-    }
-    if (bytes % 8 != 0) {
-      uint64_t w = 0;
-      std::memcpy(&w, p + bytes / 8 * 8, bytes % 8);
-      mix(w);
-    }
-  };
-  mix(mesh.positions.size());
-  mix(mesh.triangles.size());
-  words(mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
-  words(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
-  return key;
-}
-
 namespace {
 
 // One half-edge: its edge's welded ends as one key (low << 32 | high) and its place in triangle

@@ -16,17 +16,10 @@
 #include <memory>
 #include <vector>
 
+#include "core/mesh_fingerprint.h"
 #include "penumbra/scene.h"
 
 namespace penumbra {
-
-// A fingerprint of a mesh's positions and triangles (two independent 64-bit multiply-xorshift
-// hashes of every 64-bit word): equal fingerprints stand for geometry the same to the bit.
-struct MeshFingerprint {
-  uint64_t a = 0, b = 0;
-  bool operator==(const MeshFingerprint&) const = default;
-};
-MeshFingerprint meshFingerprint(const Mesh& mesh);
 
 struct MeshEdges {
   std::vector<uint32_t> weld;         //!< per mesh vertex: the first vertex at its position

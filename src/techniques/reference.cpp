@@ -36,7 +36,6 @@
 #include "rt/ray_scene.h"
 #include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
-#include "techniques/mesh_edges.h"
 
 namespace penumbra {
 
@@ -53,19 +52,11 @@ void ReferenceTechnique::setOptions(const ReferenceOptions& options) {
 
 void ReferenceTechnique::prepareImpl(const Scene& scene, const Light& light) {
   // Every light shape offers Light::sample, so every shape is supported.
-  std::vector<uint64_t> key;
-  key.reserve(3 * scene.objects.size());
-  for (const Object& object : scene.objects) {
-    const MeshFingerprint fingerprint = meshFingerprint(object.mesh);
-    key.insert(key.end(), {static_cast<uint64_t>(static_cast<uint32_t>(object.id)), fingerprint.a, fingerprint.b});
-  }
-  if (!rays_ || key != raysKey_) {
-    rays_.reset();  // before the new one is built: never two scenes' BVHs in memory at once
-    rays_ = std::make_unique<RayScene>(scene);
-    raysKey_ = std::move(key);
-  }
+  if (!raysCache_) raysCache_ = std::make_unique<RaySceneCache>();
+  rays_ = nullptr;
+  rays_ = &raysCache_->get(scene);
   light_ = light;
-  epsilon_ = shadowRayEpsilon(scene.bounds());
+  epsilon_ = shadowRayEpsilon(raysCache_->bounds());
 }
 
 void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {

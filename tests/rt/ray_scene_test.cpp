@@ -169,6 +169,34 @@ TEST(RayScene, MovedSceneStillWorks) {
   EXPECT_TRUE(b.occluded(makeRay(Vec3(0.0f, 0.0f, 5.0f), Vec3(0, 0, -1))));
 }
 
+TEST(RaySceneCache, KeepsTheSceneWhileTheGeometryIsTheSameAndRebuildsItOtherwise) {
+  Scene scene = twoQuads();
+  RaySceneCache cache;
+  const Ray down = makeRay(Vec3(0.5f, -0.25f, 5.0f), Vec3(0, 0, -1));
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f);
+  EXPECT_TRUE(cache.rebuilt());
+  // The same geometry, also in another Scene object (a copy, with a moved camera): kept.
+  cache.get(scene);
+  EXPECT_FALSE(cache.rebuilt());
+  Scene copy = scene;
+  copy.camera.position += Vec3(1.0f, 0.0f, 0.0f);
+  cache.get(copy);
+  EXPECT_FALSE(cache.rebuilt());
+  // One vertex of quad B written in place, lifting its corner: rebuilt, and the ray sees the new geometry.
+  for (Vec3& p : scene.objects[1].mesh.positions) p.z += 1.0f;
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 3.0f);
+  EXPECT_TRUE(cache.rebuilt());
+  EXPECT_FLOAT_EQ(cache.bounds().upper.z, 2.0f);
+  // Another id for the same mesh: rebuilt (hits report object ids).
+  scene.objects[1].id = 11;
+  EXPECT_EQ(cache.get(scene).intersect(down)->objectId, 11);
+  EXPECT_TRUE(cache.rebuilt());
+  // An object removed: rebuilt.
+  scene.objects.pop_back();
+  EXPECT_EQ(cache.get(scene).intersect(down)->objectId, 3);
+  EXPECT_TRUE(cache.rebuilt());
+}
+
 TEST(ShadowRayEpsilon, ScalesWithTheSceneAndItsDistanceFromTheOrigin) {
   Bounds3 unit;
   unit.extend(Vec3(-1.0f));

@@ -345,9 +345,10 @@ void TemporalHistory::accumulate(const GBuffer& gbuffer, const Camera& camera, c
 }
 
 void FewRayState::prepare(const Scene& scene, const Light& aimedAt) {
-  rays = std::make_unique<RayScene>(scene);
+  rays = nullptr;
+  rays = &raysCache.get(scene);
   light = aimedAt;
-  epsilon = shadowRayEpsilon(scene.bounds());
+  epsilon = shadowRayEpsilon(raysCache.bounds());
   tanHalfFovY = std::tan(0.5f * radians(scene.camera.fovYDegrees));
   camera = scene.camera;
 }

@@ -141,13 +141,14 @@ class TemporalHistory {
 // What raytraced-soft and hybrid keep between calls: the last prepare's ray scene, light and camera,
 // the frame's storage, the temporal history, and the last visibility pass's statistics.
 struct FewRayState {
-  std::unique_ptr<RayScene> rays;
-  std::optional<Light> light;  //!< the light the rays aim at
-  float epsilon = 0.0f;        //!< shadowRayEpsilon of the scene
-  float tanHalfFovY = 0.0f;    //!< the camera's, for pixel footprints
-  Camera camera;               //!< this frame's, for the temporal history
-  FewRayFrame frame;           //!< kept across frames: its storage is reused
-  TemporalHistory history;     //!< the frames before, when temporal is on
+  RaySceneCache raysCache;         //!< built when the geometry changed, else kept
+  const RayScene* rays = nullptr;  //!< raysCache's scene, after prepare
+  std::optional<Light> light;      //!< the light the rays aim at
+  float epsilon = 0.0f;            //!< shadowRayEpsilon of the scene
+  float tanHalfFovY = 0.0f;        //!< the camera's, for pixel footprints
+  Camera camera;                   //!< this frame's, for the temporal history
+  FewRayFrame frame;               //!< kept across frames: its storage is reused
+  TemporalHistory history;         //!< the frames before, when temporal is on
   double rayCount = 0.0;
   double penumbraTileFraction = 0.0;
   // Milliseconds of the visibility pass's stages (stats, not finer passes: the report's visibility

@@ -25,9 +25,10 @@ class RaytracedHardTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     // Every light shape has a centre sample, so every shape is supported.
-    rays_ = std::make_unique<RayScene>(scene);
+    rays_ = nullptr;
+    rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
-    epsilon_ = shadowRayEpsilon(scene.bounds());
+    epsilon_ = shadowRayEpsilon(raysCache_.bounds());
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
@@ -67,7 +68,8 @@ class RaytracedHardTechnique final : public ShadowTechnique {
     });
   }
 
-  std::unique_ptr<RayScene> rays_;
+  RaySceneCache raysCache_;
+  const RayScene* rays_ = nullptr;
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
 };

@@ -823,15 +823,7 @@ class PlmTechnique final : public ShadowTechnique {
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
-    std::vector<MeshFingerprint> key;
-    key.reserve(scene.objects.size());
-    for (const Object& object : scene.objects) key.push_back(meshFingerprint(object.mesh));
-    if (!rays_ || key != raysKey_) {
-      rays_.reset();
-      rays_ = std::make_unique<RayScene>(scene);
-      raysKey_ = std::move(key);
-    }
-    const RayScene& rays = *rays_;
+    const RayScene& rays = raysCache_.get(scene);
     const int n = map_.size;
     Vec2 pattern[kProfileSamples];
     for (int q = 0; q < kProfileSamples; ++q)
@@ -904,9 +896,8 @@ class PlmTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> ribbons_;
   std::vector<plm::Edge> edges_;  //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
-  std::unique_ptr<RayScene> rays_;        //!< findLowerLimits' BVH of the scene
-  std::vector<MeshFingerprint> raysKey_;  //!< the geometry rays_ was built from
-  plm::EdgeCache edgeCache_;              //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  RaySceneCache raysCache_;   //!< findLowerLimits' BVH of the scene
+  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 
 }  // namespace

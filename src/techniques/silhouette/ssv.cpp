@@ -236,7 +236,8 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
     occluders_ = makeOccluders(scene);
-    rays_ = std::make_unique<RayScene>(scene);
+    rays_ = nullptr;
+    rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
@@ -960,7 +961,8 @@ class SsvTechnique final : public ShadowTechnique {
   SsvOptions options_;
   std::vector<Occluder> occluders_;
   bool backBuilt_ = false;
-  std::unique_ptr<RayScene> rays_;  //!< the light's centre seen from receivers beside an occluder
+  RaySceneCache raysCache_;
+  const RayScene* rays_ = nullptr;  //!< the light's centre seen from receivers beside an occluder
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
   Side sides_[2];  //!< [0]: the face towards the scene's centre; [1]: the other face

@@ -129,7 +129,8 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
     }
     occluders_ = makeOccluders(scene);
-    rays_ = std::make_unique<RayScene>(scene);
+    rays_ = nullptr;
+    rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
     // The other face of the light is built when a receiver lies behind the light's plane.
@@ -304,7 +305,8 @@ class WedgesTechnique final : public ShadowTechnique {
   int grid_;
   std::vector<Occluder> occluders_;
   bool backBuilt_ = false;
-  std::unique_ptr<RayScene> rays_;  //!< the hard shadow of the light's centre
+  RaySceneCache raysCache_;
+  const RayScene* rays_ = nullptr;  //!< the hard shadow of the light's centre
   std::optional<Light> light_;
   float epsilon_ = 0.0f;
   Side sides_[2];  //!< [0]: the face towards the scene's centre; [1]: the other face
