@@ -65,9 +65,7 @@ class KirschTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("kirsch: visibility() called before prepare()");
-    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r =
-          makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int, int, const ShadowReceiver& r) {
       if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
       const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
       const plm::RibbonTexel& width = widths_(i, j);

@@ -714,11 +714,10 @@ class PlmTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("plm: visibility() called before prepare()");
     const int n = map_.size;
-    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
+    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int x, int y, ShadowReceiver r) {
+      if (!r.inMap) return 1.0f;
       const Vec3& position = gbuffer.wsPosition(x, y);
       const Vec3& normal = gbuffer.wsGeometricNormal(x, y);
-      ShadowReceiver r = makeReceiver(map_, position, normal, options_.bias);
-      if (!r.inMap) return 1.0f;
       // A surface that faces away from the light's centre is never the one the map holds at its
       // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
       // the compare: the bias would only lift it above the surface that covers it.

@@ -62,9 +62,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("smoothies: visibility() called before prepare()");
-    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      const ShadowReceiver r =
-          makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int, int, const ShadowReceiver& r) {
       if (!r.inMap) return 1.0f;
       if (hardShadow(map_, r) == 0.0f) return 0.0f;
       const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));

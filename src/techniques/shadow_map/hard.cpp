@@ -29,9 +29,23 @@ class HardShadowTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("hard: visibility() called before prepare()");
-    forEachReceiverPixel(gbuffer, v, [&](int x, int y) {
-      return hardShadow(map_,
-                        makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
+    // hardShadow from the row's nearest-texel thresholds: one vectorized set-up per row, then one
+    // compare per pixel.
+    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+    const float* depth = map_.lsDepth.row(0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+      ReceiverRow r;
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(),
+                        options_.bias, r);
+        float* out = v.row(y);
+        const int32_t* ids = gbuffer.objectId.row(y);
+        for (int x = 0; x < gbuffer.width(); ++x) {
+          const auto i = static_cast<size_t>(x);
+          if (ids[x] != kNoObject && r.inMap[i])
+            out[x] = depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
+        }
+      }
     });
   }
 

@@ -106,13 +106,16 @@ class PcssTechnique final : public ShadowTechnique {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
     v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
     std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
-    // As forEachReceiverPixel, with per-range counts of the paths the pixels took.
+    // As forEachReceiver, with per-range counts of the paths the pixels took.
     tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
       std::array<int64_t, kPathCount + 1> local{};
+      ReceiverRow receivers;
       for (int y = rows.begin(); y < rows.end(); ++y) {
+        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(),
+                        options_.bias, receivers);
         float* out = v.row(y);
         for (int x = 0; x < gbuffer.width(); ++x)
-          if (gbuffer.hit(x, y)) out[x] = pixelVisibility(gbuffer, x, y, local);
+          if (gbuffer.hit(x, y)) out[x] = pixelVisibility(receivers[x], x, y, local);
       }
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
@@ -136,9 +139,7 @@ class PcssTechnique final : public ShadowTechnique {
   static constexpr std::array<const char*, kPathCount + 1> kPathNames = {
       "frac_no_search", "frac_search_only", "frac_filter_bilinear", "frac_filter_nearest", "frac_clamped_to_map"};
 
-  float pixelVisibility(const GBuffer& gbuffer, int x, int y, std::array<int64_t, kPathCount + 1>& counts) const {
-    const ShadowReceiver r =
-        makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
+  float pixelVisibility(const ShadowReceiver& r, int x, int y, std::array<int64_t, kPathCount + 1>& counts) const {
     if (!r.inMap || !(r.lsDepth > zMin_)) {
       ++counts[kNoSearch];
       return 1.0f;

@@ -5,6 +5,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -52,11 +53,108 @@ float minMapDepth(const LightMap& map) {
   return m;
 }
 
-ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
-                            const DepthBias& bias) {
-  const Vec3 lsP = map.lsFromWs(wsPosition);
-  if (!map.orthographic && !(lsP.z > 0.0f)) return {};  // behind a local light: not in its map
-  return receiverAt(map, map.projectLightSpace(lsP), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
+namespace {
+
+// What makeReceiverRow's loop reads besides the pixels: the map's frame and projection, the bias.
+struct ReceiverRowConstants {
+  float ox, oy, oz;                          //!< the map's origin
+  float xx, xy, xz, yx, yy, yz, zx, zy, zz;  //!< its axes
+  float size, half, halfWidth, tanHalfFov, biasConstant, biasSlope;
+  int mapSize;
+};
+
+// num / den limited to [-kMaxDepthSlope, kMaxDepthSlope] (detail::limitedRatio), as a select.
+inline float limitedSelect(float num, float den) {
+  const float q = num / den;
+  const float cap = (num < 0.0f) != (den < 0.0f) ? -kMaxDepthSlope : kMaxDepthSlope;
+  return std::abs(num) <= kMaxDepthSlope * std::abs(den) ? q : cap;
+}
+
+// makeReceiver and receiverAt, operation for operation (glm's dot is (x x' + y y') + z z'), for n
+// pixels. One function per projection, restrict-qualified arrays (GCC trusts restrict on parameters),
+// plain floats (glm's union members keep the vectorizer from their loads), every condition a bitwise
+// and of comparisons, every branch a select: the loop vectorizes.
+template <bool kOrtho>
+void receiverRowKernel(const ReceiverRowConstants k, size_t n, const float* __restrict position,
+                       const float* __restrict normal, float* __restrict s, float* __restrict t, float* __restrict z,
+                       float* __restrict dzds, float* __restrict dzdt, float* __restrict biasOut,
+                       float* __restrict texelWorld, float* __restrict threshold, int32_t* __restrict texel,
+                       int32_t* __restrict inMap) {
+  for (size_t x = 0; x < n; ++x) {
+    const float dx = position[3 * x] - k.ox, dy = position[3 * x + 1] - k.oy, dz = position[3 * x + 2] - k.oz;
+    const float gx = normal[3 * x], gy = normal[3 * x + 1], gz = normal[3 * x + 2];
+    const float lx = dx * k.xx + dy * k.xy + dz * k.xz;
+    const float ly = dx * k.yx + dy * k.yy + dz * k.yz;
+    const float lz = dx * k.zx + dy * k.zy + dz * k.zz;
+    const float nx = gx * k.xx + gy * k.xy + gz * k.xz;
+    const float ny = gx * k.yx + gy * k.yy + gz * k.yz;
+    const float nz = gx * k.zx + gy * k.zy + gz * k.zz;
+    const bool inFront = kOrtho | (lz > 0.0f);
+    const float scale = kOrtho ? 1.0f / k.halfWidth : 1.0f / (lz * k.tanHalfFov);
+    const float ms = k.half * (1.0f + lx * scale), mt = k.half * (1.0f - ly * scale);
+    const bool inside = inFront & (ms >= 0.0f) & (ms < k.size) & (mt >= 0.0f) & (mt < k.size) &
+                        (std::abs(lz) <= std::numeric_limits<float>::max());  // finite
+    const float tw = 2.0f * (kOrtho ? k.halfWidth : lz * k.tanHalfFov) / k.size;
+    const float nDotD = kOrtho ? nz : (nx * lx + ny * ly + nz * lz) / lz;
+    const float gs = limitedSelect(-nx, nDotD), gt = limitedSelect(ny, nDotD);
+    const float b = tw * (k.biasConstant + k.biasSlope * std::sqrt(gs * gs + gt * gt));
+    const float fi = std::floor(ms), fj = std::floor(mt);
+    const float thr = lz + gs * tw * (fi + 0.5f - ms) + gt * tw * (fj + 0.5f - mt) - b;
+    // A receiver outside the map is makeReceiver's: s, t and depth where they are in front of the
+    // light, the rest 0; behind a local light, all 0.
+    s[x] = inFront ? ms : 0.0f;
+    t[x] = inFront ? mt : 0.0f;
+    z[x] = inFront ? lz : 0.0f;
+    dzds[x] = inside ? gs * tw : 0.0f;
+    dzdt[x] = inside ? gt * tw : 0.0f;
+    biasOut[x] = inside ? b : 0.0f;
+    texelWorld[x] = inside ? tw : 0.0f;
+    threshold[x] = inside ? thr : 0.0f;
+    // Outside the map the index is not read; clamped so that the conversion stays defined.
+    const float ci = fi >= 0.0f ? (fi <= k.size - 1.0f ? fi : k.size - 1.0f) : 0.0f;
+    const float cj = fj >= 0.0f ? (fj <= k.size - 1.0f ? fj : k.size - 1.0f) : 0.0f;
+    texel[x] = inside ? static_cast<int32_t>(cj) * k.mapSize + static_cast<int32_t>(ci) : 0;
+    inMap[x] = inside ? 1 : 0;
+  }
+}
+
+}  // namespace
+
+void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
+                     const DepthBias& bias, ReceiverRow& out) {
+  const auto n = static_cast<size_t>(std::max(count, 0));
+  for (auto* field :
+       {&out.s, &out.t, &out.lsDepth, &out.dzds, &out.dzdt, &out.bias, &out.texelWorld, &out.nearestThreshold})
+    field->resize(n);
+  out.inMap.resize(n);
+  out.nearestTexel.resize(n);
+  const ReceiverRowConstants k{map.wsOrigin.x,
+                               map.wsOrigin.y,
+                               map.wsOrigin.z,
+                               map.lsFrame.x.x,
+                               map.lsFrame.x.y,
+                               map.lsFrame.x.z,
+                               map.lsFrame.y.x,
+                               map.lsFrame.y.y,
+                               map.lsFrame.y.z,
+                               map.lsFrame.z.x,
+                               map.lsFrame.z.y,
+                               map.lsFrame.z.z,
+                               static_cast<float>(map.size),
+                               0.5f * static_cast<float>(map.size),
+                               map.halfWidth,
+                               map.tanHalfFov,
+                               bias.constantTexels,
+                               bias.slope,
+                               map.size};
+  static_assert(sizeof(Vec3) == 3 * sizeof(float));
+  const auto* position = reinterpret_cast<const float*>(wsPositions);
+  const auto* normal = reinterpret_cast<const float*>(wsGeometricNormals);
+  (map.orthographic ? receiverRowKernel<true>
+                    : receiverRowKernel<false>)(k, n, position, normal, out.s.data(), out.t.data(), out.lsDepth.data(),
+                                                out.dzds.data(), out.dzdt.data(), out.bias.data(),
+                                                out.texelWorld.data(), out.nearestThreshold.data(),
+                                                out.nearestTexel.data(), out.inMap.data());
 }
 
 float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels) {

@@ -119,8 +119,44 @@ inline ShadowReceiver receiverAt(const LightMap& map, const Vec3& stz, const Vec
   return r;
 }
 
-ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
-                            const DepthBias& bias);
+// A camera pixel's surface point as the map sees it. Inline: every shadow-map technique calls it once
+// per pixel, and in the caller's loop the compiler overlaps its divides with the caller's work.
+inline ShadowReceiver makeReceiver(const LightMap& map, const Vec3& wsPosition, const Vec3& wsGeometricNormal,
+                                   const DepthBias& bias) {
+  const Vec3 lsP = map.lsFromWs(wsPosition);
+  if (!map.orthographic && !(lsP.z > 0.0f)) return {};  // behind a local light: not in its map
+  return receiverAt(map, map.projectLightSpace(lsP), lsP, map.lsFrame.toLocal(wsGeometricNormal), bias);
+}
+
+// The receivers of a row of pixels, as structure of arrays: makeReceiverRow sets them up in one loop the
+// compiler vectorizes (no calls, no branches; the same float operations as makeReceiver, so each field
+// is makeReceiver's to the bit), where makeReceiver, called pixel by pixel, cannot be. Pixels that see
+// nothing get receivers too; callers skip them.
+struct ReceiverRow {
+  std::vector<float> s, t, lsDepth, dzds, dzdt, bias, texelWorld;
+  std::vector<int32_t> inMap;  //!< 0 or 1 (32 bits, as the floats: one vector width in the loop)
+  // The nearest texel's blocker threshold (blockerThreshold at (floor s, floor t)) and that texel's
+  // index in the map (y * size + x), for hardShadow's compare; 0 outside the map.
+  std::vector<float> nearestThreshold;
+  std::vector<int32_t> nearestTexel;
+
+  ShadowReceiver operator[](int x) const {
+    const auto i = static_cast<size_t>(x);
+    ShadowReceiver r;
+    r.s = s[i];
+    r.t = t[i];
+    r.lsDepth = lsDepth[i];
+    r.dzds = dzds[i];
+    r.dzdt = dzdt[i];
+    r.bias = bias[i];
+    r.texelWorld = texelWorld[i];
+    r.inMap = inMap[i] != 0;
+    return r;
+  }
+};
+// The receivers of `count` pixels with these world positions and geometric normals (a G-buffer row).
+void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
+                     const DepthBias& bias, ReceiverRow& out);
 
 // The depth below which texel (i, j) holds a blocker for the receiver.
 inline float blockerThreshold(const ShadowReceiver& r, int i, int j) {
@@ -215,6 +251,25 @@ inline float pcfDisk(const LightMap& map, const ShadowReceiver& r, float radiusT
 inline float pcfDiskNearest(const LightMap& map, const ShadowReceiver& r, float radiusTexels,
                             std::span<const Vec2> pattern, const Vec2& rotation) {
   return pcfDiskNearest(depthTexels(map), r, radiusTexels, pattern, rotation);
+}
+
+// Runs f(x, y, receiver) -> V for every pixel of the G-buffer that sees geometry, with its receiver in
+// `map` set up a row at a time (makeReceiverRow), in parallel over rows; V = 1 where the pixel sees
+// nothing. Deterministic: every pixel is computed on its own.
+template <class F>
+void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, Image<float>& v, F&& f) {
+  v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    ReceiverRow receivers;  // per task: a few per frame
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), bias,
+                      receivers);
+      float* out = v.row(y);
+      const int32_t* ids = gbuffer.objectId.row(y);
+      for (int x = 0; x < gbuffer.width(); ++x)
+        if (ids[x] != kNoObject) out[x] = f(x, y, receivers[x]);
+    }
+  });
 }
 
 // Runs f(x, y) -> V for every pixel of the G-buffer that sees geometry, in parallel over rows;

@@ -8,10 +8,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
+#include <utility>
 
 #include "penumbra/error.h"
+#include "penumbra/raster.h"
 #include "penumbra/registry.h"
+#include "penumbra/scene_io.h"
 #include "techniques/shadow_map/shadow_map.h"
 
 namespace penumbra {
@@ -134,6 +138,73 @@ TEST(ShadowMap, ReceiversOutsideTheMapAreLit) {
   LightMap persp = m;
   persp.orthographic = false;
   EXPECT_FALSE(makeReceiver(persp, Vec3(0.0f, 0.0f, -5.0f), kFacingLight, DepthBias{}).inMap);  // behind the light
+}
+
+// makeReceiverRow is makeReceiver, vectorized: field for field, to the bit, on real G-buffers under a
+// perspective map (a sphere light) and an orthographic one (a directional light), receivers outside the
+// map and behind the light included; and its nearest-texel threshold is hardShadow's compare.
+TEST(ShadowMap, ReceiverRowIsMakeReceiverToTheBit) {
+  const auto bits = [](float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+  };
+  for (const char* name : {"crowded", "triangle", "teapots"}) {
+    const Scene scene = loadScene(name);
+    // A small map, so that many receivers fall outside it, and the image wider than the scene's view.
+    for (const Light& light : scene.lights) {
+      for (const int mapSize : {64, 1024}) {
+        // The fitted map; one a quarter as wide (receivers outside it); one looking from the scene's
+        // centre (a perspective map's receivers behind it).
+        const LightMap fitted = renderLightMap(scene, light, mapSize);
+        LightMap narrow = fitted;
+        narrow.halfWidth *= 0.25f;
+        narrow.tanHalfFov *= 0.25f;
+        LightMap inside = fitted;
+        inside.wsOrigin = scene.bounds().center();
+        const GBuffer gbuffer = renderGBuffer(scene, 96, 64);
+        for (const LightMap* mapVariant :
+             {&fitted, static_cast<const LightMap*>(&narrow), static_cast<const LightMap*>(&inside)}) {
+          const LightMap& map = *mapVariant;
+          const DepthBias bias{0.7f, 1.3f};
+          ReceiverRow row;
+          int outside = 0, checked = 0;
+          for (int y = 0; y < gbuffer.height(); ++y) {
+            makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), bias,
+                            row);
+            for (int x = 0; x < gbuffer.width(); ++x) {
+              const ShadowReceiver want =
+                  makeReceiver(map, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), bias);
+              const ShadowReceiver got = row[x];
+              const std::string where = std::string(name) + " light " + std::string(toString(light.shape())) + " map " +
+                                        std::to_string(mapSize) + " pixel " + std::to_string(x) + "," +
+                                        std::to_string(y);
+              ASSERT_EQ(got.inMap, want.inMap) << where;
+              for (const auto& [a, b] : {std::pair{got.s, want.s},
+                                         {got.t, want.t},
+                                         {got.lsDepth, want.lsDepth},
+                                         {got.dzds, want.dzds},
+                                         {got.dzdt, want.dzdt},
+                                         {got.bias, want.bias},
+                                         {got.texelWorld, want.texelWorld}})
+                ASSERT_EQ(bits(a), bits(b)) << where << ": " << a << " vs " << b;
+              if (want.inMap) {
+                const int i = static_cast<int>(std::floor(want.s)), j = static_cast<int>(std::floor(want.t));
+                ASSERT_EQ(row.nearestTexel[static_cast<size_t>(x)], j * map.size + i) << where;
+                ASSERT_EQ(bits(row.nearestThreshold[static_cast<size_t>(x)]), bits(blockerThreshold(want, i, j)))
+                    << where;
+              } else {
+                ++outside;
+              }
+              ++checked;
+            }
+          }
+          EXPECT_GT(checked, 0);
+          if (mapVariant == &narrow) EXPECT_GT(outside, 0) << name;
+        }
+      }
+    }
+  }
 }
 
 TEST(ShadowMap, BlockerSearchAveragesTheBlockersItFinds) {
