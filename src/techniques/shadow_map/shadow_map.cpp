@@ -53,6 +53,16 @@ float minMapDepth(const LightMap& map) {
   return m;
 }
 
+// The disk kernels below and the receivers' loop are also compiled for AVX2, picked at load time where
+// the CPU has it (GCC function multi-versioning): their vector phases then run 8 lanes wide instead of
+// 4. No multiply-add is fused (no FMA in the list, and this file is compiled with -ffp-contract=off for
+// the AVX-512 path below), so every path rounds alike: V is bit-identical on every CPU.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
+#define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PENUMBRA_KERNEL_CLONES
+#endif
+
 namespace {
 
 // What makeReceiverRow's loop reads besides the pixels: the map's frame and projection, the bias.
@@ -75,11 +85,11 @@ inline float limitedSelect(float num, float den) {
 // plain floats (glm's union members keep the vectorizer from their loads), every condition a bitwise
 // and of comparisons, every branch a select: the loop vectorizes.
 template <bool kOrtho>
-void receiverRowKernel(const ReceiverRowConstants k, size_t n, const float* __restrict position,
-                       const float* __restrict normal, float* __restrict s, float* __restrict t, float* __restrict z,
-                       float* __restrict dzds, float* __restrict dzdt, float* __restrict biasOut,
-                       float* __restrict texelWorld, float* __restrict threshold, int32_t* __restrict texel,
-                       int32_t* __restrict inMap) {
+inline __attribute__((always_inline)) void receiverRowKernel(
+    const ReceiverRowConstants k, size_t n, const float* __restrict position, const float* __restrict normal,
+    float* __restrict s, float* __restrict t, float* __restrict z, float* __restrict dzds, float* __restrict dzdt,
+    float* __restrict biasOut, float* __restrict texelWorld, float* __restrict threshold, int32_t* __restrict texel,
+    int32_t* __restrict inMap) {
   for (size_t x = 0; x < n; ++x) {
     const float dx = position[3 * x] - k.ox, dy = position[3 * x + 1] - k.oy, dz = position[3 * x + 2] - k.oz;
     const float gx = normal[3 * x], gy = normal[3 * x + 1], gz = normal[3 * x + 2];
@@ -118,6 +128,20 @@ void receiverRowKernel(const ReceiverRowConstants k, size_t n, const float* __re
   }
 }
 
+// The two projections' loops, each compiled for every target of PENUMBRA_KERNEL_CLONES.
+#define PENUMBRA_RECEIVER_ROW_PARAMETERS                                                                               \
+  const ReceiverRowConstants k, size_t n, const float *__restrict position, const float *__restrict normal,            \
+      float *__restrict s, float *__restrict t, float *__restrict z, float *__restrict dzds, float *__restrict dzdt,   \
+      float *__restrict biasOut, float *__restrict texelWorld, float *__restrict threshold, int32_t *__restrict texel, \
+      int32_t *__restrict inMap
+PENUMBRA_KERNEL_CLONES void receiverRowOrtho(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
+  receiverRowKernel<true>(k, n, position, normal, s, t, z, dzds, dzdt, biasOut, texelWorld, threshold, texel, inMap);
+}
+PENUMBRA_KERNEL_CLONES void receiverRowPerspective(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
+  receiverRowKernel<false>(k, n, position, normal, s, t, z, dzds, dzdt, biasOut, texelWorld, threshold, texel, inMap);
+}
+#undef PENUMBRA_RECEIVER_ROW_PARAMETERS
+
 }  // namespace
 
 void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
@@ -150,11 +174,9 @@ void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* w
   static_assert(sizeof(Vec3) == 3 * sizeof(float));
   const auto* position = reinterpret_cast<const float*>(wsPositions);
   const auto* normal = reinterpret_cast<const float*>(wsGeometricNormals);
-  (map.orthographic ? receiverRowKernel<true>
-                    : receiverRowKernel<false>)(k, n, position, normal, out.s.data(), out.t.data(), out.lsDepth.data(),
-                                                out.dzds.data(), out.dzdt.data(), out.bias.data(),
-                                                out.texelWorld.data(), out.nearestThreshold.data(),
-                                                out.nearestTexel.data(), out.inMap.data());
+  (map.orthographic ? receiverRowOrtho : receiverRowPerspective)(
+      k, n, position, normal, out.s.data(), out.t.data(), out.lsDepth.data(), out.dzds.data(), out.dzdt.data(),
+      out.bias.data(), out.texelWorld.data(), out.nearestThreshold.data(), out.nearestTexel.data(), out.inMap.data());
 }
 
 float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels) {
@@ -215,19 +237,11 @@ namespace {
 // scattered map reads alone, (3) the compares and weights, vectorized again, summed in four lanes so
 // no tap waits for the previous one's add. Phase 1 evaluates blockerThreshold's expression term by
 // term in its order and phase 3's compare is exact, so a tap sees the blocker litAtTexel sees.
-// Written without float selects or std::floor: GCC vectorizes those only with -fno-trapping-math.
+// Written without float selects or std::floor, which GCC vectorizes only with -fno-trapping-math (this
+// file has it now, for makeReceiverRow; these kernels were written before and need it not).
 constexpr size_t kTapChunk = 64;
 constexpr size_t kLanes = 4;  // the partial sums below are combined as four
 static_assert(kTapChunk % kLanes == 0);
-// The three disk kernels are also compiled for AVX2, picked at load time where the CPU has it (GCC
-// function multi-versioning): phases 1 and 3 then run 8 lanes wide instead of 4. No multiply-add is
-// fused (no FMA in the list, and this file is compiled with -ffp-contract=off for the AVX-512 path
-// below), so every path rounds alike: V is bit-identical on every CPU.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
-#define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define PENUMBRA_KERNEL_CLONES
-#endif
 
 // Offsets of pattern[first, first + n): each p rotated by `rotation` (cos, sin), then scaled to
 // radiusTexels.
