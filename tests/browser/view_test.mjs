@@ -143,6 +143,24 @@ try {
   check((await text('rmse8')) !== rmseStill, 'and changes its error', `${rmseStill} -> ${await text('rmse8')}`);
   await page.screenshot({ path: path.join(outDir, 'view_light_moved.png') });
 
+  // Orbit (a drag in camera mode) and zoom (the wheel): the camera moves, so the G-buffer is made again.
+  await page.selectOption('#dragMode', 'camera');
+  const cameraBefore = await page.evaluate(() => JSON.stringify(window.penumbraView.state.camera));
+  const gbuffersBefore = await page.evaluate(() => window.penumbraView.stats.gbufferFrames);
+  n = await frames();
+  await page.mouse.move(box.x + box.w * 0.5, box.y + box.h * 0.5);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.w * 0.5 + 40, box.y + box.h * 0.5 + 10, { steps: 4 });
+  await page.mouse.up();
+  await page.mouse.wheel(0, 200);
+  await waitFrames(n, 'after orbiting and zooming');
+  await page.waitForFunction((k) => window.penumbraView.stats.gbufferFrames > k, gbuffersBefore,
+    { timeout: 30000 }).catch(() => {});
+  const cameraAfter = await page.evaluate(() => JSON.stringify(window.penumbraView.state.camera));
+  check(cameraAfter !== cameraBefore, 'orbiting and zooming move the camera');
+  check(await page.evaluate((k) => window.penumbraView.stats.gbufferFrames > k, gbuffersBefore),
+    'a moved camera makes the G-buffer again');
+
   // Another technique.
   n = await frames();
   await page.selectOption('#technique', 'pcss');
