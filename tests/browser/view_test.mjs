@@ -145,12 +145,14 @@ try {
 
   // Orbit (a drag in camera mode) and zoom (the wheel): the camera moves, so the G-buffer is made again.
   await page.selectOption('#dragMode', 'camera');
+  const view = await page.$eval('#view', (c) => { const r = c.getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; });
   const cameraBefore = await page.evaluate(() => JSON.stringify(window.penumbraView.state.camera));
   const gbuffersBefore = await page.evaluate(() => window.penumbraView.stats.gbufferFrames);
   n = await frames();
-  await page.mouse.move(box.x + box.w * 0.5, box.y + box.h * 0.5);
+  // Left of the divider, which lies over the canvas's middle.
+  await page.mouse.move(view.x + view.w * 0.25, view.y + view.h * 0.5);
   await page.mouse.down();
-  await page.mouse.move(box.x + box.w * 0.5 + 40, box.y + box.h * 0.5 + 10, { steps: 4 });
+  await page.mouse.move(view.x + view.w * 0.25 + 40, view.y + view.h * 0.5 + 10, { steps: 4 });
   await page.mouse.up();
   await page.mouse.wheel(0, 200);
   await waitFrames(n, 'after orbiting and zooming');
