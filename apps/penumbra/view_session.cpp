@@ -401,6 +401,7 @@ ViewFrame ViewSession::render(const ViewRequest& request) {
   timer.reset();
   const int w = options_.width, h = options_.height;
   const FrameEncoding encoding = options_.encoding;
+  frame.display = request.display;
   switch (request.display) {
     case ViewDisplay::Visibility:
       if (techniqueValid_) frame.technique = makeImage(w, h, 1, grayBytes(v_), encoding);
@@ -424,7 +425,11 @@ ViewFrame ViewSession::render(const ViewRequest& request) {
 std::string encodeViewFrame(const ViewFrame& frame) {
   json passes = json::array();
   for (const auto& [pass, ms] : frame.passMs) passes.push_back(json::array({pass, ms}));
+  const char* display = frame.display == ViewDisplay::Shaded  ? "shaded"
+                        : frame.display == ViewDisplay::Error ? "error"
+                                                              : "v";
   json header = {{"passes", passes},
+                 {"display", display},
                  {"gbufferCached", frame.gbufferCached},
                  {"techniqueCached", frame.techniqueCached},
                  {"reference",

@@ -56,7 +56,8 @@ struct ViewImage {
 };
 
 struct ViewFrame {
-  std::optional<ViewImage> technique;  //!< none when the technique could not run (see techniqueError)
+  ViewDisplay display = ViewDisplay::Visibility;  //!< what the images show
+  std::optional<ViewImage> technique;             //!< none when the technique could not run (see techniqueError)
   ViewImage reference;
   std::optional<std::string> techniqueError;           //!< why the technique did not run on this light or scene
   std::vector<std::pair<std::string, double>> passMs;  //!< gbuffer, prepare, visibility, reference, metrics, encode

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -59,6 +60,11 @@ inline constexpr int64_t kMaxImagePixels = int64_t{8192} * 8192;
 // Throws Error "<where>: image size W x H ..." naming the limit that W x H breaks.
 void checkImageSize(int width, int height, const std::string& where);
 
+// What the techniques build from a scene's geometry alone (the Embree scene), kept with the scene
+// (internal: src/core/scene_caches.h).
+struct SceneCaches;
+std::shared_ptr<SceneCaches> makeSceneCaches();
+
 struct Scene {
   std::string name;    //!< built-in name or file stem
   std::string source;  //!< where it came from ("built-in:torus" or a file path), for messages and reports
@@ -74,6 +80,11 @@ struct Scene {
   std::optional<Motion> motion;
   // The files the scene was read from (the scene file and its mesh files): outputs never replace them.
   std::vector<std::string> inputFiles;
+  // Shared by every technique prepared on this scene or on a copy of it, so that one Embree scene
+  // serves them all. Each use checks that the geometry is the one it was built from (every object's
+  // id, positions and triangles, to the bit), so a changed mesh is never traced stale; null: each
+  // technique builds its own.
+  std::shared_ptr<SceneCaches> caches = makeSceneCaches();
 
   Bounds3 bounds() const;
   size_t triangleCount() const;

@@ -1,5 +1,6 @@
 #include "penumbra/scene.h"
 
+#include "core/scene_caches.h"
 #include "penumbra/error.h"
 
 namespace penumbra {
@@ -27,6 +28,8 @@ Vec3 Mesh::faceNormal(size_t i) const {
   const float len = glm::length(n);
   return len > 0.0f ? n / len : Vec3(0.0f);
 }
+
+std::shared_ptr<SceneCaches> makeSceneCaches() { return std::make_shared<SceneCaches>(); }
 
 Bounds3 Scene::bounds() const {
   Bounds3 b;

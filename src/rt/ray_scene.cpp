@@ -19,6 +19,7 @@
 #include <embree3/rtcore.h>
 
 #include "core/mesh_fingerprint.h"
+#include "core/scene_caches.h"
 #include "penumbra/error.h"
 
 namespace penumbra {
@@ -202,13 +203,24 @@ const RayScene& RaySceneCache::get(const Scene& scene) {
     const MeshFingerprint fingerprint = meshFingerprint(object.mesh);
     key.insert(key.end(), {static_cast<uint64_t>(static_cast<uint32_t>(object.id)), fingerprint.a, fingerprint.b});
   }
-  rebuilt_ = !rays_ || key != key_;
-  if (rebuilt_) {
-    rays_.reset();  // before the new one is built: never two BVHs of a large scene in memory at once
-    rays_ = std::make_unique<RayScene>(scene);
-    key_ = std::move(key);
-    bounds_ = scene.bounds();
+  SceneCaches local;  // a scene without caches: this technique's own
+  SceneCaches& caches = scene.caches ? *scene.caches : local;
+  std::lock_guard lock(caches.mutex);
+  if (!scene.caches && rays_ && key == key_) {  // kept by this technique alone
+    rebuilt_ = false;
+    return *rays_;
   }
+  rebuilt_ = !caches.rayScene || caches.rayKey != key;
+  if (rebuilt_) {
+    rays_.reset();            // this technique's hold on the old one: freed before the new one is
+    caches.rayScene.reset();  // built unless another technique still traces it
+    caches.rayScene = std::make_shared<const RayScene>(scene);
+    caches.rayKey = key;
+    caches.rayBounds = scene.bounds();
+  }
+  rays_ = std::static_pointer_cast<const RayScene>(caches.rayScene);
+  bounds_ = caches.rayBounds;
+  key_ = std::move(key);
   return *rays_;
 }
 

@@ -78,18 +78,20 @@ class RayScene {
 // A RayScene kept while the geometry it was built from stays the same: every object's id, positions
 // and triangles the same to the bit (meshFingerprint), as under a light or camera moving over a static
 // scene. Each ray-traced technique holds one, so its steady prepare builds no BVH; any change to the
-// geometry (or another scene with other geometry) builds it afresh.
+// geometry (or another scene with other geometry) builds it afresh. The RayScene itself lives in the
+// scene's caches (Scene::caches), so every technique prepared on a scene, or on a copy of it, shares
+// one; a scene without caches gets one of its own here.
 class RaySceneCache {
  public:
   const RayScene& get(const Scene& scene);
-  // Whether the last get() built the scene (rather than keeping the one it had).
+  // Whether the last get() built the scene (rather than finding it built, by this or another technique).
   bool rebuilt() const { return rebuilt_; }
   // The bounds of the geometry of the last get() (Scene::bounds, kept with the BVH).
   const Bounds3& bounds() const { return bounds_; }
 
  private:
-  std::vector<uint64_t> key_;  //!< per object: id, fingerprint.a, fingerprint.b
-  std::unique_ptr<RayScene> rays_;
+  std::shared_ptr<const RayScene> rays_;  //!< held while this technique may trace it
+  std::vector<uint64_t> key_;             //!< per object: id, fingerprint.a, fingerprint.b
   bool rebuilt_ = false;
   Bounds3 bounds_;
 };

@@ -203,9 +203,13 @@ try {
     n = await frames();
     await page.check(`input[name=display][value=${display}]`);
     await waitFrames(n, `the ${display} display`);
+    // A frame asked for before the click may arrive first: wait for one of this display.
+    await page.waitForFunction((d) => window.penumbraView.stats.lastHeader.display === d, display,
+      { timeout: 30000 }).catch(() => {});
     const header = await page.evaluate(() => window.penumbraView.stats.lastHeader);
     const technique = header.images.find((i) => i.side === 'technique');
-    check(technique && technique.channels === 3, `the ${display} display arrives in colour`);
+    check(header.display === display && technique && technique.channels === 3,
+      `the ${display} display arrives in colour`);
   }
   await page.screenshot({ path: path.join(outDir, 'view_error.png'), fullPage: true });
 

@@ -103,11 +103,13 @@ TEST(Engine, NormalsTurnTowardsTheCamera) {
   std::vector<float> p, n;
   for (const Vec3& v : own.wsPosition) p.insert(p.end(), {v.x, v.y, v.z});
   for (const Vec3& v : own.wsNormal) n.insert(n.end(), {-v.x, -v.y, -v.z});  // facing away
-  EngineGBuffer buffers{32, 32, p, n, std::span<const int32_t>(own.objectId.data(), own.objectId.size())};
+  EngineGBuffer buffers{32, 32, p, n, std::span<const int32_t>(own.objectId.data(), own.objectId.size()), {}, {}};
   const GBuffer g = makeGBuffer(buffers, original.camera, meshes);
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x)
-      if (own.hit(x, y)) EXPECT_LT(glm::length(g.wsNormal(x, y) - own.wsNormal(x, y)), 1e-6f);
+      if (own.hit(x, y)) {
+        EXPECT_LT(glm::length(g.wsNormal(x, y) - own.wsNormal(x, y)), 1e-6f);
+      }
 }
 
 TEST(Engine, BadMeshesAndBuffersAreRefusedByName) {
@@ -136,7 +138,7 @@ TEST(Engine, BadMeshesAndBuffersAreRefusedByName) {
   const std::vector<EngineMesh> meshes = {{0, tri, ok}};
   std::vector<float> p = {0.2f, 0.0f, 0.2f}, n = {0.0f, 1.0f, 0.0f};
   std::vector<int32_t> id = {0};
-  EngineGBuffer b{1, 1, p, n, id};
+  EngineGBuffer b{1, 1, p, n, id, {}, {}};
   EXPECT_NO_THROW(makeGBuffer(b, camera, meshes));
   id[0] = 7;
   EXPECT_NE(messageOf([&] {

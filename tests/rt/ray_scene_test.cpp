@@ -197,6 +197,33 @@ TEST(RaySceneCache, KeepsTheSceneWhileTheGeometryIsTheSameAndRebuildsItOtherwise
   EXPECT_TRUE(cache.rebuilt());
 }
 
+TEST(RaySceneCache, TechniquesOnOneSceneOrItsCopiesShareOneRayScene) {
+  Scene scene = twoQuads();
+  RaySceneCache first, second, third;
+  const RayScene& a = first.get(scene);
+  EXPECT_TRUE(first.rebuilt());
+  const Scene copy = scene;  // a copy shares the caches
+  const RayScene& b = second.get(copy);
+  EXPECT_FALSE(second.rebuilt()) << "a second technique built its own Embree scene";
+  EXPECT_EQ(&a, &b);
+  // Geometry changed in the original: the next technique builds anew; the first still holds the old
+  // one until its own next get().
+  for (Vec3& p : scene.objects[0].mesh.positions) p.z -= 1.0f;
+  const RayScene& c = third.get(scene);
+  EXPECT_TRUE(third.rebuilt());
+  EXPECT_NE(&c, &a);
+  EXPECT_FLOAT_EQ(a.intersect(makeRay(Vec3(-0.5f, 0.0f, 5.0f), Vec3(0, 0, -1)))->t, 5.0f);  // still valid
+  EXPECT_FLOAT_EQ(c.intersect(makeRay(Vec3(-0.5f, 0.0f, 5.0f), Vec3(0, 0, -1)))->t, 6.0f);
+  // A scene without caches: each technique its own, kept while the geometry is the same.
+  Scene alone = twoQuads();
+  alone.caches = nullptr;
+  RaySceneCache own;
+  const RayScene& d = own.get(alone);
+  EXPECT_TRUE(own.rebuilt());
+  EXPECT_EQ(&own.get(alone), &d);
+  EXPECT_FALSE(own.rebuilt());
+}
+
 TEST(ShadowRayEpsilon, ScalesWithTheSceneAndItsDistanceFromTheOrigin) {
   Bounds3 unit;
   unit.extend(Vec3(-1.0f));

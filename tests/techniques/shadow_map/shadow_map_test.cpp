@@ -200,7 +200,9 @@ TEST(ShadowMap, ReceiverRowIsMakeReceiverToTheBit) {
             }
           }
           EXPECT_GT(checked, 0);
-          if (mapVariant == &narrow) EXPECT_GT(outside, 0) << name;
+          if (mapVariant == &narrow) {
+            EXPECT_GT(outside, 0) << name;
+          }
         }
       }
     }
