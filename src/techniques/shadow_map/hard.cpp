@@ -31,7 +31,7 @@ class HardShadowTechnique final : public ShadowTechnique {
     if (map_.size == 0) fail("hard: visibility() called before prepare()");
     // hardShadow from the row's nearest-texel thresholds: one vectorized set-up per row, then one
     // compare per pixel.
-    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+    v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
     const float* depth = map_.lsDepth.row(0);
     tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
       ReceiverRow r;
@@ -42,8 +42,7 @@ class HardShadowTechnique final : public ShadowTechnique {
         const int32_t* ids = gbuffer.objectId.row(y);
         for (int x = 0; x < gbuffer.width(); ++x) {
           const auto i = static_cast<size_t>(x);
-          if (ids[x] != kNoObject && r.inMap[i])
-            out[x] = depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
+          out[x] = ids[x] != kNoObject && r.inMap[i] && depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
         }
       }
     });

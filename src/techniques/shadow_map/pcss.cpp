@@ -104,7 +104,7 @@ class PcssTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
-    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+    v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
     std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
     // As forEachReceiver, with per-range counts of the paths the pixels took.
     tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
@@ -115,7 +115,7 @@ class PcssTechnique final : public ShadowTechnique {
                         options_.bias, receivers);
         float* out = v.row(y);
         for (int x = 0; x < gbuffer.width(); ++x)
-          if (gbuffer.hit(x, y)) out[x] = pixelVisibility(receivers[x], x, y, local);
+          out[x] = gbuffer.hit(x, y) ? pixelVisibility(receivers[x], x, y, local) : 1.0f;
       }
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });

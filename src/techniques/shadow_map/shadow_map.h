@@ -258,7 +258,9 @@ inline float pcfDiskNearest(const LightMap& map, const ShadowReceiver& r, float 
 // nothing. Deterministic: every pixel is computed on its own.
 template <class F>
 void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, Image<float>& v, F&& f) {
-  v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  // Every pixel written below, in parallel: no serial fill first (and a fresh image's pages are first
+  // touched by both cores).
+  v.resizeForOverwrite(gbuffer.width(), gbuffer.height());
   tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
     ReceiverRow receivers;  // per task: a few per frame
     for (int y = rows.begin(); y < rows.end(); ++y) {
@@ -266,8 +268,7 @@ void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBia
                       receivers);
       float* out = v.row(y);
       const int32_t* ids = gbuffer.objectId.row(y);
-      for (int x = 0; x < gbuffer.width(); ++x)
-        if (ids[x] != kNoObject) out[x] = f(x, y, receivers[x]);
+      for (int x = 0; x < gbuffer.width(); ++x) out[x] = ids[x] != kNoObject ? f(x, y, receivers[x]) : 1.0f;
     }
   });
 }
@@ -276,12 +277,11 @@ void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBia
 // V = 1 where the pixel sees nothing. Deterministic: every pixel is computed on its own.
 template <class F>
 void forEachReceiverPixel(const GBuffer& gbuffer, Image<float>& v, F&& f) {
-  v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below
   tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
       float* out = v.row(y);
-      for (int x = 0; x < gbuffer.width(); ++x)
-        if (gbuffer.hit(x, y)) out[x] = f(x, y);
+      for (int x = 0; x < gbuffer.width(); ++x) out[x] = gbuffer.hit(x, y) ? f(x, y) : 1.0f;
     }
   });
 }
