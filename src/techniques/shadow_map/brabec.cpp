@@ -615,6 +615,12 @@ void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
 }
 
 BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, int y) const {
+  if (!gbuffer.hit(x, y)) return Pixel{};
+  return classify(gbuffer, x, y,
+                  makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias));
+}
+
+BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, int y, const ShadowReceiver& r) const {
   Pixel p;
   if (!gbuffer.hit(x, y)) return p;
   p.objectId = p.key = gbuffer.objectId(x, y);
@@ -626,7 +632,6 @@ BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, 
     p.cls = Pixel::BackFacing;
     return p;
   }
-  const ShadowReceiver r = makeReceiver(map_, wsP, wsNg, options_.bias);
   const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
   if (!r.inMap || i < 0 || j < 0 || i >= map_.size || j >= map_.size) {
     p.cls = Pixel::OutOfMap;
@@ -851,13 +856,17 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!options_.interpolate) {
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t hitCount = 0, searchCount = 0;
-      for (int y = rows.begin(); y < rows.end(); ++y)
+      ReceiverRow receivers;
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), width, options_.bias,
+                        receivers);
         for (int x = 0; x < width; ++x) {
-          const Pixel p = classify(gbuffer, x, y);
+          const Pixel p = classify(gbuffer, x, y, receivers[x]);
           out[static_cast<size_t>(y) * width + x] = evaluate(p);
           hitCount += p.cls != Pixel::Miss;
           searchCount += searched(p);
         }
+      }
       hits += hitCount;
       searches += searchCount;
     });
@@ -873,14 +882,18 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     std::vector<int32_t>& key = scratchKey_;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t hitCount = 0;
-      for (int y = rows.begin(); y < rows.end(); ++y)
+      ReceiverRow receivers;
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), width, options_.bias,
+                        receivers);
         for (int x = 0; x < width; ++x) {
-          const Pixel p = classify(gbuffer, x, y);
+          const Pixel p = classify(gbuffer, x, y, receivers[x]);
           const size_t k = static_cast<size_t>(y) * width + x;
           cls[k] = p.cls;
           key[k] = p.key;
           hitCount += p.cls != Pixel::Miss;
         }
+      }
       hits += hitCount;
     });
     auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };

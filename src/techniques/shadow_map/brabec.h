@@ -269,6 +269,8 @@ class BrabecTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
   struct Pixel;
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
+  // The same with the pixel's receiver already set up (makeReceiverRow: a row's at once).
+  Pixel classify(const GBuffer& gbuffer, int x, int y, const ShadowReceiver& receiver) const;
   // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
   // the texel the search found, (0, 0) when it found none; `raised` (optional) whether the coverage
   // bound raised V.
