@@ -16,6 +16,8 @@ import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
 
+import { check, summary } from './check.mjs';
+
 const [binary, outArg] = process.argv.slice(2);
 if (!binary || !outArg) {
   console.error('usage: node report_test.mjs PENUMBRA_BINARY OUT_DIR');
@@ -24,17 +26,6 @@ if (!binary || !outArg) {
 const outDir = path.resolve(outArg);
 const executablePath = process.env.PENUMBRA_CHROMIUM || '/usr/bin/chromium';
 
-let passed = 0;
-let failed = 0;
-function check(ok, what, detail = '') {
-  if (ok) {
-    passed += 1;
-    console.log(`ok   ${what}`);
-  } else {
-    failed += 1;
-    console.log(`FAIL ${what}${detail ? `: ${detail}` : ''}`);
-  }
-}
 
 // A fresh report: a small image keeps it to a few seconds; two map sizes give the map-size plot.
 fs.rmSync(outDir, { recursive: true, force: true });
@@ -174,5 +165,4 @@ try {
   await browser.close();
 }
 
-console.log(`browser: ${passed} passed, ${failed} failed`);
-process.exit(failed === 0 ? 0 : 1);
+process.exit(summary(`screenshot in ${outDir}`));

@@ -15,6 +15,8 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { chromium } from 'playwright-core';
 
+import { check, summary } from './check.mjs';
+
 const [binary, outArg] = process.argv.slice(2);
 if (!binary || !outArg) {
   console.error('usage: node view_test.mjs PENUMBRA_BINARY OUT_DIR');
@@ -25,34 +27,30 @@ fs.rmSync(outDir, { recursive: true, force: true });
 fs.mkdirSync(outDir, { recursive: true });
 const executablePath = process.env.PENUMBRA_CHROMIUM || '/usr/bin/chromium';
 
-let passed = 0;
-let failed = 0;
-function check(ok, what, detail = '') {
-  if (ok) {
-    passed += 1;
-    console.log(`ok   ${what}`);
-  } else {
-    failed += 1;
-    console.log(`FAIL ${what}${detail ? `: ${detail}` : ''}`);
-  }
+
+// `penumbra view ARGS` started, once it has printed its URL: { url, output(), exited (its exit code and
+// signal), process }.
+async function startView(args) {
+  const child = spawn(binary, ['view', ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+  let out = '';
+  child.stdout.on('data', (d) => { out += d; });
+  child.stderr.on('data', (d) => { out += d; });
+  const exited = new Promise((resolve) => child.on('exit', (code, signal) => resolve({ code, signal })));
+  const url = await new Promise((resolve, reject) => {
+    const timer = setInterval(() => {
+      const m = out.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
+      if (m) { clearInterval(timer); resolve(m[0]); }
+    }, 50);
+    exited.then(() => { clearInterval(timer); reject(new Error(`penumbra view exited:\n${out}`)); });
+  });
+  return { url, output: () => out, exited, process: child };
 }
 
 // The server: a small image and a short reference keep it to seconds; --max-seconds ends it should the
 // test hang.
-const server = spawn(binary, ['view', '--scene', 'crowded', '--width', '256', '--height', '256', '--port', '0',
-  '--technique', 'hard', '--reference-spp', '126', '--max-seconds', '240', '--threads', '2'],
-{ stdio: ['ignore', 'pipe', 'pipe'] });
-let serverOut = '';
-server.stdout.on('data', (d) => { serverOut += d; });
-server.stderr.on('data', (d) => { serverOut += d; });
-const exited = new Promise((resolve) => server.on('exit', (code, signal) => resolve({ code, signal })));
-const url = await new Promise((resolve, reject) => {
-  const timer = setInterval(() => {
-    const m = serverOut.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
-    if (m) { clearInterval(timer); resolve(m[0]); }
-  }, 50);
-  exited.then(() => { clearInterval(timer); reject(new Error(`penumbra view exited:\n${serverOut}`)); });
-});
+const server = await startView(['--scene', 'crowded', '--width', '256', '--height', '256', '--port', '0',
+  '--technique', 'hard', '--reference-spp', '126', '--max-seconds', '240', '--threads', '2']);
+const url = server.url;
 const origin = new URL(url).origin;
 
 const browser = await chromium.launch({
@@ -225,19 +223,9 @@ try {
 
 // A scene with several lights: the light selector, and a polygon light's own shape.
 {
-  const several = spawn(binary, ['view', '--scene', 'concave', '--width', '128', '--height', '128', '--port', '0',
-    '--technique', 'hard', '--reference-spp', '2', '--max-seconds', '120', '--threads', '2'], { stdio: ['ignore', 'pipe', 'pipe'] });
-  let out = '';
-  several.stdout.on('data', (d) => { out += d; });
-  several.stderr.on('data', (d) => { out += d; });
-  const done = new Promise((resolve) => several.on('exit', (code) => resolve(code)));
-  const address = await new Promise((resolve, reject) => {
-    const timer = setInterval(() => {
-      const m = out.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
-      if (m) { clearInterval(timer); resolve(m[0]); }
-    }, 50);
-    done.then(() => { clearInterval(timer); reject(new Error(`penumbra view exited:\n${out}`)); });
-  });
+  const several = await startView(['--scene', 'concave', '--width', '128', '--height', '128', '--port', '0',
+    '--technique', 'hard', '--reference-spp', '2', '--max-seconds', '120', '--threads', '2']);
+  const address = several.url;
   const again = await chromium.launch({ executablePath, args: ['--no-sandbox', '--disable-gpu'] });
   try {
     const page = await again.newPage({ viewport: { width: 1100, height: 800 } });
@@ -258,14 +246,14 @@ try {
   } finally {
     await again.close();
   }
-  several.kill('SIGTERM');
-  check((await done) === 0 && /stopped \(SIGTERM\)/.test(out), 'SIGTERM stops the server cleanly', out.trim().split('\n').pop());
+  several.process.kill('SIGTERM');
+  check((await several.exited).code === 0 && /stopped \(SIGTERM\)/.test(several.output()), 'SIGTERM stops the server cleanly',
+    several.output().trim().split('\n').pop());
 }
 
-server.kill('SIGINT');
-const end = await exited;
-check(end.code === 0 && /stopped \(Ctrl-C\)/.test(serverOut), 'Ctrl-C stops the server cleanly',
-  `exit ${end.code} ${end.signal ?? ''}: ${serverOut.trim().split('\n').pop()}`);
+server.process.kill('SIGINT');
+const end = await server.exited;
+check(end.code === 0 && /stopped \(Ctrl-C\)/.test(server.output()), 'Ctrl-C stops the server cleanly',
+  `exit ${end.code} ${end.signal ?? ''}: ${server.output().trim().split('\n').pop()}`);
 
-console.log(`\n${passed} passed, ${failed} failed; screenshots in ${outDir}`);
-process.exit(failed ? 1 : 0);
+process.exit(summary(`screenshots in ${outDir}`));

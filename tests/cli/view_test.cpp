@@ -239,22 +239,42 @@ TEST(ViewSession, RequestsAreCheckedFieldByField) {
             std::string::npos);
 }
 
+// `penumbra view ARGS` started with its output on a pipe, read up to the line with its URL.
+struct RunningView {
+  FILE* pipe = nullptr;
+  int port = 0;
+  std::string output;
+
+  explicit RunningView(const std::string& args) {
+    pipe = popen((std::string(PENUMBRA_CLI) + " view " + args + " 2>&1").c_str(), "r");
+    char line[4096];
+    while (pipe && port == 0 && std::fgets(line, sizeof line, pipe)) {
+      output += line;
+      std::smatch m;
+      const std::string text = line;
+      if (std::regex_search(text, m, std::regex(R"(http://127\.0\.0\.1:(\d+)/)"))) port = std::stoi(m[1]);
+    }
+  }
+  RunningView(const RunningView&) = delete;
+  RunningView& operator=(const RunningView&) = delete;
+  // Reads the rest of the output and waits for the program to end; its wait status.
+  int finish() {
+    char line[4096];
+    while (std::fgets(line, sizeof line, pipe)) output += line;
+    const int status = pclose(pipe);
+    pipe = nullptr;
+    return status;
+  }
+  ~RunningView() {
+    if (pipe) finish();
+  }
+};
+
 // The binary's server, as a browser meets it.
 TEST(ViewServer, ServesOnlyItsPageAndApiOnLoopbackAndStops) {
-  const std::string command = std::string(PENUMBRA_CLI) +
-                              " view --scene crowded --width 48 --height 48 --port 0 --max-seconds 6 --threads 2 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char line[4096];
-  int port = 0;
-  while (port == 0 && std::fgets(line, sizeof line, pipe)) {
-    output += line;
-    std::smatch m;
-    const std::string text = line;
-    if (std::regex_search(text, m, std::regex(R"(http://127\.0\.0\.1:(\d+)/)"))) port = std::stoi(m[1]);
-  }
-  ASSERT_GT(port, 0) << output;
+  RunningView view("--scene crowded --width 48 --height 48 --port 0 --max-seconds 6 --threads 2");
+  ASSERT_GT(view.port, 0) << view.output;
+  const int port = view.port;
 
   httplib::Client client("127.0.0.1", port);
   const auto page = client.Get("/");
@@ -297,28 +317,16 @@ TEST(ViewServer, ServesOnlyItsPageAndApiOnLoopbackAndStops) {
   EXPECT_EQ(frame->status, 200);
   EXPECT_EQ(frameHeader(frame->body)["images"].size(), 2u);
 
-  while (std::fgets(line, sizeof line, pipe)) output += line;
-  const int status = pclose(pipe);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
-  EXPECT_NE(output.find("stopped (--max-seconds 6)"), std::string::npos) << output;
+  const int status = view.finish();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << view.output;
+  EXPECT_NE(view.output.find("stopped (--max-seconds 6)"), std::string::npos) << view.output;
 }
 
 // Three requests at once: the first renders; of the two waiting, the older gives way to the newer.
 TEST(ViewServer, ARequestWaitingBehindANewerOneIsDropped) {
-  const std::string command =
-      std::string(PENUMBRA_CLI) + " view --scene crowded --width 1536 --height 1536 --port 0 --max-seconds 8 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char line[4096];
-  int port = 0;
-  while (port == 0 && std::fgets(line, sizeof line, pipe)) {
-    output += line;
-    std::smatch m;
-    const std::string text = line;
-    if (std::regex_search(text, m, std::regex(R"(http://127\.0\.0\.1:(\d+)/)"))) port = std::stoi(m[1]);
-  }
-  ASSERT_GT(port, 0) << output;
+  RunningView view("--scene crowded --width 1536 --height 1536 --port 0 --max-seconds 8");
+  ASSERT_GT(view.port, 0) << view.output;
+  const int port = view.port;
   const std::string request =
       R"({"camera": {"position": [0, 8, 10], "lookAt": [0, 0.5, 0], "up": [0, 1, 0], "fovY": 45},
           "light": {"index": 0, "shape": "sphere", "position": [0.5, 8, -1], "size": 0.8},
@@ -338,25 +346,17 @@ TEST(ViewServer, ARequestWaitingBehindANewerOneIsDropped) {
   EXPECT_EQ(status[0], 200);
   EXPECT_EQ(status[1], 409) << "the second request was rendered although a newer one waited";
   EXPECT_EQ(status[2], 200);
-  while (std::fgets(line, sizeof line, pipe)) output += line;
-  pclose(pipe);
 }
 
 TEST(ViewServer, ABusyPortIsRefusedByName) {
   httplib::Server holder;
   const int port = holder.bind_to_any_port("127.0.0.1");
   ASSERT_GT(port, 0);
-  const std::string command =
-      std::string(PENUMBRA_CLI) + " view --scene torus --port " + std::to_string(port) + " --max-seconds 2 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char line[4096];
-  while (std::fgets(line, sizeof line, pipe)) output += line;
-  const int status = pclose(pipe);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << output;
-  EXPECT_NE(output.find(fmt::format("--port {}: cannot listen on 127.0.0.1:{}", port, port)), std::string::npos)
-      << output;
+  RunningView view("--scene torus --port " + std::to_string(port) + " --max-seconds 2");
+  const int status = view.finish();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << view.output;
+  EXPECT_NE(view.output.find(fmt::format("--port {}: cannot listen on 127.0.0.1:{}", port, port)), std::string::npos)
+      << view.output;
 }
 
 }  // namespace
