@@ -205,6 +205,11 @@ class OutputLock {
   int fd_ = -1;
 };
 
+// Builds the scene's shared Embree scene (Scene::caches) before any technique is timed and returns the
+// milliseconds it took: the ray-traced techniques then share it, and none of their times includes it
+// (whichever ran first would otherwise pay for all). Reports show it apart, as the G-buffer's time.
+double buildSharedRayScene(const Scene& scene);
+
 // Every technique name if `names` is empty; otherwise the names, checked against the registry.
 std::vector<std::string> techniqueList(const std::vector<std::string>& names);
 // `hard` if registered, else `raytraced-hard`.

@@ -21,6 +21,7 @@
 #include "core/output_file.h"
 #include "penumbra/error.h"
 #include "penumbra/scene_io.h"
+#include "rt/ray_scene.h"
 
 namespace penumbra::cli {
 
@@ -177,6 +178,13 @@ void addFrameSettings(KeyValues& settings, const FrameOptions& options) {
 }
 
 const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
+
+double buildSharedRayScene(const Scene& scene) {
+  Timer timer;
+  RaySceneCache cache;
+  cache.get(scene);  // kept in scene.caches after this holder goes
+  return timer.elapsedMs();
+}
 
 void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques) {
   for (const std::string& kv : params) {

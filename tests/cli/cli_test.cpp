@@ -298,6 +298,9 @@ TEST_F(CliTest, CompareWritesReportWithReferenceAndNone) {
   ASSERT_TRUE(none) << j.dump(2);
   EXPECT_EQ(j["truth"]["name"], "reference");
   EXPECT_EQ(j["truth"]["params"]["spp"], "4");  // --spp sets the truth
+  // The times say what they are: a first frame each, the shared Embree scene's build apart.
+  EXPECT_NE(j["settings"]["timings"].get<std::string>().find("its first"), std::string::npos) << j["settings"];
+  EXPECT_GE(std::stod(j["settings"]["ray_scene_ms"].get<std::string>()), 0.0);
   EXPECT_LT(j["truth"]["rmse8"].get<double>(), 1e-9);
   EXPECT_GT(none->at("rmse8").get<double>(), 1.0);  // a sphere over a plane: a real shadow in frame
   EXPECT_TRUE(j["truth"]["stats"].contains("mean_std_error")) << j["truth"].dump(2);
@@ -906,6 +909,8 @@ TEST_F(CliTest, BenchOnAStillSceneSeparatesTheFirstFrame) {
   const nlohmann::json j = nlohmann::json::parse(read("s.json"));
   EXPECT_NE(j["settings"]["statistic"].get<std::string>().find("median over repeats 2 to N"), std::string::npos);
   EXPECT_TRUE(j["settings"].contains("gbuffer_first_ms"));
+  EXPECT_TRUE(j["settings"].contains("ray_scene_ms"));  // built once before any technique, in none of their times
+  EXPECT_NE(r.output.find("Embree scene"), std::string::npos) << r.output;
   ASSERT_EQ(j["techniques"].size(), 2u) << j.dump(2);
   for (const auto& row : j["techniques"]) {
     ASSERT_TRUE(row["stats"].contains("first_frame_ms")) << row.dump(2);
