@@ -854,18 +854,13 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   auto searched = [](const Pixel& p) { return p.cls == Pixel::Lit || p.cls == Pixel::Blocked; };
   float* out = v.data();
   if (!options_.interpolate) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
       int64_t hitCount = 0, searchCount = 0;
-      ReceiverRow receivers;
-      for (int y = rows.begin(); y < rows.end(); ++y) {
-        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), width, options_.bias,
-                        receivers);
-        for (int x = 0; x < width; ++x) {
-          const Pixel p = classify(gbuffer, x, y, receivers[x]);
-          out[static_cast<size_t>(y) * width + x] = evaluate(p);
-          hitCount += p.cls != Pixel::Miss;
-          searchCount += searched(p);
-        }
+      for (int x = 0; x < width; ++x) {
+        const Pixel p = classify(gbuffer, x, y, receivers[x]);
+        out[static_cast<size_t>(y) * width + x] = evaluate(p);
+        hitCount += p.cls != Pixel::Miss;
+        searchCount += searched(p);
       }
       hits += hitCount;
       searches += searchCount;
@@ -880,19 +875,14 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     std::vector<uint8_t>& cls = scratchClass_;
     std::vector<uint8_t>& known = scratchKnown_;
     std::vector<int32_t>& key = scratchKey_;
-    tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
       int64_t hitCount = 0;
-      ReceiverRow receivers;
-      for (int y = rows.begin(); y < rows.end(); ++y) {
-        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), width, options_.bias,
-                        receivers);
-        for (int x = 0; x < width; ++x) {
-          const Pixel p = classify(gbuffer, x, y, receivers[x]);
-          const size_t k = static_cast<size_t>(y) * width + x;
-          cls[k] = p.cls;
-          key[k] = p.key;
-          hitCount += p.cls != Pixel::Miss;
-        }
+      for (int x = 0; x < width; ++x) {
+        const Pixel p = classify(gbuffer, x, y, receivers[x]);
+        const size_t k = static_cast<size_t>(y) * width + x;
+        cls[k] = p.cls;
+        key[k] = p.key;
+        hitCount += p.cls != Pixel::Miss;
       }
       hits += hitCount;
     });

@@ -33,17 +33,12 @@ class HardShadowTechnique final : public ShadowTechnique {
     // compare per pixel.
     v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
     const float* depth = map_.lsDepth.row(0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-      ReceiverRow r;
-      for (int y = rows.begin(); y < rows.end(); ++y) {
-        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(),
-                        options_.bias, r);
-        float* out = v.row(y);
-        const int32_t* ids = gbuffer.objectId.row(y);
-        for (int x = 0; x < gbuffer.width(); ++x) {
-          const auto i = static_cast<size_t>(x);
-          out[x] = ids[x] != kNoObject && r.inMap[i] && depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
-        }
+    forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& r) {
+      float* out = v.row(y);
+      const int32_t* ids = gbuffer.objectId.row(y);
+      for (int x = 0; x < gbuffer.width(); ++x) {
+        const auto i = static_cast<size_t>(x);
+        out[x] = ids[x] != kNoObject && r.inMap[i] && depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
       }
     });
   }

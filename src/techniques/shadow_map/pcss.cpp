@@ -106,17 +106,12 @@ class PcssTechnique final : public ShadowTechnique {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
     v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
     std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
-    // As forEachReceiver, with per-range counts of the paths the pixels took.
-    tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    // As forEachReceiver, with per-row counts of the paths the pixels took.
+    forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
       std::array<int64_t, kPathCount + 1> local{};
-      ReceiverRow receivers;
-      for (int y = rows.begin(); y < rows.end(); ++y) {
-        makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(),
-                        options_.bias, receivers);
-        float* out = v.row(y);
-        for (int x = 0; x < gbuffer.width(); ++x)
-          out[x] = gbuffer.hit(x, y) ? pixelVisibility(receivers[x], x, y, local) : 1.0f;
-      }
+      float* out = v.row(y);
+      for (int x = 0; x < gbuffer.width(); ++x)
+        out[x] = gbuffer.hit(x, y) ? pixelVisibility(receivers[x], x, y, local) : 1.0f;
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
     int64_t total = 0;

@@ -253,6 +253,21 @@ inline float pcfDiskNearest(const LightMap& map, const ShadowReceiver& r, float 
   return pcfDiskNearest(depthTexels(map), r, radiusTexels, pattern, rotation);
 }
 
+// Runs f(y, receivers) for every row y of the G-buffer with the row's receivers in `map`
+// (makeReceiverRow), in parallel over rows: the loop of forEachReceiver, for passes that read the
+// row's arrays themselves (hard's nearest-texel compare) or count per row.
+template <class F>
+void forEachReceiverRow(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    ReceiverRow receivers;  // per task: a few per frame
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), bias,
+                      receivers);
+      f(y, static_cast<const ReceiverRow&>(receivers));
+    }
+  });
+}
+
 // Runs f(x, y, receiver) -> V for every pixel of the G-buffer that sees geometry, with its receiver in
 // `map` set up a row at a time (makeReceiverRow), in parallel over rows; V = 1 where the pixel sees
 // nothing. Deterministic: every pixel is computed on its own.
@@ -261,15 +276,10 @@ void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBia
   // Every pixel written below, in parallel: no serial fill first (and a fresh image's pages are first
   // touched by both cores).
   v.resizeForOverwrite(gbuffer.width(), gbuffer.height());
-  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-    ReceiverRow receivers;  // per task: a few per frame
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), bias,
-                      receivers);
-      float* out = v.row(y);
-      const int32_t* ids = gbuffer.objectId.row(y);
-      for (int x = 0; x < gbuffer.width(); ++x) out[x] = ids[x] != kNoObject ? f(x, y, receivers[x]) : 1.0f;
-    }
+  forEachReceiverRow(gbuffer, map, bias, [&](int y, const ReceiverRow& receivers) {
+    float* out = v.row(y);
+    const int32_t* ids = gbuffer.objectId.row(y);
+    for (int x = 0; x < gbuffer.width(); ++x) out[x] = ids[x] != kNoObject ? f(x, y, receivers[x]) : 1.0f;
   });
 }
 
