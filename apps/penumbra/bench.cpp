@@ -118,7 +118,7 @@ int runBench(const BenchOptions& options) {
     if (gbufferMs.size() > 1) gbufferMs.erase(gbufferMs.begin());
   }
 
-  const double raySceneMs = buildSharedRayScene(setup.scene);
+  const std::optional<double> raySceneMs = buildSharedRayScene(setup.scene, names);
   Report report = beginReport("bench", setup, baseline);
   // The G-buffer's time is reported once all runs are in (over a sequence, every frame renders its own).
   report.settings = {{motion ? "frames" : "repeat", fmt::format("{}", repeat)},
@@ -149,12 +149,13 @@ int runBench(const BenchOptions& options) {
     report.rows.push_back(std::move(row));
   }
   report.settings.emplace_back("gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs)));
-  report.settings.emplace_back("ray_scene_ms", fmt::format("{:.3f}", raySceneMs));
+  if (raySceneMs) report.settings.emplace_back("ray_scene_ms", fmt::format("{:.3f}", *raySceneMs));
   if (!motion) report.settings.emplace_back("gbuffer_first_ms", fmt::format("{:.3f}", gbufferFirstMs));
   addFrameSettings(report.settings, options.frame);
   fillBaselineRatios(report);
   // The Embree scene is built once for the scene before any technique (buildSharedRayScene).
-  const std::string rayScene = fmt::format("; Embree scene {:.2f} ms, built once, shared", raySceneMs);
+  const std::string rayScene =
+      raySceneMs ? fmt::format("; Embree scene {:.2f} ms, built once, shared", *raySceneMs) : std::string();
   if (motion)
     fmt::print("G-buffer raster {:.2f} ms (median of {}){}\n\n{}", median(gbufferMs), gbufferMs.size(), rayScene,
                reportToText(report));

@@ -208,7 +208,8 @@ class OutputLock {
 // Builds the scene's shared Embree scene (Scene::caches) before any technique is timed and returns the
 // milliseconds it took: the ray-traced techniques then share it, and none of their times includes it
 // (whichever ran first would otherwise pay for all). Reports show it apart, as the G-buffer's time.
-double buildSharedRayScene(const Scene& scene);
+// Nothing is built (nullopt) when none of `techniques` traces rays (TechniqueInfo::tracesRays).
+std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<std::string>& techniques);
 
 // Every technique name if `names` is empty; otherwise the names, checked against the registry.
 std::vector<std::string> techniqueList(const std::vector<std::string>& names);

@@ -448,7 +448,9 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   checkResources(setup, planned, keptImages, options.frame.force);
 
   fmt::print("{}\n{} frames: {}\n", describeSetup(setup), motion.frames, describeMotion(motion));
-  const double raySceneMs = buildSharedRayScene(setup.scene);
+  std::vector<std::string> runHere = names;
+  runHere.push_back(kReference);  // the truth, unless its cache has it
+  const double raySceneMs = buildSharedRayScene(setup.scene, runHere).value_or(0.0);
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"frames", fmt::format("{}", motion.frames)},
                      {"ray_scene_ms", fmt::format("{:.2f}", raySceneMs)},
@@ -576,7 +578,9 @@ int runCompare(const CompareOptions& options) {
   const Image<uint8_t> mask = errorMask(gbuffer, light);
   const CompareFrame frame{options, setup, light, gbuffer, mask, staged.dir(), setup.stem + "_"};
 
-  const double raySceneMs = buildSharedRayScene(setup.scene);
+  std::vector<std::string> runHere = names;
+  runHere.push_back(kReference);  // the truth, unless its cache has it
+  const double raySceneMs = buildSharedRayScene(setup.scene, runHere).value_or(0.0);
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)},
                      {"ray_scene_ms", fmt::format("{:.2f}", raySceneMs)},

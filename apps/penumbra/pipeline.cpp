@@ -179,7 +179,10 @@ void addFrameSettings(KeyValues& settings, const FrameOptions& options) {
 
 const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
 
-double buildSharedRayScene(const Scene& scene) {
+std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<std::string>& techniques) {
+  if (std::none_of(techniques.begin(), techniques.end(),
+                   [](const std::string& name) { return findTechnique(name).tracesRays; }))
+    return std::nullopt;
   Timer timer;
   RaySceneCache cache;
   cache.get(scene);  // kept in scene.caches after this holder goes

@@ -225,6 +225,7 @@ TechniqueInfo referenceTechniqueInfo() {
   info.name = "reference";
   info.summary = "stratified Monte Carlo ray tracing over the light's emitting area (Embree occlusion rays)";
   info.source = "ground truth";
+  info.tracesRays = true;
   info.setOptions<ReferenceOptions>([](const ReferenceOptions& o) { return makeTechnique(o); });
   return info;
 }

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "core/scene_caches.h"
 #include "penumbra/error.h"
 #include "penumbra/metrics.h"
 #include "penumbra/primitives.h"
@@ -138,6 +139,28 @@ TEST(Registry, EveryTechniqueHandlesEveryLightShape) {
       }
     }
   }
+}
+
+// TechniqueInfo::tracesRays says which techniques use the scene's shared Embree scene (compare and
+// bench build it before timing them, and only when one of them runs): a technique not flagged never
+// builds it, and a flagged one does under some light.
+TEST(Registry, TracesRaysSaysWhichTechniquesBuildTheSharedRayScene) {
+  std::set<std::string> built;
+  for (const Light& light : everyLightShape()) {
+    for (const TechniqueInfo& info : techniqueRegistry()) {
+      Scene scene = groundAndBox(light);
+      scene.caches = makeSceneCaches();
+      const GBuffer gbuffer = renderGBuffer(scene, 48, 40);
+      Image<float> v;
+      if (!runCheap(info, scene, gbuffer, v)) continue;
+      if (scene.caches->rayScene) built.insert(info.name);
+      EXPECT_TRUE(info.tracesRays || !scene.caches->rayScene)
+          << info.name << " built the shared Embree scene under a " << toString(light.shape())
+          << " light but does not say it traces rays";
+    }
+  }
+  for (const TechniqueInfo& info : techniqueRegistry())
+    if (info.tracesRays) EXPECT_TRUE(built.count(info.name)) << info.name << " says it traces rays but never did";
 }
 
 TEST(Registry, EveryTechniqueSaysHowItTreatsAConcavePolygonLight) {

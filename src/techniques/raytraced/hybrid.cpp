@@ -164,6 +164,7 @@ TechniqueInfo hybridTechniqueInfo() {
   info.name = "hybrid";
   info.summary = "a shadow map's blocker search answers lit and umbra; rays and the penumbra filter run elsewhere";
   info.source = "engine practice (FidelityFX Hybrid Shadows; PCSS's blocker search, Fernando 2005)";
+  info.tracesRays = true;
   info.setOptions<HybridOptions>([](const HybridOptions& o) { return makeTechnique(o); });
   return info;
 }

@@ -81,6 +81,7 @@ TechniqueInfo raytracedHardTechniqueInfo() {
   info.name = "raytraced-hard";
   info.summary = "one shadow ray per pixel to the light's centre: the exact hard shadow";
   info.source = "baseline (the \"shadow volumes\" row of Lawlor 2006)";
+  info.tracesRays = true;
   info.create = [](const Params&) -> std::unique_ptr<ShadowTechnique> {
     return std::make_unique<RaytracedHardTechnique>();
   };

@@ -101,6 +101,7 @@ TechniqueInfo raytracedSoftTechniqueInfo() {
   info.name = "raytraced-soft";
   info.summary = "a few shadow rays per pixel in penumbra tiles, filtered along the penumbra width their hits give";
   info.source = "engine practice (axis-aligned filtering, Mehta et al. 2012; SIGMA; FidelityFX shadow denoiser)";
+  info.tracesRays = true;
   info.setOptions<RaytracedSoftOptions>([](const RaytracedSoftOptions& o) { return makeTechnique(o); });
   return info;
 }

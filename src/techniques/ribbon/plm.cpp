@@ -912,6 +912,7 @@ TechniqueInfo plmTechniqueInfo() {
   info.summary =
       "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
   info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";
+  info.tracesRays = true;
   info.setOptions<PlmOptions>([](const PlmOptions& o) { return makeTechnique(o); });
   return info;
 }

@@ -987,6 +987,7 @@ TechniqueInfo ssvTechniqueInfo() {
       "soft shadow volumes with a double (penumbra + umbra) silhouette, for polygonal lights (a concave one in its "
       "fewest convex parts)";
   info.source = "Rouf 2007, Soft shadows for arbitrary planar lights, Chapters 3-4";
+  info.tracesRays = true;
   info.setOptions<SsvOptions>([](const SsvOptions& o) { return makeTechnique(o); });
   return info;
 }

@@ -331,6 +331,7 @@ TechniqueInfo wedgesTechniqueInfo() {
       "penumbra wedges: one silhouette from the light's centre, exact per-edge light coverage, contributions added (a "
       "concave polygonal light in its fewest convex parts)";
   info.source = "baseline in Rouf 2007 (Assarsson & Akenine-Moeller 2003)";
+  info.tracesRays = true;
   info.setOptions<WedgesOptions>([](const WedgesOptions& o) { return makeTechnique(o); });
   return info;
 }
