@@ -33,6 +33,15 @@ void plmOverHard(benchmark::State& state) {
 }
 BENCHMARK(plmOverHard)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// smoothies and kirsch share plm's ribbon stages; issue 22's target for all three: prepare <= 2x hard's.
+void ribbonOverHard(benchmark::State& state, const std::string& name) {
+  auto hard = bench::makeTechnique("hard", {"map_size=1024"});
+  auto ribbon = bench::makeTechnique(name, {"map_size=1024"});
+  bench::timeAgainstBaseline(state, bench::builtinScene("crowded", 1024), "hard", *hard, name, *ribbon);
+}
+BENCHMARK_CAPTURE(ribbonOverHard, smoothies, std::string("smoothies"))->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(ribbonOverHard, kirsch, std::string("kirsch"))->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void lawlorTable(benchmark::State& state) {
   const Scene scene = loadScene("triangle");
   for (auto _ : state) {

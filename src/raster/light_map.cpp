@@ -40,6 +40,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/raster.h"
 #include "rasterizer.h"
@@ -164,8 +165,8 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   out = std::move(fresh);
   LightMap& m = out;
   m.size = size;
-  m.lsDepth.reset(size, size, kInfinity);
-  m.objectId.reset(size, size, kNoObject);
+  resetInParallel(m.lsDepth, size, size, kInfinity);
+  resetInParallel(m.objectId, size, size, kNoObject);
   const Bounds3 bounds = scene.bounds();
   m.lsFrame = lightMapFrame(light, bounds, fit);
   m.orthographic = light.isDirectional();

@@ -153,6 +153,15 @@ TEST(GBuffer, RenderingIntoAUsedGBufferEqualsAFreshRender) {
   expectSameGBuffer(reused, renderGBuffer(moved, 200, 150));
   renderGBuffer(scene, 320, 240, reused);
   expectSameGBuffer(reused, renderGBuffer(scene, 320, 240));
+  // Views that rasterize nothing clear what was there.
+  Scene away = scene;
+  away.camera.lookAt = away.camera.position + (away.camera.position - Vec3(0.0f));
+  renderGBuffer(away, 320, 240, reused);
+  expectSameGBuffer(reused, renderGBuffer(away, 320, 240));
+  renderGBuffer(scene, 320, 240, reused);
+  renderGBuffer(Scene{}, 320, 240, reused);
+  expectSameGBuffer(reused, renderGBuffer(Scene{}, 320, 240));
+  renderGBuffer(scene, 320, 240, reused);
   // A refused size leaves the G-buffer as it was.
   EXPECT_THROW(renderGBuffer(scene, 0, 10, reused), Error);
   EXPECT_EQ(reused.width(), 320);

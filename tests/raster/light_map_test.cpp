@@ -147,6 +147,13 @@ TEST(LightMap, RenderingIntoAUsedMapEqualsAFreshRender) {
   expectSameMap(reused, renderLightMap(scene, sun, 128));
   renderLightMap(scene, sphere, 200, reused);
   expectSameMap(reused, renderLightMap(scene, sphere, 200));
+  // Maps that see nothing clear what was there: an empty scene, a scene wholly behind the light.
+  renderLightMap(Scene{}, sphere, 200, reused);
+  expectSameMap(reused, renderLightMap(Scene{}, sphere, 200));
+  renderLightMap(scene, sphere, 200, reused);
+  const Light below = Light::disk(Vec3(0.0f, -50.0f, 0.0f), Vec3(0.0f, -1.0f, 0.0f), 0.5f);
+  renderLightMap(scene, below, 200, reused);
+  expectSameMap(reused, renderLightMap(scene, below, 200));
 }
 
 TEST(LightMap, RectLightUsesItsNormalAsTheAxis) {

@@ -85,6 +85,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "core/image_fill.h"
 #include "core/light_profile.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
@@ -356,7 +357,7 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
         });
     base += mesh.positions.size();
   }
-  far.reset(map.size, map.size, space.zetaNone);
+  resetInParallel(far, map.size, map.size, space.zetaNone);
   if (triangles.empty()) return;
   raster::RasterInput input;
   input.width = input.height = map.size;
@@ -382,7 +383,8 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
                       Image<RibbonTexel>& out) {
-  out.reset(mapSize, mapSize, RibbonTexel{});
+  // Every texel lies in one tile below, which clears it first: no serial pass over the whole image.
+  out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
   struct Box {
@@ -449,6 +451,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
       std::fill(priority, priority + kTile * kTile, kInfinity);
+      const int tileWidth = std::min(kTile, mapSize - ti * kTile);
+      for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j)
+        std::fill_n(out.row(j) + ti * kTile, tileWidth, RibbonTexel{});
       for (uint32_t k : bins[static_cast<size_t>(tile)]) {
         const Edge& e = edges[k];
         const Box& box = boxes[k];
