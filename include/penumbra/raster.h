@@ -18,6 +18,10 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height);
 // every frame then costs a pass over its memory, not fresh pages.
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& out);
 
+// Which surfaces a light map keeps per texel: the nearest (the shadow map), or also the deepest
+// (LightMap::lsFarDepth, rasterized in the same pass; the ribbon techniques' far layer).
+enum class LightMapLayers { Nearest, NearestAndFarthest };
+
 // How a light map is fitted to the scene bounds each time it is rendered (src/raster/light_map.cpp).
 enum class LightMapFit {
   // Refitted to the scene every frame from the light's centre sample: the finest texels, but the
@@ -48,6 +52,9 @@ struct LightMap {
   float zNear = 0.0f, zFar = 1.0f;  //!< light-space depth range that holds the scene
   Image<float> lsDepth;             //!< light-space depth z (distance along +z); kInfinity where empty
   Image<int32_t> objectId;          //!< kNoObject where empty
+  // LightMapLayers::NearestAndFarthest only (else empty): the light-space depth of the deepest
+  // surface along the texel's ray; kInfinity where empty.
+  Image<float> lsFarDepth;
 
   Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
@@ -76,6 +83,6 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
 // The same into `out`, whose images keep their storage where it is large enough: a map rendered
 // every frame then costs a pass over its memory, not fresh pages.
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out,
-                    LightMapFit fit = LightMapFit::Tight);
+                    LightMapFit fit = LightMapFit::Tight, LightMapLayers layers = LightMapLayers::Nearest);
 
 }  // namespace penumbra

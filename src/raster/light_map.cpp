@@ -33,6 +33,10 @@
 //    looks from up to sqrt(3)/2 lattice steps away from the light's centre sample.
 // A perspective stable map is fitted from its snapped origin and widened a step at a time until it
 // holds every corner of the scene's bounds (light_map_test checks that over a long path).
+//
+// With LightMapLayers::NearestAndFarthest the same rasterization also keeps each texel's deepest
+// surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon techniques' far layer costs
+// no second pass over the triangles.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -155,18 +159,22 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
   return m;
 }
 
-void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit) {
+void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit,
+                    LightMapLayers layers) {
   if (size < 1 || size > raster::kMaxImageSize)
     fail("renderLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
   // Every field from its default, the images' storage from `out`.
   LightMap fresh;
   fresh.lsDepth = std::move(out.lsDepth);
   fresh.objectId = std::move(out.objectId);
+  const bool farthest = layers == LightMapLayers::NearestAndFarthest;
+  if (farthest) fresh.lsFarDepth = std::move(out.lsFarDepth);
   out = std::move(fresh);
   LightMap& m = out;
   m.size = size;
   resetInParallel(m.lsDepth, size, size, kInfinity);
   resetInParallel(m.objectId, size, size, kNoObject);
+  if (farthest) resetInParallel(m.lsFarDepth, size, size, kInfinity);
   const Bounds3 bounds = scene.bounds();
   m.lsFrame = lightMapFrame(light, bounds, fit);
   m.orthographic = light.isDirectional();
@@ -271,7 +279,20 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   input.height = size;
   input.clipPositions = clip;
   input.triangles = triangles;
+  input.farthestLayer = farthest;
   raster::rasterize(input, [&](const raster::TileSamples& samples) {
+    if (farthest)
+      for (int j = 0; j < samples.height; ++j) {
+        float* row = m.lsFarDepth.row(samples.y0 + j) + samples.x0;
+        // The depth from the key, its clip z over clip w: perspective -zNear / z, orthographic
+        // linear in z (within float rounding of the interpolated depth; no barycentrics needed).
+        for (int i = 0; i < samples.width; ++i) {
+          const int k = j * raster::kTileSize + i;
+          if (samples.farTriangle[k] < 0) continue;
+          const float key = samples.farDepth[k];
+          row[i] = m.orthographic ? (key - clipZOffset) / clipZScale : clipZOffset / key;
+        }
+      }
     for (int j = 0; j < samples.height; ++j)
       for (int i = 0; i < samples.width; ++i) {
         const int k = j * raster::kTileSize + i;

@@ -222,9 +222,13 @@ void buildChunk(const RasterInput& input, const ScratchVector<uint8_t>& codes, c
 struct TileBuffers {
   std::array<float, kTileSize * kTileSize> key;
   std::array<int32_t, kTileSize * kTileSize> winner;
+  std::array<float, kTileSize * kTileSize> farKey;  //!< kFarthest only: the largest key and its triangle
+  std::array<int32_t, kTileSize * kTileSize> farWinner;
 };
 
-// Rasterizes one setup into the tile whose top-left pixel is (tx0, ty0).
+// Rasterizes one setup into the tile whose top-left pixel is (tx0, ty0); with kFarthest, the
+// deepest covering triangle too.
+template <bool kFarthest>
 void rasterizeInTile(const Setup& s, int tx0, int ty0, const Context& ctx, TileBuffers& tile) {
   const int x0 = std::max(s.xMin, tx0), x1 = std::min({s.xMax, tx0 + kTileSize - 1});
   const int y0 = std::max(s.yMin, ty0), y1 = std::min({s.yMax, ty0 + kTileSize - 1});
@@ -253,15 +257,23 @@ void rasterizeInTile(const Setup& s, int tx0, int ty0, const Context& ctx, TileB
         static_cast<float>(s.key0 + s.keyDx * (x0 + 0.5 - vx) + static_cast<double>(s.keyDy) * (y + 0.5 - vy));
     float* key = tile.key.data() + (y - ty0) * kTileSize + (x0 - tx0);
     int32_t* winner = tile.winner.data() + (y - ty0) * kTileSize + (x0 - tx0);
+    float* farKey = tile.farKey.data() + (y - ty0) * kTileSize + (x0 - tx0);
+    int32_t* farWinner = tile.farWinner.data() + (y - ty0) * kTileSize + (x0 - tx0);
     int64_t e0 = row[0], e1 = row[1], e2 = row[2];
     const int64_t s0 = stepX[0], s1 = stepX[1], s2 = stepX[2];
     // Branch-free over the row: coverage (all three edge functions >= 0, i.e. their OR has no sign
     // bit), depth test, select.
     for (int i = 0; i < n; ++i) {
       const float k = keyRow + keyDx * static_cast<float>(i);
-      const bool pass = ((e0 | e1 | e2) >= 0) & (k < key[i]);
+      const bool covered = (e0 | e1 | e2) >= 0;
+      const bool pass = covered & (k < key[i]);
       key[i] = pass ? k : key[i];
       winner[i] = pass ? id : winner[i];
+      if constexpr (kFarthest) {
+        const bool deeper = covered & (k > farKey[i]);
+        farKey[i] = deeper ? k : farKey[i];
+        farWinner[i] = deeper ? id : farWinner[i];
+      }
       e0 += s0;
       e1 += s1;
       e2 += s2;
@@ -365,13 +377,21 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
     TileBuffers tile;
     std::array<Vec3, kTileSize * kTileSize> barycentrics;
     std::array<float, kTileSize * kTileSize> clipW;
+    const bool farthest = input.farthestLayer;
     for (int t = r.begin(); t < r.end(); ++t) {
       const int tx0 = (t % ctx.tilesX) * kTileSize, ty0 = (t / ctx.tilesX) * kTileSize;
       tile.key.fill(kInfinity);
       tile.winner.fill(-1);
+      if (farthest) {
+        tile.farKey.fill(-kInfinity);
+        tile.farWinner.fill(-1);
+      }
       for (const Chunk& chunk : chunks)
         for (uint32_t k = chunk.tileStart[t]; k < chunk.tileStart[t + 1]; ++k)
-          rasterizeInTile(chunk.setups[chunk.items[k]], tx0, ty0, ctx, tile);
+          if (farthest)
+            rasterizeInTile<true>(chunk.setups[chunk.items[k]], tx0, ty0, ctx, tile);
+          else
+            rasterizeInTile<false>(chunk.setups[chunk.items[k]], tx0, ty0, ctx, tile);
       TileSamples samples;
       samples.x0 = tx0;
       samples.y0 = ty0;
@@ -395,6 +415,10 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
           barycentrics[j * kTileSize + i] = Vec3(b);
           clipW[j * kTileSize + i] = static_cast<float>(b.x * h.w.x + b.y * h.w.y + b.z * h.w.z);
         }
+      }
+      if (farthest) {
+        samples.farTriangle = tile.farWinner.data();
+        samples.farDepth = tile.farKey.data();
       }
       samples.triangle = tile.winner.data();
       samples.depth = tile.key.data();

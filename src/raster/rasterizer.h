@@ -65,6 +65,9 @@ struct RasterInput {
   std::span<const int32_t> payloads;      //!< per triangle (object id, ...); empty: payload = -1
   int attributeCount = 0;                 //!< N floats per vertex
   std::span<const float> attributes;      //!< vertexCount * N, the N floats of a vertex together
+  // Also keep, per pixel, the covering triangle with the largest depth key (the deepest surface),
+  // handed to a TileVisitor as TileSamples::farTriangle: one pass for a map's near and far layers.
+  bool farthestLayer = false;
 };
 
 struct RasterOutput {
@@ -83,6 +86,11 @@ struct TileSamples {
   const float* depth = nullptr;        //!< depth key; kInfinity where empty
   const Vec3* barycentrics = nullptr;  //!< perspective-correct, of the input triangle's vertices
   const float* clipW = nullptr;        //!< clip w at the sample
+  // With RasterInput::farthestLayer (else nullptr): the covering triangle with the largest depth key
+  // (the first in input order among equals) and that key. No barycentrics: a caller that needs the
+  // deepest surface's depth alone takes it from the key, which is affine in the pixel position.
+  const int32_t* farTriangle = nullptr;
+  const float* farDepth = nullptr;
 };
 // Called once per tile, concurrently for different tiles (it must only write that tile's pixels).
 using TileVisitor = std::function<void(const TileSamples&)>;

@@ -6,6 +6,7 @@
 // intersection in double precision, and bit-identical output for any thread count.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -309,6 +310,79 @@ TEST(Rasterizer, DepthTestKeepsTheNearestSurfaceAndBreaksTiesByInputOrder) {
     EXPECT_EQ(out.payload[i], 10);
   }
   EXPECT_GT(covered, 3000);
+}
+
+// The same pass's visitor with the farthest layer: per pixel the deepest covering triangle and its key
+// (the analytic max of the two depths), the nearest layer unchanged, and ties to the first in input order.
+TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) {
+  for (int order = 0; order < 2; ++order) {
+    Mesh2 m;
+    m.width = 130;
+    m.height = 70;
+    const double x0 = 5.0, x1 = 125.0;
+    const uint32_t a0 = m.addRasterVertex(x0, 5), a1 = m.addRasterVertex(x1, 5), a2 = m.addRasterVertex(65, 65);
+    const uint32_t b0 = m.addRasterVertex(x0, 65, -0.5f), b1 = m.addRasterVertex(x1, 65, 0.5f),
+                   b2 = m.addRasterVertex(65, 2, 0.0f);
+    const glm::uvec3 A(a0, a1, a2), B(b0, b1, b2);
+    m.triangles = order == 0 ? std::vector<glm::uvec3>{A, B} : std::vector<glm::uvec3>{B, A};
+    const int idA = order == 0 ? 0 : 1, idB = 1 - idA;
+    const RasterOutput nearest = rasterize(m.input());
+    Image<int32_t> farTriangle(m.width, m.height, -2), nearTriangle(m.width, m.height, -2);
+    Image<float> farKey(m.width, m.height, 0.0f);
+    RasterInput in = m.input();
+    in.farthestLayer = true;
+    rasterize(in, [&](const TileSamples& t) {
+      for (int j = 0; j < t.height; ++j)
+        for (int i = 0; i < t.width; ++i) {
+          const int k = j * kTileSize + i;
+          farTriangle(t.x0 + i, t.y0 + j) = t.farTriangle[k];
+          nearTriangle(t.x0 + i, t.y0 + j) = t.triangle[k];
+          if (t.farTriangle[k] >= 0) farKey(t.x0 + i, t.y0 + j) = t.farDepth[k];
+        }
+    });
+    const Image<int> count = coverageCount(m);
+    int checked = 0;
+    for (int y = 0; y < m.height; ++y)
+      for (int x = 0; x < m.width; ++x) {
+        ASSERT_EQ(nearTriangle(x, y), nearest.triangle(x, y)) << x << "," << y;
+        if (count(x, y) == 0) {
+          ASSERT_EQ(farTriangle(x, y), -1) << x << "," << y;
+          continue;
+        }
+        if (count(x, y) == 1) {
+          ASSERT_EQ(farTriangle(x, y), nearest.triangle(x, y)) << x << "," << y;
+          continue;
+        }
+        const double zB = -0.5 + ((x + 0.5) - x0) / (x1 - x0);
+        if (std::abs(zB) > 1e-3) {
+          EXPECT_EQ(farTriangle(x, y), zB > 0.0 ? idB : idA) << x << "," << y;
+          EXPECT_NEAR(farKey(x, y), std::max(zB, 0.0), 1e-5);
+          ++checked;
+        }
+      }
+    EXPECT_GT(checked, 1000);
+  }
+  // Coplanar duplicates: the first triangle in the input is the deepest too.
+  Mesh2 m;
+  m.width = 100;
+  m.height = 90;
+  m.addRasterVertex(3.3, 4.1, 0.25f);
+  m.addRasterVertex(97.2, 20.7, 0.25f);
+  m.addRasterVertex(30.1, 88.8, 0.25f);
+  m.triangles = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}};
+  RasterInput in = m.input();
+  in.farthestLayer = true;
+  std::atomic<int> covered = 0, others = 0;
+  rasterize(in, [&](const TileSamples& t) {
+    for (int j = 0; j < t.height; ++j)
+      for (int i = 0; i < t.width; ++i) {
+        const int32_t far = t.farTriangle[j * kTileSize + i];
+        covered += far >= 0;
+        others += far > 0;
+      }
+  });
+  EXPECT_GT(covered.load(), 3000);
+  EXPECT_EQ(others.load(), 0);
 }
 
 TEST(Rasterizer, ClipsATriangleCrossingTheCameraPlane) {

@@ -325,57 +325,16 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   return edges;
 }
 
-void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far) {
-  // The rasterizer keeps the smallest depth key; handing it the negated key of renderLightMap keeps
-  // the largest light-space depth instead (orthographic: a linear key; perspective: zNear / z with
-  // w = z, whose near-plane test z_clip >= -w then holds for every point in front of the light).
-  // Set up as renderLightMap sets up its input (oneTBB's scratch allocator, which keeps freed blocks
-  // for the next frame; vertices in parallel).
-  raster::ScratchVector<Vec4> clip;
-  raster::ScratchVector<float> lsZ;
-  raster::ScratchVector<glm::uvec3> triangles;
-  triangles.reserve(scene.triangleCount());
-  for (const Object& object : scene.objects) {
-    const auto offset = static_cast<uint32_t>(clip.size());
-    for (const glm::uvec3& t : object.mesh.triangles) triangles.push_back(t + glm::uvec3(offset));
-    clip.resize(clip.size() + object.mesh.positions.size());
-  }
-  lsZ.resize(clip.size());
-  const float xyScale = 1.0f / (map.orthographic ? map.halfWidth : map.tanHalfFov);
-  const float range = std::max(map.zFar, 1e-6f) * 1.01f;
-  size_t base = 0;
-  for (const Object& object : scene.objects) {
-    const Mesh& mesh = object.mesh;
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3 l = map.lsFromWs(mesh.positions[i]);
-            clip[base + i] = map.orthographic ? Vec4(l.x * xyScale, l.y * xyScale, -(2.0f * l.z / range - 1.0f), 1.0f)
-                                              : Vec4(l.x * xyScale, l.y * xyScale, map.zNear, l.z);
-            lsZ[base + i] = l.z;
-          }
-        });
-    base += mesh.positions.size();
-  }
-  resetInParallel(far, map.size, map.size, space.zetaNone);
-  if (triangles.empty()) return;
-  raster::RasterInput input;
-  input.width = input.height = map.size;
-  input.clipPositions = clip;
-  input.triangles = triangles;
-  // Straight from the resolved tiles, z interpolated as the rasterizer interpolates attributes:
-  // no intermediate images.
-  raster::rasterize(input, [&](const raster::TileSamples& samples) {
-    for (int j = 0; j < samples.height; ++j) {
-      float* row = far.row(samples.y0 + j) + samples.x0;
-      for (int i = 0; i < samples.width; ++i) {
-        const int k = j * raster::kTileSize + i;
-        if (samples.triangle[k] < 0) continue;
-        const glm::uvec3& t = triangles[static_cast<size_t>(samples.triangle[k])];
-        const Vec3& b = samples.barycentrics[k];
-        const float z = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];
-        row[i] = map.orthographic || z > 0.0f ? space.zeta(z) : space.zetaNone;
-      }
+void farthestSurface(const LightMap& map, const Space& space, Image<float>& far) {
+  if (map.lsFarDepth.size() != map.lsDepth.size())
+    fail("farthestSurface: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest)");
+  far.resizeForOverwrite(map.size, map.size);  // every texel written below
+  tbb::parallel_for(tbb::blocked_range<int>(0, map.size, 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j) {
+      const float* z = map.lsFarDepth.row(j);
+      float* row = far.row(j);
+      for (int i = 0; i < map.size; ++i)
+        row[i] = z[i] < kInfinity && (map.orthographic || z[i] > 0.0f) ? space.zeta(z[i]) : space.zetaNone;
     }
   });
 }
@@ -383,7 +342,7 @@ void farthestSurface(const Scene& scene, const LightMap& map, const Space& space
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
                       Image<RibbonTexel>& out) {
-  // Every texel lies in one tile below, which clears it first: no serial pass over the whole image.
+  // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
   out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = 32;
   const int tiles = (mapSize + kTile - 1) / kTile;
@@ -444,16 +403,16 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
   }
   const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
-    // The tile's priorities (texels are the tile's alone: no other task writes them), and one span's geometry.
+    // The tile's priorities and winners (texels are the tile's alone: no other task writes them),
+    // copied out once when the tile is done, and one span's geometry.
     float priority[kTile * kTile];
+    RibbonTexel winners[kTile * kTile];
     float spanU[kTile], spanC[kTile], spanDistance[kTile], spanP[kTile];
     uint8_t spanOuter[kTile];
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
       std::fill(priority, priority + kTile * kTile, kInfinity);
-      const int tileWidth = std::min(kTile, mapSize - ti * kTile);
-      for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j)
-        std::fill_n(out.row(j) + ti * kTile, tileWidth, RibbonTexel{});
+      std::fill(winners, winners + kTile * kTile, RibbonTexel{});
       for (uint32_t k : bins[static_cast<size_t>(tile)]) {
         const Edge& e = edges[k];
         const Box& box = boxes[k];
@@ -494,7 +453,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           }
           int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
-          RibbonTexel* row = out.row(j);
+          RibbonTexel* row = winners + (j - tj * kTile) * kTile;
           // Two passes over the span: the geometry of every texel without branches (four texels to
           // an SSE vector, the same operations in the same order as the scalar tail, so the same
           // values bit for bit), then the candidates that beat the texel's current winner through
@@ -603,9 +562,15 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               if (probeInMap && above((*top)(pi, pj))) continue;
             }
             prio[m] = p;
-            row[i] = RibbonTexel{c, outer ? distance : -distance, p, e.objectId, static_cast<int32_t>(k)};
+            row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, e.objectId, static_cast<int32_t>(k)};
           }
         }
+      }
+      const int tileWidth = std::min(kTile, mapSize - ti * kTile);
+      for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
+        const RibbonTexel* from = winners + (j - tj * kTile) * kTile;
+        RibbonTexel* to = out.row(j) + ti * kTile;
+        std::copy_n(from, tileWidth, to);
       }
     }
   });
@@ -650,14 +615,14 @@ class PlmTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
-    createShadowMap(scene, sceneLight, options_.lightMap, map_);
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     const Light& light = *light_;
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
-    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::farthestSurface(map_, space_, farthest_);
     plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;

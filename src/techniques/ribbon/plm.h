@@ -119,13 +119,14 @@ inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
 
+// 16 bytes: a 1024^2 ribbon image is written whole every prepare (its winners' priorities stay in
+// rasterizeRibbons' tiles).
 struct RibbonTexel {
-  float c = 0.0f;              //!< zeta of the winning edge at its nearest point
-  float w = 0.0f;              //!< signed distance to it, texels, + outside the silhouette
-  float priority = kInfinity;  //!< kInfinity: no ribbon covers this texel
+  float c = 0.0f;  //!< zeta of the winning edge at its nearest point
+  float w = 0.0f;  //!< signed distance to it, texels, + outside the silhouette
   int32_t objectId = kNoObject;
-  int32_t edge = -1;  //!< index of the winning edge in the list given to rasterizeRibbons
-  bool covered() const { return priority != kInfinity; }
+  int32_t edge = -1;  //!< index of the winning edge in the list given to rasterizeRibbons; -1: no ribbon
+  bool covered() const { return edge >= 0; }
 };
 
 // The deepest surface along each texel's light ray (the light map's far layer), in zeta; zetaNone
@@ -133,8 +134,9 @@ struct RibbonTexel {
 // elsewhere there is nothing to receive its shadow (the border of a ground plane, seen from above,
 // would otherwise lay an inner ribbon over the ground itself, whose texels then interpolate with
 // the ribbons of the occluders above it).
-// Into `far`, which keeps its storage where it is large enough.
-void farthestSurface(const Scene& scene, const LightMap& map, const Space& space, Image<float>& far);
+// From the light map's far layer (rendered with LightMapLayers::NearestAndFarthest; Error without
+// it), into `far`, which keeps its storage where it is large enough.
+void farthestSurface(const LightMap& map, const Space& space, Image<float>& far);
 
 // Which candidate texels of a ribbon may compete for a texel at all (before the priority decides
 // among them); every test is made per edge and texel, so a dropped candidate leaves the texel to the

@@ -50,11 +50,11 @@ class SmoothiesTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "smoothies");
-    createShadowMap(scene, sceneLight, options_.lightMap, map_);
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
-    plm::farthestSurface(scene, map_, space_, farthest_);
+    plm::farthestSurface(map_, space_, farthest_);
     plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
                           plm::RibbonSides::Outer, options_.marginTexels,
                           plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);

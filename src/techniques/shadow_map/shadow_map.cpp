@@ -24,11 +24,12 @@ LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapO
   return map;
 }
 
-void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out) {
+void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
+                     LightMapLayers layers) {
   if (options.size < kMinShadowMapSize || options.size > kMaxShadowMapSize)
     fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", options.size, kMinShadowMapSize,
          kMaxShadowMapSize);
-  renderLightMap(scene, light, options.size, out, options.fit);
+  renderLightMap(scene, light, options.size, out, options.fit, layers);
 }
 
 Light lightAtMapOrigin(const Light& light, const LightMap& map) {

@@ -59,7 +59,8 @@ inline constexpr float kMaxDepthSlope = 10.0f;
 // Throws Error if the size is outside [kMinShadowMapSize, kMaxShadowMapSize].
 LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options);
 // The same into `out`, reusing its storage (renderLightMap); `out` is untouched when the size is refused.
-void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out);
+void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
+                     LightMapLayers layers = LightMapLayers::Nearest);
 
 // The light as `map` sees it: moved so that its centre sample is the map's origin. A stable fit
 // (LightMapFit::Stable) snaps that origin to a world lattice, so whatever a technique takes from the
