@@ -464,6 +464,41 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float* rowPriority = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
             const float across0 = (static_cast<float>(si0) + 0.5f - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y;
             int lo = 0, hi = count - 1;
+#if defined(__SSE4_1__)
+            {
+              // Four texels at a time from each end (on a dense model most of a span is already won
+              // by nearer edges), least() lane by lane in the same operations and order.
+              const __m128 zero = _mm_setzero_ps(), vDy = _mm_set1_ps(dy), vAcross0 = _mm_set1_ps(across0),
+                           vOutX = _mm_set1_ps(e.outward.x), vFloor = _mm_set1_ps(cFloor),
+                           vRate = _mm_set1_ps(rateFloor), signBit = _mm_set1_ps(-0.0f);
+              const auto rejected4 = [&](int at) {  // bit l: texel at + l is one the edge cannot take
+                const __m128 index = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(at), _mm_setr_epi32(0, 1, 2, 3)));
+                const __m128 across = _mm_andnot_ps(signBit, _mm_add_ps(vAcross0, _mm_mul_ps(index, vOutX)));
+                const __m128 distance = _mm_blendv_ps(vDy, across, _mm_cmplt_ps(vDy, across));
+                const __m128 reach =
+                    _mm_sub_ps(_mm_sub_ps(distance, _mm_set1_ps(0.01f)), _mm_mul_ps(_mm_set1_ps(1e-5f), distance));
+                const __m128 bound =
+                    _mm_add_ps(vFloor, _mm_mul_ps(_mm_blendv_ps(reach, zero, _mm_cmplt_ps(reach, zero)), vRate));
+                return _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(rowPriority + at), bound));
+              };
+              while (hi - lo >= 3) {
+                const int bits = rejected4(lo);
+                if (bits != 0xf) {
+                  lo += __builtin_ctz(~bits);
+                  break;
+                }
+                lo += 4;
+              }
+              while (hi - lo >= 3) {
+                const int bits = rejected4(hi - 3);
+                if (bits != 0xf) {
+                  hi -= __builtin_clz(static_cast<unsigned>(~bits & 0xf)) - 28;
+                  break;
+                }
+                hi -= 4;
+              }
+            }
+#endif
             while (lo <= hi && rowPriority[lo] <= least(dy, across0 + static_cast<float>(lo) * e.outward.x)) ++lo;
             while (hi >= lo && rowPriority[hi] <= least(dy, across0 + static_cast<float>(hi) * e.outward.x)) --hi;
             if (hi < lo) continue;
