@@ -597,7 +597,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               if (probeInMap && above((*top)(pi, pj))) continue;
             }
             prio[m] = p;
-            row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, e.objectId, static_cast<int32_t>(k)};
+            row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, static_cast<int32_t>(k)};
           }
         }
       }

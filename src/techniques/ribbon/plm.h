@@ -119,12 +119,11 @@ inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
 
-// 16 bytes: a 1024^2 ribbon image is written whole every prepare (its winners' priorities stay in
-// rasterizeRibbons' tiles).
+// 12 bytes: a 1024^2 ribbon image is written whole every prepare (its winners' priorities stay in
+// rasterizeRibbons' tiles; the edge's object is the Edge's).
 struct RibbonTexel {
-  float c = 0.0f;  //!< zeta of the winning edge at its nearest point
-  float w = 0.0f;  //!< signed distance to it, texels, + outside the silhouette
-  int32_t objectId = kNoObject;
+  float c = 0.0f;     //!< zeta of the winning edge at its nearest point
+  float w = 0.0f;     //!< signed distance to it, texels, + outside the silhouette
   int32_t edge = -1;  //!< index of the winning edge in the list given to rasterizeRibbons; -1: no ribbon
   bool covered() const { return edge >= 0; }
 };
