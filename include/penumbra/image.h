@@ -5,9 +5,37 @@
 #include <algorithm>
 #include <cassert>
 #include <cstddef>
+#include <memory>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace penumbra {
+
+// std::allocator, but elements made without a value are default-initialized (for arithmetic types
+// and glm's vectors: left as the memory holds them) rather than zeroed. A fresh image sized by
+// Image::resizeForOverwrite is then first touched by the pass that writes its pixels, on every thread
+// that pass runs on, instead of by a zero fill on the calling thread (page faults dominate a first
+// frame on a virtual machine).
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() noexcept = default;
+  template <class U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
 
 template <class T>
 class Image {
@@ -46,7 +74,8 @@ class Image {
     data_.assign(static_cast<size_t>(width) * height, value);
   }
   // Becomes a width x height image whose pixels the caller is about to write, every one: what it
-  // held is kept where the storage is large enough, so no pass fills it first.
+  // held is kept where the storage is large enough, so no pass fills it first; new pixels are left
+  // unset (DefaultInitAllocator).
   void resizeForOverwrite(int width, int height) {
     width_ = width;
     height_ = height;
@@ -60,7 +89,7 @@ class Image {
  private:
   int width_ = 0;
   int height_ = 0;
-  std::vector<T> data_;
+  std::vector<T, DefaultInitAllocator<T>> data_;
 };
 
 }  // namespace penumbra

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,7 +13,7 @@
 namespace penumbra {
 
 template <class T>
-void resetInParallel(Image<T>& image, int width, int height, const T& value) {
+void resetInParallel(Image<T>& image, int width, int height, const std::type_identity_t<T>& value) {
   image.resizeForOverwrite(width, height);
   tbb::parallel_for(tbb::blocked_range<int>(0, height, 32), [&](const tbb::blocked_range<int>& rows) {
     std::fill(image.row(rows.begin()), image.row(rows.begin()) + static_cast<size_t>(rows.size()) * width, value);

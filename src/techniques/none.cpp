@@ -3,6 +3,7 @@
 // ignoring shadows altogether.
 #include <memory>
 
+#include "core/image_fill.h"
 #include "penumbra/registry.h"
 
 namespace penumbra {
@@ -16,7 +17,7 @@ class NoneTechnique final : public ShadowTechnique {
   void prepareImpl(const Scene&, const Light&) override {}  // nothing to prepare, for any light shape
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
-    v.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+    resetInParallel(v, gbuffer.width(), gbuffer.height(), 1.0f);
   }
 };
 

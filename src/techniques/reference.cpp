@@ -30,6 +30,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
@@ -62,8 +63,8 @@ void ReferenceTechnique::prepareImpl(const Scene& scene, const Light& light) {
 void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!rays_ || !light_) fail("reference: visibility() called before prepare(); call prepare(scene, light) first");
   const int width = gbuffer.width(), height = gbuffer.height();
-  v.reset(width, height, 1.0f);
-  stdError_.reset(width, height, 0.0f);  // in place: fresh pages every frame cost a fault each
+  resetInParallel(v, width, height, 1.0f);
+  resetInParallel(stdError_, width, height, 0.0f);  // in place: fresh pages every frame cost a fault each
   const Light& light = *light_;
   const RayScene& rays = *rays_;
   const float epsilon = epsilon_;

@@ -48,6 +48,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/techniques/parker.h"
@@ -137,7 +138,7 @@ class ParkerTechnique final : public ShadowTechnique {
     if (!rays_ || !outer_ || !light_)
       fail("parker: visibility() called before prepare(); call prepare(scene, light) first");
     const int width = gbuffer.width(), height = gbuffer.height();
-    v.reset(width, height, 1.0f);
+    resetInParallel(v, width, height, 1.0f);
     const Light& light = *light_;
     const rt::OuterObjects& outer = *outer_;
     const rt::OuterFalloff falloff = options_.falloff;

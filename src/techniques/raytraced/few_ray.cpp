@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "rt/shadow_packet.h"
 #include "rt/shadow_ray.h"
 
@@ -242,9 +243,9 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
   Image<float>& noisy = frame.noisy;
   Image<float>& radius = frame.radius;
   Image<float>& reach = frame.reach;
-  noisy.reset(width, height, 1.0f);
-  radius.reset(width, height, 0.0f);
-  reach.reset(width, height, kInfinity);
+  resetInParallel(noisy, width, height, 1.0f);
+  resetInParallel(radius, width, height, 0.0f);
+  resetInParallel(reach, width, height, kInfinity);
   forTiles([&](int tile, const TileBounds& b) {
     const int tx = tile % frame.tilesX, ty = tile / frame.tilesX;
     const bool penumbra = frame.penumbra[static_cast<size_t>(tile)] != 0;
@@ -285,7 +286,7 @@ void resolveVisibility(const GBuffer& gbuffer, FewRayFrame& frame, const Light& 
       }
   });
   if (!(filter.filterScale > 0.0f)) {
-    v.reset(width, height, 1.0f);
+    resetInParallel(v, width, height, 1.0f);
     std::copy(noisy.begin(), noisy.end(), v.begin());
     return;
   }
@@ -307,7 +308,7 @@ void TemporalHistory::accumulate(const GBuffer& gbuffer, const Camera& camera, c
   if (hasHistory) {
     const Mat4 rasterFromWs = camera_.rasterFromWs(width, height);  // the previous frame's camera
     const float tanHalfNow = std::tan(0.5f * radians(camera.fovYDegrees));
-    blended_.reset(width, height, 1.0f);
+    resetInParallel(blended_, width, height, 1.0f);
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
         for (int x = 0; x < width; ++x) {

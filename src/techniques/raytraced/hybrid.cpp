@@ -33,6 +33,7 @@
 #include <tbb/parallel_for.h>
 
 #include "../shadow_map/shadow_map.h"
+#include "core/image_fill.h"
 #include "few_ray.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
@@ -107,7 +108,7 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   using namespace raytraced;
   Timer stageTimer;
   state_.frame.reset(gbuffer.width(), gbuffer.height());
-  searchRatio_.reset(gbuffer.width(), gbuffer.height(), 0.0f);
+  resetInParallel(searchRatio_, gbuffer.width(), gbuffer.height(), 0.0f);
   const int tiles = static_cast<int>(state_.frame.tiles.size());
 
   // 1. The map's class of each 2 x 2 quad, from a search at its first pixel that sees geometry (a

@@ -8,6 +8,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
+
 namespace penumbra::raytraced {
 namespace {
 
@@ -98,8 +100,8 @@ void filterPenumbrae(const GBuffer& gbuffer, const PenumbraFilterInput& input, c
                      Image<float>& scratch, Image<float>& out) {
   const Image<float>& noisy = *input.noisy;
   // Pixels outside the active tiles keep their input; both passes write only inside them.
-  scratch.reset(gbuffer.width(), gbuffer.height(), 1.0f);
-  out.reset(gbuffer.width(), gbuffer.height(), 1.0f);
+  resetInParallel(scratch, gbuffer.width(), gbuffer.height(), 1.0f);
+  resetInParallel(out, gbuffer.width(), gbuffer.height(), 1.0f);
   std::copy(noisy.begin(), noisy.end(), out.begin());
   filterPass(gbuffer, input, options, noisy, noisy, 1, 0, scratch);
   filterPass(gbuffer, input, options, scratch, noisy, 0, 1, out);

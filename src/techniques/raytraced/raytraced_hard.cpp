@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "rt/ray_scene.h"
@@ -35,7 +36,7 @@ class RaytracedHardTechnique final : public ShadowTechnique {
     if (!rays_ || !light_)
       fail("raytraced-hard: visibility() called before prepare(); call prepare(scene, light) first");
     const int width = gbuffer.width(), height = gbuffer.height();
-    v.reset(width, height, 1.0f);
+    resetInParallel(v, width, height, 1.0f);
     const Light& light = *light_;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       Ray packet[16];

@@ -412,7 +412,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
       std::fill(priority, priority + kTile * kTile, kInfinity);
-      std::fill(winners, winners + kTile * kTile, RibbonTexel{});
+      std::fill(winners, winners + kTile * kTile, kNoRibbon);
       for (uint32_t k : bins[static_cast<size_t>(tile)]) {
         const Edge& e = edges[k];
         const Box& box = boxes[k];

@@ -120,13 +120,16 @@ inline constexpr float kRibbonBorderTexels = 1.5f;
 enum class RibbonSides { Both, Outer, Inner };
 
 // 12 bytes: a 1024^2 ribbon image is written whole every prepare (its winners' priorities stay in
-// rasterizeRibbons' tiles; the edge's object is the Edge's).
+// rasterizeRibbons' tiles; the edge's object is the Edge's). Trivially constructible, so that a fresh
+// image's pages are first touched by rasterizeRibbons' parallel tiles (DefaultInitAllocator, image.h);
+// kNoRibbon is the texel no ribbon covers.
 struct RibbonTexel {
-  float c = 0.0f;     //!< zeta of the winning edge at its nearest point
-  float w = 0.0f;     //!< signed distance to it, texels, + outside the silhouette
-  int32_t edge = -1;  //!< index of the winning edge in the list given to rasterizeRibbons; -1: no ribbon
+  float c;       //!< zeta of the winning edge at its nearest point
+  float w;       //!< signed distance to it, texels, + outside the silhouette
+  int32_t edge;  //!< index of the winning edge in the list given to rasterizeRibbons; -1: no ribbon
   bool covered() const { return edge >= 0; }
 };
+inline constexpr RibbonTexel kNoRibbon{0.0f, 0.0f, -1};
 
 // The deepest surface along each texel's light ray (the light map's far layer), in zeta; zetaNone
 // where the texel sees nothing. A ribbon texel is only taken where a surface lies below the edge:

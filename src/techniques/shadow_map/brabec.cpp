@@ -17,6 +17,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/sampling.h"
 
@@ -845,7 +846,7 @@ std::vector<int> groupBorders(int length) {
 void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!light_) fail("brabec: visibility() called before prepare(); call prepare(scene, light) first");
   const int width = gbuffer.width(), height = gbuffer.height();
-  v.reset(width, height, 1.0f);
+  resetInParallel(v, width, height, 1.0f);
   searches_ = 0.0;
   hitPixels_ = 0.0;
   if (width == 0 || height == 0) return;

@@ -107,6 +107,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/timer.h"
@@ -117,10 +118,10 @@ namespace heidrich {
 void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges, Image<float>& horizontal,
                  Image<float>& blurred) {
   const int n = map.size;
-  edges.reset(n, n, 0);
+  resetInParallel(edges, n, n, 0);
   if (n == 0) return;
-  horizontal.reset(n, n, 0.0f);
-  blurred.reset(n, n, 0.0f);
+  resetInParallel(horizontal, n, n, 0.0f);
+  resetInParallel(blurred, n, n, 0.0f);
   auto clampIndex = [n](int i) { return std::clamp(i, 0, n - 1); };
   const float* depth = map.lsDepth.data();
   // The binomial blur, separable; borders repeat the edge texel. Empty texels (+inf) spread +inf over
@@ -279,9 +280,9 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
 
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
                             Image<float>& frontDepth) {
-  front.reset(view.size, view.size, kUncovered);
-  behind.reset(view.size, view.size, Vec2(kUncovered, kInfinity));
-  frontDepth.reset(view.size, view.size, kInfinity);
+  resetInParallel(front, view.size, view.size, kUncovered);
+  resetInParallel(behind, view.size, view.size, Vec2(kUncovered, kInfinity));
+  resetInParallel(frontDepth, view.size, view.size, kInfinity);
   if (skin.triangles.empty() || view.size == 0) return;
   if (view.orthographic) fail("heidrich: visibility maps need a perspective map (a local light)");
   // Vertices in the view's map coordinates (s, t) and light-space depth z. A skin lies between an
@@ -387,10 +388,10 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
 void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Image<TwoChannelTexel>& out,
                        Image<uint8_t>& horizontal) {
   const int n = map.size;
-  out.reset(n, n, TwoChannelTexel{});
+  resetInParallel(out, n, n, TwoChannelTexel{});
   if (n == 0) return;
   // Coverage dilated by one texel (3x3), separably: a horizontal then a vertical OR.
-  horizontal.reset(n, n, 0);
+  resetInParallel(horizontal, n, n, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
       const float* v = visibility.row(j);

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 
 namespace penumbra {
@@ -93,7 +94,7 @@ class ConvexPartsTechnique final : public ShadowTechnique {
     parts_.resize(prepared_);
     for (size_t k = 0; k < prepared_; ++k) instances_[k]->visibility(gbuffer, parts_[k]);
     const int width = gbuffer.width(), height = gbuffer.height();
-    v.reset(width, height, 1.0f);
+    resetInParallel(v, width, height, 1.0f);
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
       for (int y = range.begin(); y < range.end(); ++y)
         for (int x = 0; x < width; ++x) {

@@ -54,6 +54,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/techniques/silhouette.h"
@@ -142,7 +143,7 @@ class WedgesTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (!prepared_) fail("wedges: visibility() called before prepare(); call prepare(scene, light) first");
     const int width = gbuffer.width(), height = gbuffer.height();
-    v.reset(width, height, 1.0f);
+    resetInParallel(v, width, height, 1.0f);
     if (!backBuilt_ && anyReceiverBehind(gbuffer, sides_[0].plane)) {
       buildSide(sides_[1]);
       backBuilt_ = true;
