@@ -725,61 +725,116 @@ class PlmTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("plm: visibility() called before prepare()");
-    const int n = map_.size;
-    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int x, int y, ShadowReceiver r) {
-      if (!r.inMap) return 1.0f;
-      const Vec3& position = gbuffer.wsPosition(x, y);
-      const Vec3& normal = gbuffer.wsGeometricNormal(x, y);
-      // A surface that faces away from the light's centre is never the one the map holds at its
-      // texel (the map sees the surfaces that face the centre), so it cannot shadow itself through
-      // the compare: the bias would only lift it above the surface that covers it.
-      if (glm::dot(normal, light_->isDirectional() ? light_->direction() : light_->center() - position) < 0.0f)
-        r.bias = 0.0f;
-      // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels.
-      const float fs = r.s - 0.5f, ft = r.t - 0.5f;
-      const float is = std::floor(fs), it = std::floor(ft);
-      const float ws = fs - is, wt = ft - it;
-      const int i0 = std::clamp(static_cast<int>(is), 0, n - 1), i1 = std::clamp(static_cast<int>(is) + 1, 0, n - 1);
-      const int j0 = std::clamp(static_cast<int>(it), 0, n - 1), j1 = std::clamp(static_cast<int>(it) + 1, 0, n - 1);
-      const auto lerp2 = [&](float a00, float a10, float a01, float a11) {
-        const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
-        return top + wt * (bottom - top);
-      };
-      const float g = lerp2(g_(i0, j0), g_(i1, j0), g_(i0, j1), g_(i1, j1));
-      const float biased = r.lsDepth - r.bias;
-      const float zc = space_.orthographic || biased > 0.0f ? space_.zeta(biased) : -kInfinity;
-      // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
-      // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The flag's
-      // 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
-      const uint8_t footprint = footprint2x2_(i0, j0);
-      if (footprint == kFootprintRibbonFree) return zc < g ? 1.0f : 0.0f;
-      const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
-      if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
-      const float z = space_.zeta(r.lsDepth);
-      const int32_t receiver = gbuffer.objectId(x, y);
-      if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
-        // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
-        // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
-        const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
-        const int is[4] = {i0, i1, i0, i1}, js[4] = {j0, j0, j1, j1};
-        const float weights[4] = {(1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
-        float sum = 0.0f;
-        for (int k = 0; k < 4; ++k) {
-          const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
-          const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
-          const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
-          const float lg = equation2(*texels[k], zk, zck, map_.objectId(is[k], js[k]) != receiver);
-          sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
+    const int n = map_.size, width = gbuffer.width();
+    const bool directional = light_->isDirectional();
+    const Vec3 towardLight = directional ? light_->direction() : light_->center();
+    const plm::Space space = space_;
+    const float* gTexels = g_.data();
+    const uint8_t* footprints = footprint2x2_.data();
+    v.resizeForOverwrite(width, gbuffer.height());  // every pixel written below, in parallel
+    forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& row) {
+      float* out = v.row(y);
+      const int32_t* ids = gbuffer.objectId.row(y);
+      static_assert(sizeof(Vec3) == 3 * sizeof(float));
+      const auto* positions = reinterpret_cast<const float*>(gbuffer.wsPosition.row(y));
+      const auto* normals = reinterpret_cast<const float*>(gbuffer.wsGeometricNormal.row(y));
+      const float fromPoint = directional ? 0.0f : 1.0f;  // towardLight - fromPoint * P: exact either way
+      // A run of pixels in two passes: the fetch's set-up, arithmetic alone (the compiler vectorizes
+      // it), then the fetch and Equation 2 per pixel, where most pixels take the ribbon-free compare.
+      constexpr int kRun = 256;
+      alignas(64) float ws[kRun], wt[kRun], zc[kRun], bias[kRun];
+      alignas(64) int32_t i0[kRun], i1[kRun], j0[kRun], j1[kRun];
+      const float lastIndex = static_cast<float>(n);
+      for (int first = 0; first < width; first += kRun) {
+        const int count = std::min(kRun, width - first);
+        for (int k = 0; k < count; ++k) {
+          const int x = first + k;
+          // A surface that faces away from the light's centre is never the one the map holds at its
+          // texel (the map sees the surfaces that face the centre), so it cannot shadow itself
+          // through the compare: the bias would only lift it above the surface that covers it.
+          const float* p = positions + 3 * x;
+          const float* m = normals + 3 * x;
+          const float dx = towardLight.x - fromPoint * p[0], dy = towardLight.y - fromPoint * p[1],
+                      dz = towardLight.z - fromPoint * p[2];
+          const bool facesAway = m[0] * dx + m[1] * dy + m[2] * dz < 0.0f;  // glm::dot's order
+          bias[k] = facesAway ? 0.0f : row.bias[x];
+          // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels (the position is
+          // limited to [-1, size] first, which the clamps below make no difference to, so that a
+          // pixel outside the map, whose result is not used, converts no out-of-range float).
+          const float fs = row.s[x] - 0.5f, ft = row.t[x] - 0.5f;
+          const float is = std::floor(fs), it = std::floor(ft);
+          ws[k] = fs - is;
+          wt[k] = ft - it;
+          const int si = static_cast<int>(!(is >= -1.0f) ? -1.0f : std::min(is, lastIndex));
+          const int ti = static_cast<int>(!(it >= -1.0f) ? -1.0f : std::min(it, lastIndex));
+          i0[k] = std::clamp(si, 0, n - 1);
+          i1[k] = std::clamp(si + 1, 0, n - 1);
+          j0[k] = std::clamp(ti, 0, n - 1);
+          j1[k] = std::clamp(ti + 1, 0, n - 1);
+          const float biased = row.lsDepth[x] - bias[k];
+          const float zeta = space.orthographic ? biased : -1.0f / biased;  // Space::zeta, without a branch
+          zc[k] = space.orthographic || biased > 0.0f ? zeta : -kInfinity;
         }
-        return sum;
+        for (int k = 0; k < count; ++k) {
+          const int x = first + k;
+          if (ids[x] == kNoObject || !row.inMap[x]) {
+            out[x] = 1.0f;
+            continue;
+          }
+          const float* g0 = gTexels + static_cast<size_t>(j0[k]) * n;
+          const float* g1 = gTexels + static_cast<size_t>(j1[k]) * n;
+          const float g = lerp2(ws[k], wt[k], g0[i0[k]], g0[i1[k]], g1[i0[k]], g1[i1[k]]);
+          // No ribbon under any of the four texels: Equation 2 reduces to the compare with g (c and b
+          // interpolate to zetaNone exactly, p_i to 0), the same value without the division. The
+          // flag's 2x2 texels hold the clamped footprint's (at the map's border they are a superset).
+          const uint8_t footprint = footprints[static_cast<size_t>(j0[k]) * n + i0[k]];
+          if (footprint == kFootprintRibbonFree) {
+            out[x] = zc[k] < g ? 1.0f : 0.0f;
+            continue;
+          }
+          ShadowReceiver r = row[x];
+          r.bias = bias[k];
+          out[x] = ribbonPixel(r, ids[x], footprint, i0[k], i1[k], j0[k], j1[k], ws[k], wt[k], g, zc[k]);
+        }
       }
-      const PlmTexel texel{lerp2(t00.c, t10.c, t01.c, t11.c), g, lerp2(t00.b, t10.b, t01.b, t11.b),
-                           lerp2(t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
-      const bool otherObject = map_.objectId(i0, j0) != receiver && map_.objectId(i1, j0) != receiver &&
-                               map_.objectId(i0, j1) != receiver && map_.objectId(i1, j1) != receiver;
-      const float lg = equation2(texel, z, zc, otherObject);
-      return options_.illuminationTable ? table_(lg) : lg;
     });
+  }
+
+  // The bilinear interpolation of a fetch's four texels (weights ws along s, wt along t).
+  static float lerp2(float ws, float wt, float a00, float a10, float a01, float a11) {
+    const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
+    return top + wt * (bottom - top);
+  }
+
+  // A pixel whose fetch has a ribbon under some texel: Equation 2 on the interpolated texel, or per
+  // texel across an occluder transition. g and zc as visibilityImpl computed them.
+  float ribbonPixel(const ShadowReceiver& r, int32_t receiver, uint8_t footprint, int i0, int i1, int j0, int j1,
+                    float ws, float wt, float g, float zc) const {
+    const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
+    if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
+    const float z = space_.zeta(r.lsDepth);
+    if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
+      // An occluder transition (Fig. 7 B): Equation 2 per texel, with the compares of shadow_map.h
+      // (the receiver's tangent plane at the texel's centre), and the four values interpolated.
+      const PlmTexel* texels[4] = {&t00, &t10, &t01, &t11};
+      const int is[4] = {i0, i1, i0, i1}, js[4] = {j0, j0, j1, j1};
+      const float weights[4] = {(1.0f - ws) * (1.0f - wt), ws * (1.0f - wt), (1.0f - ws) * wt, ws * wt};
+      float sum = 0.0f;
+      for (int k = 0; k < 4; ++k) {
+        const float biasedPlane = blockerThreshold(r, is[k], js[k]), plane = biasedPlane + r.bias;
+        const float zk = space_.orthographic || plane > 0.0f ? space_.zeta(plane) : -kInfinity;
+        const float zck = space_.orthographic || biasedPlane > 0.0f ? space_.zeta(biasedPlane) : -kInfinity;
+        const float lg = equation2(*texels[k], zk, zck, map_.objectId(is[k], js[k]) != receiver);
+        sum += weights[k] * (options_.illuminationTable ? table_(lg) : lg);
+      }
+      return sum;
+    }
+    const PlmTexel texel{lerp2(ws, wt, t00.c, t10.c, t01.c, t11.c), g, lerp2(ws, wt, t00.b, t10.b, t01.b, t11.b),
+                         lerp2(ws, wt, t00.pi, t10.pi, t01.pi, t11.pi), t00.edge};
+    const bool otherObject = map_.objectId(i0, j0) != receiver && map_.objectId(i1, j0) != receiver &&
+                             map_.objectId(i0, j1) != receiver && map_.objectId(i1, j1) != receiver;
+    const float lg = equation2(texel, z, zc, otherObject);
+    return options_.illuminationTable ? table_(lg) : lg;
   }
 
   // Equation 1, then Equation 2's three compares (the sat keeps the division's sign harmless), for a
