@@ -675,49 +675,64 @@ class PlmTechnique final : public ShadowTechnique {
     std::vector<int>& needLower = needLower_;
     needLower.clear();
     coveredInRow_.resize(static_cast<size_t>(n));
+    g_.resizeForOverwrite(n, n);
+    ribbonAt_.resizeForOverwrite(n, n);
+    const plm::Space space = space_;
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         std::vector<int>& covered = coveredInRow_[static_cast<size_t>(j)];
         covered.clear();
+        // g of the light map first, in one branch-free loop the compiler vectorizes (Space::zeta).
+        const float* depthRow = map_.lsDepth.row(j);
+        float* gRow = g_.row(j);
         for (int i = 0; i < n; ++i) {
-          const float depth = map_.lsDepth(i, j);
-          const float g = std::isfinite(depth) ? space_.zeta(depth) : space_.zetaNone;
-          PlmTexel texel{space_.zetaNone, g, space_.zetaNone, 0.0f, -1};
-          const plm::RibbonTexel& r = ribbons(i, j);
+          const float depth = depthRow[i];
+          const float zeta = space.orthographic ? depth : -1.0f / depth;
+          gRow[i] = std::isfinite(depth) ? zeta : space.zetaNone;
+        }
+        const plm::RibbonTexel* ribbonRow = ribbons.row(j);
+        PlmTexel* out = limits_.row(j);
+        uint8_t* ribbonAt = ribbonAt_.row(j);
+        for (int i = 0; i < n; ++i) {
+          PlmTexel texel{space.zetaNone, gRow[i], space.zetaNone, 0.0f, -1};
+          const plm::RibbonTexel& r = ribbonRow[i];
           if (r.covered()) {
             texel.c = r.c;
-            texel.pi = r.w * space_.ratePerTexel;
+            texel.pi = r.w * space.ratePerTexel;
             texel.edge = r.edge;
-            if (r.w > 0.0f)  // raise g (step 2; see the file comment)
-              texel.g = std::min(g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space_.ratePerTexel);
+            if (r.w > 0.0f) {  // raise g (step 2; see the file comment)
+              texel.g = std::min(texel.g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space.ratePerTexel);
+              gRow[i] = texel.g;
+            }
             covered.push_back(j * n + i);
           }
-          limits_(i, j) = texel;
+          out[i] = texel;
+          ribbonAt[i] = texel.c < space.zetaNone ? 1 : 0;
         }
       }
     });
     for (const std::vector<int>& covered : coveredInRow_)
       needLower.insert(needLower.end(), covered.begin(), covered.end());
     if (!needLower.empty()) findLowerLimits(scene, light, needLower);
-    // The lit fast path of visibility() reads g alone, from a map a quarter the size of limits_, and
-    // a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is (clamped
-    // at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without the
-    // depth test of b, which needs the receiver), or neither.
-    g_.resizeForOverwrite(n, n);
+    // The lit fast path of visibility() reads g alone (g_, filled with limits_ above, a quarter of its
+    // size), and a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is
+    // (clamped at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without
+    // the depth test of b, which needs the receiver), or neither.
     footprint2x2_.resizeForOverwrite(n, n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         const int j1 = std::min(j + 1, n - 1);
+        const uint8_t *ribbonAt0 = ribbonAt_.row(j), *ribbonAt1 = ribbonAt_.row(j1);
+        uint8_t* footprint = footprint2x2_.row(j);
         for (int i = 0; i < n; ++i) {
           const int i1 = std::min(i + 1, n - 1);
-          g_(i, j) = limits_(i, j).g;
+          // No texel's c below zetaNone: the ribbon-free class, without reading the texels.
+          if ((ribbonAt0[i] | ribbonAt0[i1] | ribbonAt1[i] | ribbonAt1[i1]) == 0) {
+            footprint[i] = kFootprintRibbonFree;
+            continue;
+          }
           const PlmTexel &t00 = limits_(i, j), &t10 = limits_(i1, j), &t01 = limits_(i, j1), &t11 = limits_(i1, j1);
-          if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone)
-            footprint2x2_(i, j) = kFootprintRibbonFree;
-          else if (continuousRibbon(t00, t10, t01, t11))
-            footprint2x2_(i, j) = kFootprintOneRibbon;
-          else
-            footprint2x2_(i, j) = kFootprintMixed;
+          footprint[i] = continuousRibbon(t00, t10, t01, t11) ? kFootprintOneRibbon : kFootprintMixed;
         }
       }
     });
@@ -1000,6 +1015,7 @@ class PlmTechnique final : public ShadowTechnique {
   std::vector<std::vector<int>> coveredInRow_;  //!< prepare's scratch: each row's ribbon texels
   Image<float> g_;                              //!< limits_' g alone, for the lit fast path
   Image<uint8_t> footprint2x2_;                 //!< kFootprint* of the 2x2 texels whose top-left this is
+  Image<uint8_t> ribbonAt_;                     //!< 1 where a ribbon holds the texel (c below zetaNone)
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
