@@ -30,22 +30,29 @@ struct MapComparison {
   double maxInteriorError = 0.0;  // relative depth error where the ray hits well inside a triangle
 };
 
+// The ray through texel (s, t)'s centre from the map's origin (orthographic: along its axis), with
+// t measured in light-space depth.
+Ray texelRay(const LightMap& m, int s, int t) {
+  const float sc = static_cast<float>(s) + 0.5f, tc = static_cast<float>(t) + 0.5f;
+  Ray ray;
+  if (m.orthographic) {
+    ray.origin = m.unproject(sc, tc, 0.0f);
+    ray.direction = m.lsFrame.z;
+  } else {
+    ray.origin = m.wsOrigin;
+    ray.direction = m.unproject(sc, tc, 1.0f) - m.wsOrigin;  // light-space z = 1: t is the depth
+    ray.tMin = m.zNear;
+  }
+  return ray;
+}
+
 MapComparison compareWithRays(const Scene& scene, const LightMap& m) {
   const RayScene rays(scene);
   MapComparison c;
   for (int t = 0; t < m.size; ++t)
     for (int s = 0; s < m.size; ++s) {
       ++c.texels;
-      const float sc = static_cast<float>(s) + 0.5f, tc = static_cast<float>(t) + 0.5f;
-      Ray ray;
-      if (m.orthographic) {
-        ray.origin = m.unproject(sc, tc, 0.0f);
-        ray.direction = m.lsFrame.z;
-      } else {
-        ray.origin = m.wsOrigin;
-        ray.direction = m.unproject(sc, tc, 1.0f) - m.wsOrigin;  // light-space z = 1: t is the depth
-        ray.tMin = m.zNear;
-      }
+      Ray ray = texelRay(m, s, t);
       const std::optional<RayHit> hit = rays.intersect(ray);
       const int32_t id = hit ? hit->objectId : kNoObject;
       if (id != m.objectId(s, t)) {
@@ -170,16 +177,7 @@ TEST(LightMap, FarLayerMatchesTheLastHitAlongEachTexelsRay) {
     int hits = 0, outliers = 0, behindNearest = 0;
     for (int t = 0; t < m.size; ++t)
       for (int s = 0; s < m.size; ++s) {
-        const float sc = static_cast<float>(s) + 0.5f, tc = static_cast<float>(t) + 0.5f;
-        Ray ray;
-        if (m.orthographic) {
-          ray.origin = m.unproject(sc, tc, 0.0f);
-          ray.direction = m.lsFrame.z;
-        } else {
-          ray.origin = m.wsOrigin;
-          ray.direction = m.unproject(sc, tc, 1.0f) - m.wsOrigin;  // light-space z = 1: t is the depth
-          ray.tMin = m.zNear;
-        }
+        Ray ray = texelRay(m, s, t);
         std::optional<RayHit> last;
         for (int step = 0; step < 32; ++step) {
           const std::optional<RayHit> hit = rays.intersect(ray);

@@ -263,27 +263,45 @@ TEST(Rasterizer, PerspectiveCorrectInterpolationOnATiltedPlane) {
   EXPECT_GT(maxAffineError, 0.1);
 }
 
+// Two interpenetrating triangles: A at constant depth 0, B tilted from -0.5 to +0.5 across x (its
+// depth at a pixel centre x + 0.5 is -0.5 + (x + 0.5 - 5) / 120), drawn A first (order 0) or B first.
+Mesh2 interpenetratingTriangles(int order) {
+  Mesh2 m;
+  m.width = 130;
+  m.height = 70;
+  const double x0 = 5.0, x1 = 125.0;
+  const uint32_t a0 = m.addRasterVertex(x0, 5), a1 = m.addRasterVertex(x1, 5), a2 = m.addRasterVertex(65, 65);
+  const uint32_t b0 = m.addRasterVertex(x0, 65, -0.5f), b1 = m.addRasterVertex(x1, 65, 0.5f),
+                 b2 = m.addRasterVertex(65, 2, 0.0f);
+  const glm::uvec3 A(a0, a1, a2), B(b0, b1, b2);
+  m.triangles = order == 0 ? std::vector<glm::uvec3>{A, B} : std::vector<glm::uvec3>{B, A};
+  return m;
+}
+
+// One triangle three times over, its corners in three orders.
+Mesh2 coplanarDuplicates() {
+  Mesh2 m;
+  m.width = 100;
+  m.height = 90;
+  m.addRasterVertex(3.3, 4.1, 0.25f);
+  m.addRasterVertex(97.2, 20.7, 0.25f);
+  m.addRasterVertex(30.1, 88.8, 0.25f);
+  m.triangles = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}};
+  return m;
+}
+
 TEST(Rasterizer, DepthTestKeepsTheNearestSurfaceAndBreaksTiesByInputOrder) {
-  // Two interpenetrating triangles: A at constant depth 0, B tilted from -0.5 to +0.5 across x.
   // The analytic winner at each pixel centre is the smaller depth; far from the intersection line
   // the result must match in both drawing orders.
   for (int order = 0; order < 2; ++order) {
-    Mesh2 m;
-    m.width = 130;
-    m.height = 70;
-    const double x0 = 5.0, x1 = 125.0;
-    const uint32_t a0 = m.addRasterVertex(x0, 5), a1 = m.addRasterVertex(x1, 5), a2 = m.addRasterVertex(65, 65);
-    const uint32_t b0 = m.addRasterVertex(x0, 65, -0.5f), b1 = m.addRasterVertex(x1, 65, 0.5f),
-                   b2 = m.addRasterVertex(65, 2, 0.0f);
-    const glm::uvec3 A(a0, a1, a2), B(b0, b1, b2);
-    m.triangles = order == 0 ? std::vector<glm::uvec3>{A, B} : std::vector<glm::uvec3>{B, A};
+    const Mesh2 m = interpenetratingTriangles(order);
     const int idA = order == 0 ? 0 : 1, idB = 1 - idA;
     const RasterOutput out = rasterize(m.input());
     const Image<int> count = coverageCount(m);
     int checked = 0;
     for (int y = 0; y < m.height; ++y)
       for (int x = 0; x < m.width; ++x) {
-        const double zB = -0.5 + ((x + 0.5) - x0) / (x1 - x0);  // B's depth is linear in x only
+        const double zB = -0.5 + ((x + 0.5) - 5.0) / 120.0;  // B's depth is linear in x only
         if (count(x, y) == 2 && std::abs(zB) > 1e-3) {
           EXPECT_EQ(out.triangle(x, y), zB < 0.0 ? idB : idA) << x << "," << y;
           EXPECT_NEAR(out.depth(x, y), std::min(zB, 0.0), 1e-5);
@@ -293,13 +311,7 @@ TEST(Rasterizer, DepthTestKeepsTheNearestSurfaceAndBreaksTiesByInputOrder) {
     EXPECT_GT(checked, 1000);
   }
   // Coplanar duplicates: the first triangle in the input wins every pixel.
-  Mesh2 m;
-  m.width = 100;
-  m.height = 90;
-  m.addRasterVertex(3.3, 4.1, 0.25f);
-  m.addRasterVertex(97.2, 20.7, 0.25f);
-  m.addRasterVertex(30.1, 88.8, 0.25f);
-  m.triangles = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}};
+  Mesh2 m = coplanarDuplicates();
   m.payloads = {10, 11, 12};
   const RasterOutput out = rasterize(m.input());
   int covered = 0;
@@ -316,15 +328,7 @@ TEST(Rasterizer, DepthTestKeepsTheNearestSurfaceAndBreaksTiesByInputOrder) {
 // (the analytic max of the two depths), the nearest layer unchanged, and ties to the first in input order.
 TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) {
   for (int order = 0; order < 2; ++order) {
-    Mesh2 m;
-    m.width = 130;
-    m.height = 70;
-    const double x0 = 5.0, x1 = 125.0;
-    const uint32_t a0 = m.addRasterVertex(x0, 5), a1 = m.addRasterVertex(x1, 5), a2 = m.addRasterVertex(65, 65);
-    const uint32_t b0 = m.addRasterVertex(x0, 65, -0.5f), b1 = m.addRasterVertex(x1, 65, 0.5f),
-                   b2 = m.addRasterVertex(65, 2, 0.0f);
-    const glm::uvec3 A(a0, a1, a2), B(b0, b1, b2);
-    m.triangles = order == 0 ? std::vector<glm::uvec3>{A, B} : std::vector<glm::uvec3>{B, A};
+    const Mesh2 m = interpenetratingTriangles(order);
     const int idA = order == 0 ? 0 : 1, idB = 1 - idA;
     const RasterOutput nearest = rasterize(m.input());
     Image<int32_t> farTriangle(m.width, m.height, -2), nearTriangle(m.width, m.height, -2);
@@ -353,7 +357,7 @@ TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) 
           ASSERT_EQ(farTriangle(x, y), nearest.triangle(x, y)) << x << "," << y;
           continue;
         }
-        const double zB = -0.5 + ((x + 0.5) - x0) / (x1 - x0);
+        const double zB = -0.5 + ((x + 0.5) - 5.0) / 120.0;
         if (std::abs(zB) > 1e-3) {
           EXPECT_EQ(farTriangle(x, y), zB > 0.0 ? idB : idA) << x << "," << y;
           EXPECT_NEAR(farKey(x, y), std::max(zB, 0.0), 1e-5);
@@ -363,13 +367,7 @@ TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) 
     EXPECT_GT(checked, 1000);
   }
   // Coplanar duplicates: the first triangle in the input is the deepest too.
-  Mesh2 m;
-  m.width = 100;
-  m.height = 90;
-  m.addRasterVertex(3.3, 4.1, 0.25f);
-  m.addRasterVertex(97.2, 20.7, 0.25f);
-  m.addRasterVertex(30.1, 88.8, 0.25f);
-  m.triangles = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}};
+  Mesh2 m = coplanarDuplicates();
   RasterInput in = m.input();
   in.farthestLayer = true;
   std::atomic<int> covered = 0, others = 0;
