@@ -284,13 +284,13 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     if (farthest)
       for (int j = 0; j < samples.height; ++j) {
         float* row = m.lsFarDepth.row(samples.y0 + j) + samples.x0;
-        // The depth from the key, its clip z over clip w: perspective -zNear / z, orthographic
-        // linear in z (within float rounding of the interpolated depth; no barycentrics needed).
         for (int i = 0; i < samples.width; ++i) {
           const int k = j * raster::kTileSize + i;
-          if (samples.farTriangle[k] < 0) continue;
-          const float key = samples.farDepth[k];
-          row[i] = m.orthographic ? (key - clipZOffset) / clipZScale : clipZOffset / key;
+          const int32_t triangle = samples.farTriangle[k];
+          if (triangle < 0) continue;
+          const glm::uvec3& t = triangles[static_cast<size_t>(triangle)];
+          const Vec3& b = samples.farBarycentrics[k];
+          row[i] = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];
         }
       }
     for (int j = 0; j < samples.height; ++j)

@@ -375,7 +375,7 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
   const int W = input.width, H = input.height;
   tbb::parallel_for(tbb::blocked_range<int>(0, ctx.tilesX * ctx.tilesY, 1), [&](const tbb::blocked_range<int>& r) {
     TileBuffers tile;
-    std::array<Vec3, kTileSize * kTileSize> barycentrics;
+    std::array<Vec3, kTileSize * kTileSize> barycentrics, farBarycentrics;
     std::array<float, kTileSize * kTileSize> clipW;
     const bool farthest = input.farthestLayer;
     for (int t = r.begin(); t < r.end(); ++t) {
@@ -417,8 +417,22 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
         }
       }
       if (farthest) {
+        cachedTriangle = -1;
+        for (int j = 0; j < samples.height; ++j) {
+          const double ndcY = 1.0 - (ty0 + j + 0.5) * ndcPerPixelY;
+          for (int i = 0; i < samples.width; ++i) {
+            const int32_t tri = tile.farWinner[j * kTileSize + i];
+            if (tri < 0) continue;
+            if (tri != cachedTriangle) {
+              const glm::uvec3& v = input.triangles[static_cast<size_t>(tri)];
+              h = HomogeneousTriangle(input.clipPositions[v.x], input.clipPositions[v.y], input.clipPositions[v.z]);
+              cachedTriangle = tri;
+            }
+            farBarycentrics[j * kTileSize + i] = Vec3(h.barycentrics((tx0 + i + 0.5) * ndcPerPixelX - 1.0, ndcY));
+          }
+        }
         samples.farTriangle = tile.farWinner.data();
-        samples.farDepth = tile.farKey.data();
+        samples.farBarycentrics = farBarycentrics.data();
       }
       samples.triangle = tile.winner.data();
       samples.depth = tile.key.data();

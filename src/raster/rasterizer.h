@@ -87,10 +87,10 @@ struct TileSamples {
   const Vec3* barycentrics = nullptr;  //!< perspective-correct, of the input triangle's vertices
   const float* clipW = nullptr;        //!< clip w at the sample
   // With RasterInput::farthestLayer (else nullptr): the covering triangle with the largest depth key
-  // (the first in input order among equals) and that key. No barycentrics: a caller that needs the
-  // deepest surface's depth alone takes it from the key, which is affine in the pixel position.
+  // (the first in input order among equals) and its barycentrics, as above. (A depth taken back from
+  // the interpolated key instead differs from the interpolated attribute by up to 1e-5 of it.)
   const int32_t* farTriangle = nullptr;
-  const float* farDepth = nullptr;
+  const Vec3* farBarycentrics = nullptr;
 };
 // Called once per tile, concurrently for different tiles (it must only write that tile's pixels).
 using TileVisitor = std::function<void(const TileSamples&)>;

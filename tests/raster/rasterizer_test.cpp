@@ -324,8 +324,9 @@ TEST(Rasterizer, DepthTestKeepsTheNearestSurfaceAndBreaksTiesByInputOrder) {
   EXPECT_GT(covered, 3000);
 }
 
-// The same pass's visitor with the farthest layer: per pixel the deepest covering triangle and its key
-// (the analytic max of the two depths), the nearest layer unchanged, and ties to the first in input order.
+// The same pass's visitor with the farthest layer: per pixel the deepest covering triangle and its
+// barycentrics (giving the analytic max of the two depths), the nearest layer unchanged, and ties to
+// the first in input order.
 TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) {
   for (int order = 0; order < 2; ++order) {
     const Mesh2 m = interpenetratingTriangles(order);
@@ -341,7 +342,11 @@ TEST(Rasterizer, FarthestLayerKeepsTheDeepestSurfaceAndLeavesTheNearestAsItWas) 
           const int k = j * kTileSize + i;
           farTriangle(t.x0 + i, t.y0 + j) = t.farTriangle[k];
           nearTriangle(t.x0 + i, t.y0 + j) = t.triangle[k];
-          if (t.farTriangle[k] >= 0) farKey(t.x0 + i, t.y0 + j) = t.farDepth[k];
+          if (t.farTriangle[k] < 0) continue;
+          // The far triangle's depth at the pixel, from its barycentrics.
+          const glm::uvec3& v = m.triangles[static_cast<size_t>(t.farTriangle[k])];
+          const Vec3& b = t.farBarycentrics[k];
+          farKey(t.x0 + i, t.y0 + j) = b.x * m.clip[v.x].z + b.y * m.clip[v.y].z + b.z * m.clip[v.z].z;
         }
     });
     const Image<int> count = coverageCount(m);

@@ -641,13 +641,6 @@ struct PlmTexel {
   int32_t edge;  //!< the ribbon's edge (index into edges_); -1 where no ribbon
 };
 
-// One texel's walk down its light ray in the fit of b (PlmTechnique::findLowerLimits): its texel,
-// the hits so far, and the ray from just below c, past the last hit.
-struct LowerLimitWalk {
-  int i = 0, j = 0, hops = 0;
-  Ray ray;
-};
-
 class PlmTechnique final : public ShadowTechnique {
  public:
   explicit PlmTechnique(const PlmOptions& options) : options_(options) {}
@@ -901,6 +894,12 @@ class PlmTechnique final : public ShadowTechnique {
   // (stratified over the emitter, one packet), and b is put there at the first one that sees less
   // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
   // more of this one than its edge accounts for, shadows the receivers (see the file comment).
+  // The walk takes one closest hit at a time (rtcIntersect1). Sixteen walks in one rtcIntersect16 were
+  // 2 ms faster on crowded, but where two faces coincide (a box's bottom on the ground) the packet
+  // and single-ray traversals return different ones of the two, and a walk that met the face turned
+  // away stepped past the ground without probing it (397 texels lost b on crowded under a directional
+  // light). Which of two coincident faces a query returns is arbitrary; the packet walk changed V (851
+  // pixels at 700 x 450 there), so the walk stays as it was.
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
@@ -910,100 +909,56 @@ class PlmTechnique final : public ShadowTechnique {
     for (int q = 0; q < kProfileSamples; ++q)
       pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
                         (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
-    // Sixteen texels at a time (neighbours along a row: coherent rays), each walking its light ray
-    // down from c one closest hit at a time in one Embree packet of the texels still walking; a
-    // texel leaves the walk when its ray leaves the scene, after kMaxProfileHits hits, or when b is found.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t first = range.begin(); first < range.end(); first += 16) {
-        LowerLimitWalk walks[16];
-        int walking = 0;
-        for (size_t k = first; k < std::min(first + 16, range.end()); ++k) {
-          const int i = texels[k] % n, j = texels[k] / n;
-          // Only receivers below the surface the map sees are probed: none where that is the deepest.
-          const float seenDepth = map_.lsDepth(i, j);
-          if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
-          const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
-          const float cDepth = space_.lsDepth(limits_(i, j).c);
-          const float start = cDepth + map_.texelWorldSize(cDepth);
-          LowerLimitWalk& w = walks[walking++];
-          w.i = i;
-          w.j = j;
-          w.ray.origin = map_.unproject(s, t, start);
-          w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
-        }
-        while (walking > 0) {
-          RayHitPacket16 packet;
-          for (int lane = 0; lane < walking; ++lane) {
-            const Ray& ray = walks[lane].ray;
-            packet.ray.orgX[lane] = ray.origin.x;
-            packet.ray.orgY[lane] = ray.origin.y;
-            packet.ray.orgZ[lane] = ray.origin.z;
-            packet.ray.dirX[lane] = ray.direction.x;
-            packet.ray.dirY[lane] = ray.direction.y;
-            packet.ray.dirZ[lane] = ray.direction.z;
-            packet.ray.tMin[lane] = ray.tMin;
-            packet.ray.tMax[lane] = ray.tMax;
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const int i = texels[k] % n, j = texels[k] / n;
+        PlmTexel& texel = limits_(i, j);
+        // Only receivers below the surface the map sees are probed: none where that is the deepest.
+        const float seenDepth = map_.lsDepth(i, j);
+        if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+        const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
+        const float cDepth = space_.lsDepth(texel.c);
+        const float start = cDepth + map_.texelWorldSize(cDepth);
+        Ray ray;
+        ray.origin = map_.unproject(s, t, start);
+        ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
+        std::optional<RayHit> hit;
+        for (int hop = 0; hop < kMaxProfileHits && (hit = rays.intersect(ray)); ++hop) {
+          ray.tMin = std::nextafter(hit->t, kInfinity);
+          if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
+          const Vec3 wsHit = ray.origin + hit->t * ray.direction;
+          const float depth = map_.lsFromWs(wsHit).z;
+          const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+          // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
+          if (!(depth > map_.lsDepth(i, j) + lift)) continue;
+          const float probeDepth = depth - lift;
+          if (!(probeDepth > 0.0f)) continue;
+          const float l =
+              std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+          const float predicted = options_.illuminationTable ? table_(l) : l;
+          // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
+          if (!(predicted * kProfileSamples >= kProfileMinDeficit)) continue;
+          const Vec3 probe = wsHit - lift * ray.direction;
+          Ray toLight[kProfileSamples];
+          bool blocked[kProfileSamples];
+          for (int q = 0; q < kProfileSamples; ++q) {
+            const LightSample sample = light.sample(probe, pattern[q]);
+            toLight[q].origin = probe;
+            toLight[q].direction = sample.wsDirection;
+            toLight[q].tMax = sample.distance;  // kInfinity for a directional light
           }
-          rays.intersect16(packet, walking);
-          int kept = 0;
-          for (int lane = 0; lane < walking; ++lane) {
-            LowerLimitWalk& w = walks[lane];
-            if (packet.hit.geomId[lane] != HitPacket16::kNoHit && !probeHit(light, pattern, rays, w, packet, lane) &&
-                ++w.hops < kMaxProfileHits)
-              walks[kept++] = w;
+          rays.occluded16(toLight, kProfileSamples, blocked);
+          int seen = 0;
+          for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
+          const float expected = predicted * kProfileSamples;
+          if (static_cast<float>(seen) < kProfileFraction * expected &&
+              expected - static_cast<float>(seen) >= kProfileMinDeficit) {
+            texel.b = space_.zeta(probeDepth);
+            break;
           }
-          walking = kept;
         }
       }
     });
-  }
-
-  // One hit of a texel's walk down its light ray (lane `lane` of `packet`): a surface facing the
-  // light, below the surface the map sees, is a receiver of the texel's shadow; its visibility is
-  // probed with kProfileSamples rays to the light, and b put there if it sees too little (true: the
-  // walk ends). Otherwise the walk goes on past the hit.
-  bool probeHit(const Light& light, const Vec2* pattern, const RayScene& rays, LowerLimitWalk& w,
-                const RayHitPacket16& packet, int lane) {
-    Ray& ray = w.ray;
-    const float hitT = packet.ray.tMax[lane];
-    ray.tMin = std::nextafter(hitT, kInfinity);
-    // Embree's Ng is (v1 - v0) x (v2 - v0), unnormalized: normalized as RayScene::intersect does.
-    const Vec3 ng(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]);
-    const float len = glm::length(ng);
-    const Vec3 normal = len > 0.0f ? ng / len : Vec3(0.0f);
-    if (!(glm::dot(normal, -ray.direction) > 0.0f)) return false;  // faces away: no receiver
-    PlmTexel& texel = limits_(w.i, w.j);
-    const Vec3 wsHit = ray.origin + hitT * ray.direction;
-    const float depth = map_.lsFromWs(wsHit).z;
-    const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
-    // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
-    if (!(depth > map_.lsDepth(w.i, w.j) + lift)) return false;
-    const float probeDepth = depth - lift;
-    if (!(probeDepth > 0.0f)) return false;
-    const float l =
-        std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
-    const float predicted = options_.illuminationTable ? table_(l) : l;
-    // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
-    if (!(predicted * kProfileSamples >= kProfileMinDeficit)) return false;
-    const Vec3 probe = wsHit - lift * ray.direction;
-    Ray toLight[kProfileSamples];
-    bool blocked[kProfileSamples];
-    for (int q = 0; q < kProfileSamples; ++q) {
-      const LightSample sample = light.sample(probe, pattern[q]);
-      toLight[q].origin = probe;
-      toLight[q].direction = sample.wsDirection;
-      toLight[q].tMax = sample.distance;  // kInfinity for a directional light
-    }
-    rays.occluded16(toLight, kProfileSamples, blocked);
-    int seen = 0;
-    for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
-    const float expected = predicted * kProfileSamples;
-    if (static_cast<float>(seen) < kProfileFraction * expected &&
-        expected - static_cast<float>(seen) >= kProfileMinDeficit) {
-      texel.b = space_.zeta(probeDepth);
-      return true;
-    }
-    return false;
   }
 
   PlmOptions options_;
