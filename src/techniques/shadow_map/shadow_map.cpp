@@ -60,7 +60,9 @@ float minMapDepth(const LightMap& map) {
 // the AVX-512 path below), so every path rounds alike: V is bit-identical on every CPU.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
 #define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
+#define PENUMBRA_RECEIVER_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
+#define PENUMBRA_RECEIVER_CLONES
 #define PENUMBRA_KERNEL_CLONES
 #endif
 
@@ -68,8 +70,9 @@ namespace {
 
 // What makeReceiverRow's loop reads besides the pixels: the map's frame and projection, the bias.
 struct ReceiverRowConstants {
-  float ox, oy, oz;                          //!< the map's origin
+  float ox, oy, oz;                          //!< the origin of the frame the pixels are taken into
   float xx, xy, xz, yx, yy, yz, zx, zy, zz;  //!< its axes
+  float mx, my, mz;                          //!< the map's origin in that frame (0 for the map's own frame)
   float size, half, halfWidth, tanHalfFov, biasConstant, biasSlope;
   int mapSize;
 };
@@ -94,9 +97,10 @@ inline __attribute__((always_inline)) void receiverRowKernel(
   for (size_t x = 0; x < n; ++x) {
     const float dx = position[3 * x] - k.ox, dy = position[3 * x + 1] - k.oy, dz = position[3 * x + 2] - k.oz;
     const float gx = normal[3 * x], gy = normal[3 * x + 1], gz = normal[3 * x + 2];
-    const float lx = dx * k.xx + dy * k.xy + dz * k.xz;
-    const float ly = dx * k.yx + dy * k.yy + dz * k.yz;
-    const float lz = dx * k.zx + dy * k.zy + dz * k.zz;
+    // Minus the map's origin in the frame: exact for the map's own frame (x - 0 is x, -0 included).
+    const float lx = (dx * k.xx + dy * k.xy + dz * k.xz) - k.mx;
+    const float ly = (dx * k.yx + dy * k.yy + dz * k.yz) - k.my;
+    const float lz = (dx * k.zx + dy * k.zy + dz * k.zz) - k.mz;
     const float nx = gx * k.xx + gy * k.xy + gz * k.xz;
     const float ny = gx * k.yx + gy * k.yy + gz * k.yz;
     const float nz = gx * k.zx + gy * k.zy + gz * k.zz;
@@ -135,36 +139,41 @@ inline __attribute__((always_inline)) void receiverRowKernel(
       float *__restrict s, float *__restrict t, float *__restrict z, float *__restrict dzds, float *__restrict dzdt,   \
       float *__restrict biasOut, float *__restrict texelWorld, float *__restrict threshold, int32_t *__restrict texel, \
       int32_t *__restrict inMap
-PENUMBRA_KERNEL_CLONES void receiverRowOrtho(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
+PENUMBRA_RECEIVER_CLONES void receiverRowOrtho(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
   receiverRowKernel<true>(k, n, position, normal, s, t, z, dzds, dzdt, biasOut, texelWorld, threshold, texel, inMap);
 }
-PENUMBRA_KERNEL_CLONES void receiverRowPerspective(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
+PENUMBRA_RECEIVER_CLONES void receiverRowPerspective(PENUMBRA_RECEIVER_ROW_PARAMETERS) {
   receiverRowKernel<false>(k, n, position, normal, s, t, z, dzds, dzdt, biasOut, texelWorld, threshold, texel, inMap);
 }
 #undef PENUMBRA_RECEIVER_ROW_PARAMETERS
 
 }  // namespace
 
-void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
-                     const DepthBias& bias, ReceiverRow& out) {
+namespace {
+
+void receiverRow(const LightMap& frame, const Vec3& lsOffset, const LightMap& map, const Vec3* wsPositions,
+                 const Vec3* wsGeometricNormals, int count, const DepthBias& bias, ReceiverRow& out) {
   const auto n = static_cast<size_t>(std::max(count, 0));
   for (auto* field :
        {&out.s, &out.t, &out.lsDepth, &out.dzds, &out.dzdt, &out.bias, &out.texelWorld, &out.nearestThreshold})
     field->resize(n);
   out.inMap.resize(n);
   out.nearestTexel.resize(n);
-  const ReceiverRowConstants k{map.wsOrigin.x,
-                               map.wsOrigin.y,
-                               map.wsOrigin.z,
-                               map.lsFrame.x.x,
-                               map.lsFrame.x.y,
-                               map.lsFrame.x.z,
-                               map.lsFrame.y.x,
-                               map.lsFrame.y.y,
-                               map.lsFrame.y.z,
-                               map.lsFrame.z.x,
-                               map.lsFrame.z.y,
-                               map.lsFrame.z.z,
+  const ReceiverRowConstants k{frame.wsOrigin.x,
+                               frame.wsOrigin.y,
+                               frame.wsOrigin.z,
+                               frame.lsFrame.x.x,
+                               frame.lsFrame.x.y,
+                               frame.lsFrame.x.z,
+                               frame.lsFrame.y.x,
+                               frame.lsFrame.y.y,
+                               frame.lsFrame.y.z,
+                               frame.lsFrame.z.x,
+                               frame.lsFrame.z.y,
+                               frame.lsFrame.z.z,
+                               lsOffset.x,
+                               lsOffset.y,
+                               lsOffset.z,
                                static_cast<float>(map.size),
                                0.5f * static_cast<float>(map.size),
                                map.halfWidth,
@@ -178,6 +187,18 @@ void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* w
   (map.orthographic ? receiverRowOrtho : receiverRowPerspective)(
       k, n, position, normal, out.s.data(), out.t.data(), out.lsDepth.data(), out.dzds.data(), out.dzdt.data(),
       out.bias.data(), out.texelWorld.data(), out.nearestThreshold.data(), out.nearestTexel.data(), out.inMap.data());
+}
+
+}  // namespace
+
+void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
+                     const DepthBias& bias, ReceiverRow& out) {
+  receiverRow(map, Vec3(0.0f), map, wsPositions, wsGeometricNormals, count, bias, out);
+}
+
+void makeReceiverRowInFrame(const LightMap& frame, const Vec3& lsOffset, const LightMap& map, const Vec3* wsPositions,
+                            const Vec3* wsGeometricNormals, int count, const DepthBias& bias, ReceiverRow& out) {
+  receiverRow(frame, lsOffset, map, wsPositions, wsGeometricNormals, count, bias, out);
 }
 
 float pcfBox(const LightMap& map, const ShadowReceiver& r, float s, float t, float widthTexels) {

@@ -158,6 +158,11 @@ struct ReceiverRow {
 // The receivers of `count` pixels with these world positions and geometric normals (a G-buffer row).
 void makeReceiverRow(const LightMap& map, const Vec3* wsPositions, const Vec3* wsGeometricNormals, int count,
                      const DepthBias& bias, ReceiverRow& out);
+// The same for a perspective `map` whose axes are those of `frame` and whose origin lies at lsOffset in
+// frame's light space (heidrich's maps, one per sample point of the light): each pixel is taken into
+// frame's light space and moved by -lsOffset, as heidrich::receiverInMap does, to the bit.
+void makeReceiverRowInFrame(const LightMap& frame, const Vec3& lsOffset, const LightMap& map, const Vec3* wsPositions,
+                            const Vec3* wsGeometricNormals, int count, const DepthBias& bias, ReceiverRow& out);
 
 // The depth below which texel (i, j) holds a blocker for the receiver.
 inline float blockerThreshold(const ShadowReceiver& r, int i, int j) {

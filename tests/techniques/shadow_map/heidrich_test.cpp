@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -551,6 +552,53 @@ TEST(HeidrichStages, SharedFrameReceiverMatchesMakeReceiver) {
       }
   }
   EXPECT_GT(compared, 10000);
+}
+
+// The visibility pass sets up each map's receivers a row at a time (makeReceiverRowInFrame): field for
+// field receiverInMap's, to the bit, with each map's nearest texel and its threshold hardShadow's.
+TEST(HeidrichStages, SharedFrameReceiverRowsMatchReceiverInMapToTheBit) {
+  for (const char* name : {"linear", "crowded"}) {
+    const ShadowTestScene& s = shadowTestScene(name);
+    HeidrichOptions o;
+    o.lightMap.size = 200;  // not a power of two
+    o.subdivisions = 3;
+    const Light segment =
+        Light::segment(s.light().center() - Vec3(0.6f, 0.0f, 0.2f), s.light().center() + Vec3(0.6f, 0.0f, 0.2f));
+    HeidrichTechnique technique(o);
+    technique.prepare(s.scene, segment);
+    const LightMap& map0 = technique.shadowMap(0);
+    ReceiverRow row;
+    int compared = 0;
+    for (int j = 0; j < technique.samplePoints(); ++j) {
+      const LightMap& map = technique.shadowMap(j);
+      const Vec3 offset = map0.lsFromWs(map.wsOrigin);
+      for (int y = 0; y < s.gbuffer.height(); y += 3) {
+        makeReceiverRowInFrame(map0, offset, map, s.gbuffer.wsPosition.row(y), s.gbuffer.wsGeometricNormal.row(y),
+                               s.gbuffer.width(), o.bias, row);
+        for (int x = 0; x < s.gbuffer.width(); ++x) {
+          const ShadowReceiver expected =
+              heidrich::receiverInMap(map, map0.lsFromWs(s.gbuffer.wsPosition(x, y)) - offset,
+                                      map0.lsFrame.toLocal(s.gbuffer.wsGeometricNormal(x, y)), o.bias);
+          const ShadowReceiver r = row[x];
+          ASSERT_EQ(r.inMap, expected.inMap) << name << " " << j << " " << x << " " << y;
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.s), std::bit_cast<uint32_t>(expected.s));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.t), std::bit_cast<uint32_t>(expected.t));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.lsDepth), std::bit_cast<uint32_t>(expected.lsDepth));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.dzds), std::bit_cast<uint32_t>(expected.dzds));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.dzdt), std::bit_cast<uint32_t>(expected.dzdt));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.bias), std::bit_cast<uint32_t>(expected.bias));
+          EXPECT_EQ(std::bit_cast<uint32_t>(r.texelWorld), std::bit_cast<uint32_t>(expected.texelWorld));
+          if (!expected.inMap) continue;
+          const int i = static_cast<int>(std::floor(expected.s)), k = static_cast<int>(std::floor(expected.t));
+          EXPECT_EQ(row.nearestTexel[static_cast<size_t>(x)], k * map.size + i);
+          EXPECT_EQ(std::bit_cast<uint32_t>(row.nearestThreshold[static_cast<size_t>(x)]),
+                    std::bit_cast<uint32_t>(blockerThreshold(expected, i, k)));
+          ++compared;
+        }
+      }
+    }
+    EXPECT_GT(compared, 20000) << name;
+  }
 }
 
 // ---------------------------------------------------------------------------------------------------
