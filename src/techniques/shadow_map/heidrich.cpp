@@ -116,67 +116,84 @@
 namespace penumbra {
 namespace heidrich {
 
-void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges, Image<float>& horizontal,
-                 Image<float>& blurred) {
+namespace {
+
+// One row of the edge test: the 5-point Laplacian of the blurred depth (rows up, mid, down; mid[-1] and
+// mid[n] repeat its border texels) against k texel sizes at the texel's depth z. Values in, restrict
+// pointers: the byte stores may alias nothing the loop reads, so it vectorizes.
+void edgeRow(const float* __restrict up, const float* __restrict mid, const float* __restrict down,
+             const float* __restrict z, int n, float k, float texelPerDepth, float texelConstant,
+             uint8_t* __restrict e) {
+  for (int x = 0; x < n; ++x) {
+    const float log = mid[x - 1] + mid[x + 1] + up[x] + down[x] - 4.0f * mid[x];
+    const float threshold = k * (texelPerDepth * z[x] + texelConstant);
+    e[x] = !(std::abs(log) <= threshold);  // NaN and inf (empty texels nearby) are edges
+  }
+}
+
+}  // namespace
+
+void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges) {
   const int n = map.size;
-  // Every texel of the three images is written below, in parallel.
-  edges.resizeForOverwrite(n, n);
+  edges.resizeForOverwrite(n, n);  // every texel written below, in parallel
   if (n == 0) return;
-  horizontal.resizeForOverwrite(n, n);
-  blurred.resizeForOverwrite(n, n);
   auto clampIndex = [n](int i) { return std::clamp(i, 0, n - 1); };
   const float* depth = map.lsDepth.data();
-  // The binomial blur, separable; borders repeat the edge texel. Empty texels (+inf) spread +inf over
-  // the blur's support, and the Laplacian turns that into NaN or inf: flagged below, skipped later.
-  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      const float* z = depth + static_cast<size_t>(y) * n;
-      float* h = horizontal.row(y);
-      h[0] = 0.25f * z[0] + 0.5f * z[0] + 0.25f * z[clampIndex(1)];
-      for (int x = 1; x < n - 1; ++x) h[x] = 0.25f * z[x - 1] + 0.5f * z[x] + 0.25f * z[x + 1];
-      if (n > 1) h[n - 1] = 0.25f * z[n - 2] + 0.5f * z[n - 1] + 0.25f * z[n - 1];
-    }
-  });
-  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      const float* up = horizontal.row(clampIndex(y - 1));
-      const float* mid = horizontal.row(y);
-      const float* down = horizontal.row(clampIndex(y + 1));
-      float* b = blurred.row(y);
-      for (int x = 0; x < n; ++x) b[x] = 0.25f * up[x] + 0.5f * mid[x] + 0.25f * down[x];
-    }
-  });
   // texelWorldSize(z) is linear in z for a perspective map and constant for an orthographic one.
   const float texelPerDepth = map.orthographic ? 0.0f : map.texelWorldSize(1.0f);
   const float texelConstant = map.orthographic ? map.texelWorldSize(1.0f) : 0.0f;
   const float k = 0.25f * edgeThresholdTexels;
-  tbb::enumerable_thread_specific<std::vector<float>> rowBuffer(std::vector<float>(static_cast<size_t>(n) + 2));
-  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      const float* up = blurred.row(clampIndex(y - 1));
-      const float* mid = blurred.row(y);
-      const float* down = blurred.row(clampIndex(y + 1));
+  // Bands of rows, each blurred and filtered in its own buffers (a band's rows of the horizontal blur,
+  // with two rows beyond it on either side, then of the full blur, with one): the passes meet in the
+  // cache instead of in two map-sized images. The band's outer rows are computed twice; every value
+  // is the same expression of the same texels whichever band computes it.
+  constexpr int kBand = 32;
+  const auto stride = static_cast<size_t>(n) + 2;  // blurred rows keep their border texels repeated
+  tbb::enumerable_thread_specific<std::vector<float>> horizontalRows(static_cast<size_t>(kBand + 4) * n);
+  tbb::enumerable_thread_specific<std::vector<float>> blurredRows(static_cast<size_t>(kBand + 2) * stride);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, kBand), [&](const tbb::blocked_range<int>& rows) {
+    const int y0 = rows.begin(), y1 = rows.end();
+    // The binomial blur, separable; borders repeat the edge texel. Empty texels (+inf) spread +inf over
+    // the blur's support, and the Laplacian turns that into NaN or inf: flagged below, skipped later.
+    const int h0 = std::max(0, y0 - 2), h1 = std::min(n, y1 + 2);
+    std::vector<float>& hBuffer = horizontalRows.local();
+    hBuffer.resize(static_cast<size_t>(h1 - h0) * n);
+    auto horizontal = [&](int y) { return hBuffer.data() + static_cast<size_t>(y - h0) * n; };
+    for (int y = h0; y < h1; ++y) {
       const float* z = depth + static_cast<size_t>(y) * n;
-      uint8_t* e = edges.row(y);
-      // The row with its border texels repeated, so the loop below reads x - 1 and x + 1 unclamped
-      // and vectorizes.
-      float* padded = rowBuffer.local().data();
-      padded[0] = mid[0];
-      std::copy(mid, mid + n, padded + 1);
-      padded[n + 1] = mid[n - 1];
-      for (int x = 0; x < n; ++x) {
-        const float log = padded[x] + padded[x + 2] + up[x] + down[x] - 4.0f * mid[x];
-        const float threshold = k * (texelPerDepth * z[x] + texelConstant);
-        e[x] = !(std::abs(log) <= threshold);  // NaN and inf (empty texels nearby) are edges
-      }
+      float* h = horizontal(y);
+      h[0] = 0.25f * z[0] + 0.5f * z[0] + 0.25f * z[clampIndex(1)];
+      for (int x = 1; x < n - 1; ++x) h[x] = 0.25f * z[x - 1] + 0.5f * z[x] + 0.25f * z[x + 1];
+      if (n > 1) h[n - 1] = 0.25f * z[n - 2] + 0.5f * z[n - 1] + 0.25f * z[n - 1];
+    }
+    const int b0 = std::max(0, y0 - 1), b1 = std::min(n, y1 + 1);
+    std::vector<float>& bBuffer = blurredRows.local();
+    bBuffer.resize(static_cast<size_t>(b1 - b0) * stride);
+    // Blurred row y, padded: [-1] and [n] repeat its border texels, so the Laplacian's loop reads x - 1
+    // and x + 1 unclamped and vectorizes.
+    auto blurred = [&](int y) { return bBuffer.data() + static_cast<size_t>(y - b0) * stride + 1; };
+    for (int y = b0; y < b1; ++y) {
+      const float* up = horizontal(clampIndex(y - 1));
+      const float* mid = horizontal(y);
+      const float* down = horizontal(clampIndex(y + 1));
+      float* b = blurred(y);
+      for (int x = 0; x < n; ++x) b[x] = 0.25f * up[x] + 0.5f * mid[x] + 0.25f * down[x];
+      b[-1] = b[0];
+      b[n] = b[n - 1];
+    }
+    for (int y = y0; y < y1; ++y) {
+      const float* up = blurred(clampIndex(y - 1));
+      const float* mid = blurred(y);
+      const float* down = blurred(clampIndex(y + 1));
+      const float* z = depth + static_cast<size_t>(y) * n;
+      edgeRow(up, mid, down, z, n, k, texelPerDepth, texelConstant, edges.row(y));
     }
   });
 }
 
 Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels) {
   Image<uint8_t> edges;
-  Image<float> horizontal, blurred;
-  detectEdges(map, edgeThresholdTexels, edges, horizontal, blurred);
+  detectEdges(map, edgeThresholdTexels, edges);
   return edges;
 }
 
@@ -217,15 +234,20 @@ void buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeThres
       out.triangles.clear();
       const uint8_t* edgesHere = edges.row(j);
       const uint8_t* edgesBelow = edges.row(j + 1);
+      const float* depthHere = map.lsDepth.row(j);
+      const float* depthBelow = map.lsDepth.row(j + 1);
       for (int i = 0; i < n - 1; ++i) {
-        // Most quads touch no edge texel: eight of them at a time are passed over with four 8-byte reads.
+        // Most quads touch no edge texel, or lie where the map is empty (every empty texel is an edge,
+        // and a quad with an empty corner gives no skin, below): eight of them at a time are passed over.
         if ((i & 7) == 0 && i + 9 <= n) {
           uint64_t a, b, c, d;
           std::memcpy(&a, edgesHere + i, 8);
           std::memcpy(&b, edgesHere + i + 1, 8);
           std::memcpy(&c, edgesBelow + i, 8);
           std::memcpy(&d, edgesBelow + i + 1, 8);
-          if ((a | b | c | d) == 0) {
+          bool empty = true;
+          for (int k = 0; k <= 8; ++k) empty &= (depthHere[i + k] == kInfinity) & (depthBelow[i + k] == kInfinity);
+          if ((a | b | c | d) == 0 || empty) {
             i += 7;
             continue;
           }
@@ -295,10 +317,27 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
 }
 
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
-                            Image<float>& frontDepth) {
-  resetInParallel(front, view.size, view.size, kUncovered);
-  resetInParallel(behind, view.size, view.size, Vec2(kUncovered, kInfinity));
-  resetInParallel(frontDepth, view.size, view.size, kInfinity);
+                            std::vector<uint8_t>& behindRows, Image<float>& frontDepth,
+                            std::vector<uint8_t>& skinRows) {
+  const Vec2 noSkin(kUncovered, kInfinity);
+  // `behind` keeps its pixels from the last call: only the rows a skin reached then are cleared (all of
+  // them when the size changed). Most rows of a map never hold a skin.
+  const auto n = static_cast<size_t>(view.size);
+  if (behind.width() != view.size || behind.height() != view.size || behindRows.size() != n) {
+    resetInParallel(behind, view.size, view.size, noSkin);
+    behindRows.assign(n, 0);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<int>(0, view.size, 16), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        if (behindRows[static_cast<size_t>(j)]) std::fill(behind.row(j), behind.row(j) + view.size, noSkin);
+    });
+  }
+  // `front` and `frontDepth` are filled below on the rows a skin may reach only, and makeTwoChannelMap
+  // reads no other.
+  front.resizeForOverwrite(view.size, view.size);
+  frontDepth.resizeForOverwrite(view.size, view.size);
+  skinRows.assign(n, 0);
+  behindRows.assign(n, 0);
   if (skin.triangles.empty() || view.size == 0) return;
   if (view.orthographic) fail("heidrich: visibility maps need a perspective map (a local light)");
   // Vertices in the view's map coordinates (s, t) and light-space depth z. A skin lies between an
@@ -333,6 +372,8 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
     u.rowEnd = std::min(view.size, static_cast<int>(std::floor(tMax - 0.5)) + 1);
     if (u.rowBegin < u.rowEnd) setups.push_back(u);
   }
+  for (const Setup& u : setups) std::fill(skinRows.begin() + u.rowBegin, skinRows.begin() + u.rowEnd, uint8_t{1});
+  behindRows = skinRows;
   // Bands of rows in parallel; within a band, the triangles in input order and a strict "nearer wins":
   // the same maps for any thread count. Edges are inclusive (a texel centre on the edge two skin
   // triangles share takes the first one's value; both interpolate alike there), so no texel centre
@@ -343,6 +384,11 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
   tbb::parallel_for(tbb::blocked_range<int>(0, bands), [&](const tbb::blocked_range<int>& range) {
     for (int band = range.begin(); band < range.end(); ++band) {
       const int y0 = band * kBand, y1 = std::min(view.size, y0 + kBand);
+      for (int j = y0; j < y1; ++j)
+        if (skinRows[static_cast<size_t>(j)]) {
+          std::fill(front.row(j), front.row(j) + view.size, kUncovered);
+          std::fill(frontDepth.row(j), frontDepth.row(j) + view.size, kInfinity);
+        }
       for (const Setup& u : setups) {
         const int jBegin = std::max(u.rowBegin, y0), jEnd = std::min(u.rowEnd, y1);
         for (int j = jBegin; j < jEnd; ++j) {
@@ -401,16 +447,20 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
   });
 }
 
-void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Image<TwoChannelTexel>& out,
-                       Image<uint8_t>& horizontal) {
+void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, const std::vector<uint8_t>& skinRows,
+                       Image<TwoChannelTexel>& out, Image<uint8_t>& horizontal) {
   const int n = map.size;
-  // Every texel of both images is written below, in parallel.
+  // Every texel of `out` is written below, in parallel; `horizontal` on the rows with skin.
   out.resizeForOverwrite(n, n);
   if (n == 0) return;
-  // Coverage dilated by one texel (3x3), separably: a horizontal then a vertical OR.
+  auto hasSkin = [&](int j) { return skinRows[static_cast<size_t>(j)] != 0; };
+  // Coverage dilated by one texel (3x3), separably: a horizontal then a vertical OR. A row without skin
+  // has no coverage.
   horizontal.resizeForOverwrite(n, n);
+  const std::vector<uint8_t> noCoverage(static_cast<size_t>(n), 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
+      if (!hasSkin(j)) continue;
       const float* v = visibility.row(j);
       uint8_t* h = horizontal.row(j);
       for (int i = 0; i < n; ++i) h[i] = v[i] >= 0.0f;
@@ -424,12 +474,21 @@ void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Imag
   });
   tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j) {
-      const uint8_t* up = horizontal.row(std::max(j - 1, 0));
-      const uint8_t* mid = horizontal.row(j);
-      const uint8_t* down = horizontal.row(std::min(j + 1, n - 1));
-      const float* v = visibility.row(j);
+      const int jUp = std::max(j - 1, 0), jDown = std::min(j + 1, n - 1);
       const float* z = map.lsDepth.row(j);
       TwoChannelTexel* o = out.row(j);
+      if (!hasSkin(jUp) && !hasSkin(j) && !hasSkin(jDown)) {
+        for (int i = 0; i < n; ++i) o[i] = TwoChannelTexel{z[i], kNoSkinNearby};
+        continue;
+      }
+      const uint8_t* up = hasSkin(jUp) ? horizontal.row(jUp) : noCoverage.data();
+      const uint8_t* mid = hasSkin(j) ? horizontal.row(j) : noCoverage.data();
+      const uint8_t* down = hasSkin(jDown) ? horizontal.row(jDown) : noCoverage.data();
+      if (!hasSkin(j)) {  // no skin here, one nearby
+        for (int i = 0; i < n; ++i) o[i] = TwoChannelTexel{z[i], (up[i] | down[i]) != 0 ? kUncovered : kNoSkinNearby};
+        continue;
+      }
+      const float* v = visibility.row(j);
       for (int i = 0; i < n; ++i) {
         const bool near = (up[i] | mid[i] | down[i]) != 0;
         o[i] = TwoChannelTexel{z[i], v[i] >= 0.0f ? v[i] : (near ? kUncovered : kNoSkinNearby)};
@@ -605,7 +664,7 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   w.skins.resize(samples);
   skinTriangles_ = 0;
   for (size_t j = 0; j < samples; ++j) {
-    heidrich::detectEdges(maps_[j], options_.edgeThreshold, w.edges, w.blurHorizontal, w.blurred);
+    heidrich::detectEdges(maps_[j], options_.edgeThreshold, w.edges);
     heidrich::buildSkin(maps_[j], w.edges, options_.edgeThreshold, w.skins[j], w.skinRows);
     skinTriangles_ += w.skins[j].triangles.size();
   }
@@ -615,12 +674,14 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   // skins, warped into its view.
   visibility_.resize(2 * static_cast<size_t>(k));
   behind_.resize(2 * static_cast<size_t>(k));
+  behindRows_.resize(2 * static_cast<size_t>(k));
   for (int q = 0; q < k; ++q) {
     for (size_t end = 0; end < 2; ++end) {
       const size_t self = static_cast<size_t>(q) + end, other = static_cast<size_t>(q) + 1 - end;
       const size_t slot = 2 * static_cast<size_t>(q) + end;
-      heidrich::renderVisibilityLayers(w.skins[other], maps_[self], w.front, behind_[slot], w.frontDepth);
-      heidrich::makeTwoChannelMap(maps_[self], w.front, visibility_[slot], w.coverage);
+      heidrich::renderVisibilityLayers(w.skins[other], maps_[self], w.front, behind_[slot], behindRows_[slot],
+                                       w.frontDepth, w.frontRows);
+      heidrich::makeTwoChannelMap(maps_[self], w.front, w.frontRows, visibility_[slot], w.coverage);
     }
     visibilityMapsBuilt_ += 2;
     reportProgress(0.5 + 0.5 * (q + 1) / k);

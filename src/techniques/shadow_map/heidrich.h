@@ -33,10 +33,8 @@ inline constexpr float kNoSkinNearby = -2.0f;
 // binomial, then the 5-point Laplacian) exceeds edgeThresholdTexels / 4 texel sizes at that texel's
 // depth, or where its support holds an empty texel. A depth step of D texel sizes gives |LoG| = D / 4
 // at the texels on both sides of it, so the test flags steps of more than edgeThresholdTexels.
-// Into `edges`, with the blur's two passes in `horizontal` and `blurred`; every image keeps its storage
-// where it is large enough.
-void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges, Image<float>& horizontal,
-                 Image<float>& blurred);
+// Into `edges`, which keeps its storage where it is large enough.
+void detectEdges(const LightMap& map, float edgeThresholdTexels, Image<uint8_t>& edges);
 Image<uint8_t> detectEdges(const LightMap& map, float edgeThresholdTexels);
 
 // The skin polygons of one depth map (slides, "Step 3: triangulate depth values"): the depth map as a
@@ -59,10 +57,13 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
 // interpolation, against the view's depth channel. `front`: the slides' visibility channel, the nearest
 // skin in front of the surface the view sees (or at it, for a skin's receiver half: heidrich.cpp);
 // kUncovered where none lands. `behind`: the nearest skin behind that surface, as (value, light-space
-// depth); value kUncovered where none lands. `frontDepth` holds the depth of `front`'s skin. Every
-// image keeps its storage where it is large enough.
+// depth); value kUncovered where none lands. `behindRows` marks the rows of `behind` a skin may have
+// reached: passed back from the last call on the same image, only those are cleared (all of them when
+// the size differs). `frontDepth` holds the depth of `front`'s skin. `skinRows`: 1 for each row a
+// skin triangle's bounds reach, 0 for the others, where `front` and `frontDepth` are left unset (no skin
+// lands there). Every image keeps its storage where it is large enough.
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
-                            Image<float>& frontDepth);
+                            std::vector<uint8_t>& behindRows, Image<float>& frontDepth, std::vector<uint8_t>& skinRows);
 
 // One texel of a sample point's two-channel shadow map (slides, "Visibility Map": "additional shadow
 // map channel"), the channels side by side so a lookup reads both from one cache line.
@@ -70,9 +71,10 @@ struct TwoChannelTexel {
   float lsDepth;     //!< the depth channel (LightMap::lsDepth)
   float visibility;  //!< the visibility channel; kUncovered or kNoSkinNearby where no skin lands
 };
-// Into `out`, with the coverage's horizontal dilation in `coverage`; both keep their storage.
-void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, Image<TwoChannelTexel>& out,
-                       Image<uint8_t>& coverage);
+// Into `out`, from renderVisibilityLayers' `front` (read on the rows skinRows marks, uncovered on the
+// others), with the coverage's horizontal dilation in `coverage`; both keep their storage.
+void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, const std::vector<uint8_t>& skinRows,
+                       Image<TwoChannelTexel>& out, Image<uint8_t>& coverage);
 
 // makeReceiver (shadow_map.h) for a perspective map, from the receiver's position and geometric normal
 // already in the map's light space: the maps of one segment share their axes, so a pixel transforms
@@ -115,17 +117,18 @@ class HeidrichTechnique final : public ShadowTechnique {
   bool prepared_ = false;       //!< the maps below are whole (a failed prepare() clears it)
   std::vector<LightMap> maps_;  //!< sample point j's shadow map (depth channel)
   std::vector<Image<heidrich::TwoChannelTexel>> visibility_;  //!< 2q + e: map of sub-segment q's end e
-  std::vector<Image<Vec2>> behind_;  //!< 2q + e: the skins behind the surface sub-segment q's end e sees
-  std::vector<Vec3> wsSamples_;      //!< sample point j in world space
-  bool sharedFrame_ = false;         //!< every map has map 0's axes (always, unless the light points at the scene)
-  std::vector<Vec3> lsOffsets_;      //!< map j's origin in map 0's light space
+  std::vector<Image<Vec2>> behind_;               //!< 2q + e: the skins behind the surface sub-segment q's end e sees
+  std::vector<std::vector<uint8_t>> behindRows_;  //!< 2q + e: the rows of behind_ a skin may have reached
+  std::vector<Vec3> wsSamples_;                   //!< sample point j in world space
+  bool sharedFrame_ = false;     //!< every map has map 0's axes (always, unless the light points at the scene)
+  std::vector<Vec3> lsOffsets_;  //!< map j's origin in map 0's light space
   // prepare()'s working storage, kept so that a new light or scene costs passes over memory rather
   // than fresh pages (which dominated prepare on machines with costly page faults).
   struct Scratch {
     Image<uint8_t> edges;
-    Image<float> blurHorizontal, blurred;
     std::vector<heidrich::SkinMesh> skins, skinRows;
     Image<float> front, frontDepth;
+    std::vector<uint8_t> frontRows;  //!< renderVisibilityLayers' skinRows
     Image<uint8_t> coverage;
   } scratch_;
   size_t skinTriangles_ = 0;
