@@ -19,9 +19,10 @@
 // (PixelRotations: a table read, where a hash per pixel cost a few percent of the frame).
 //
 // The kernels are vectorized (shadow_map.cpp: an AVX2 clone picked at load time, and 16 taps per
-// 512-bit vector with one gather each where the CPU has AVX-512F), V bit-identical on every path;
-// lit pixels and umbra are decided by the search alone. No early-out skips the search: a receiver
-// tilted towards the light sweeps more depth over a search region than the bias allows, so bounds of
+// 512-bit vector with one gather each where the CPU has AVX-512F), V bit-identical on every path,
+// and run a row of pixels per call (the searches, then each filter's pixels), so that what does not
+// depend on the pixel is done once a row; lit pixels and umbra are decided by the search alone. No early-out skips the
+// search: a receiver tilted towards the light sweeps more depth over a search region than the bias allows, so bounds of
 // the map per region or tile rarely decide a pixel, and the 16-tap search costs less than a few tile
 // tests.
 // Directional lights use the orthographic variant: R is tan(angular_diameter / 2), the solar disk's
@@ -50,6 +51,7 @@
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "penumbra/error.h"
@@ -104,14 +106,58 @@ class PcssTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcss: visibility() called before prepare()");
-    v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
+    const int width = gbuffer.width();
+    v.resizeForOverwrite(width, gbuffer.height());  // every pixel written below, in parallel
     std::array<std::atomic<int64_t>, kPathCount + 1> counts{};
-    // As forEachReceiver, with per-row counts of the paths the pixels took.
+    // A row at a time: the receivers set up (forEachReceiverRow), then the blocker searches of the
+    // row's pixels in one call (the work that does not depend on the pixel done once), then each
+    // pixel's filter; per-row counts of the paths the pixels took.
+    tbb::enumerable_thread_specific<RowScratch> scratch;
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
+      RowScratch& w = scratch.local();
+      w.resize(static_cast<size_t>(width));
       std::array<int64_t, kPathCount + 1> local{};
       float* out = v.row(y);
-      for (int x = 0; x < gbuffer.width(); ++x)
-        out[x] = gbuffer.hit(x, y) ? pixelVisibility(receivers[x], x, y, local) : 1.0f;
+      w.pixels.clear();
+      for (int x = 0; x < width; ++x) {
+        if (!gbuffer.hit(x, y)) {
+          out[x] = 1.0f;
+          continue;
+        }
+        const ShadowReceiver r = receivers[x];
+        if (!r.inMap || !(r.lsDepth > zMin_)) {
+          ++local[kNoSearch];
+          out[x] = 1.0f;
+          continue;
+        }
+        const auto i = static_cast<size_t>(x);
+        // In texels: the world radius at the receiver's depth over the texel size there.
+        const float searchRadius = searchScale_ * (r.lsDepth - zMin_) / r.texelWorld;
+        local[kClamped] += searchRadius > maxRadius();
+        w.radius[i] = std::min(searchRadius, maxRadius());
+        w.rotation[i] = rotation(x, y);
+        w.pixels.push_back(x);
+      }
+      searchBlockersRow(depthTexels(map_), receivers, w.pixels, w.radius.data(), w.rotation.data(), blockerPattern(),
+                        w.blockers.data());
+      // Then the pixels the search leaves undecided, each filter's pixels in one call.
+      w.bilinear.clear();
+      w.nearest.clear();
+      for (const int32_t x : w.pixels) {
+        const auto i = static_cast<size_t>(x);
+        const float filterRadius = filterRadiusOf(receivers[x], w.blockers[i], w.radius[i] < maxRadius(), local);
+        if (filterRadius < 0.0f) {  // decided by the search
+          out[x] = w.blockers[i].blockers == 0 ? 1.0f : 0.0f;
+          continue;
+        }
+        w.radius[i] = filterRadius;
+        (filterRadius <= options_.bilinearMaxRadius ? w.bilinear : w.nearest).push_back(x);
+      }
+      local[kFilterBilinear] += static_cast<int64_t>(w.bilinear.size());
+      local[kFilterNearest] += static_cast<int64_t>(w.nearest.size());
+      const DepthTexels texels = depthTexels(map_);
+      pcfDiskRow(texels, receivers, w.bilinear, w.radius.data(), w.rotation.data(), filterPattern(), out);
+      pcfDiskNearestRow(texels, receivers, w.nearest, w.radius.data(), w.rotation.data(), filterPattern(), out);
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
     int64_t total = 0;
@@ -134,47 +180,57 @@ class PcssTechnique final : public ShadowTechnique {
   static constexpr std::array<const char*, kPathCount + 1> kPathNames = {
       "frac_no_search", "frac_search_only", "frac_filter_bilinear", "frac_filter_nearest", "frac_clamped_to_map"};
 
-  float pixelVisibility(const ShadowReceiver& r, int x, int y, std::array<int64_t, kPathCount + 1>& counts) const {
-    if (!r.inMap || !(r.lsDepth > zMin_)) {
-      ++counts[kNoSearch];
-      return 1.0f;
+  // A row's working arrays, kept per thread.
+  struct RowScratch {
+    std::vector<int32_t> pixels;             //!< the row's pixels that search
+    std::vector<int32_t> bilinear, nearest;  //!< those that filter, by filter
+    std::vector<float> radius;               //!< per pixel: the search's radius, then the filter's, texels
+    std::vector<Vec2> rotation;              //!< per pixel: the patterns' rotation
+    std::vector<BlockerSearch> blockers;
+    void resize(size_t n) {
+      radius.resize(n);
+      rotation.resize(n);
+      blockers.resize(n);
+      pixels.reserve(n);
+      bilinear.reserve(n);
+      nearest.reserve(n);
     }
-    const float maxRadius = static_cast<float>(map_.size);  // a search wider than the map finds nothing more
-    const float zr = r.lsDepth;
-    // In texels: the world radius at the receiver's depth over the texel size there.
-    const float searchRadius = searchScale_ * (zr - zMin_) / r.texelWorld;
-    // The disks turn per pixel; a segment's line and a rect's pattern keep the light's orientation.
-    const Vec2 rotation = lineDirection_                      ? *lineDirection_
-                          : !rectPatterns_ && options_.rotate ? rotations_(x, y)
-                                                              : Vec2(1.0f, 0.0f);
-    const std::vector<Vec2>& blockerPattern = lineDirection_  ? blockerLine_
-                                              : rectPatterns_ ? blockerRect_
-                                                              : blockerDisk_;
-    const std::vector<Vec2>& filterPattern = lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
-    counts[kClamped] += searchRadius > maxRadius;
-    const BlockerSearch blockers = searchBlockers(map_, r, std::min(searchRadius, maxRadius), blockerPattern, rotation);
+  };
+
+  // A search wider than the map finds nothing more.
+  float maxRadius() const { return static_cast<float>(map_.size); }
+  // The disks turn per pixel; a segment's line and a rect's pattern keep the light's orientation.
+  Vec2 rotation(int x, int y) const {
+    return lineDirection_ ? *lineDirection_ : !rectPatterns_ && options_.rotate ? rotations_(x, y) : Vec2(1.0f, 0.0f);
+  }
+  const std::vector<Vec2>& blockerPattern() const {
+    return lineDirection_ ? blockerLine_ : rectPatterns_ ? blockerRect_ : blockerDisk_;
+  }
+  const std::vector<Vec2>& filterPattern() const {
+    return lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
+  }
+
+  // The filter's radius in texels for a receiver and its blocker search (searchUnclamped: the search's
+  // radius was within the map); -1 where the search decides V alone.
+  float filterRadiusOf(const ShadowReceiver& r, const BlockerSearch& blockers, bool searchUnclamped,
+                       std::array<int64_t, kPathCount + 1>& counts) const {
     // No blocker: lit. Every search tap blocked: umbra. The filter disk lies inside the search disk
     // (z_b >= zMin makes w <= the search radius), so filtering would find (nearly) only blockers
     // too; skipping it halves the cost of PCSS in shadowed regions (NVIDIA's PCSS sample does the
     // same).
-    if (blockers.blockers == 0 || blockers.blockers == static_cast<int>(blockerPattern.size())) {
+    if (blockers.blockers == 0 || blockers.blockers == static_cast<int>(blockerPattern().size())) {
       ++counts[kSearchOnly];
-      return blockers.blockers == 0 ? 1.0f : 0.0f;
+      return -1.0f;
     }
+    const float zr = r.lsDepth;
     const float zb = blockers.meanDepth;
     const float penumbraWorld = map_.orthographic ? lightSize_ * (zr - zb) : lightSize_ * (zr - zb) / zb;
     // The receiver plane's slope extrapolated across a wide search can count texels behind the
     // receiver's own depth as blockers, putting z_b past z_r: a negative (or NaN) width is no
     // penumbra, and a filter radius outside [0, map size] would read outside the map.
     const float widthTexels = penumbraWorld / r.texelWorld;
-    const float filterRadius = widthTexels > 0.0f ? std::min(widthTexels, maxRadius) : 0.0f;
-    counts[kClamped] += widthTexels > maxRadius && !(searchRadius > maxRadius);
-    if (filterRadius <= options_.bilinearMaxRadius) {
-      ++counts[kFilterBilinear];
-      return pcfDisk(map_, r, filterRadius, filterPattern, rotation);
-    }
-    ++counts[kFilterNearest];
-    return pcfDiskNearest(map_, r, filterRadius, filterPattern, rotation);
+    counts[kClamped] += widthTexels > maxRadius() && searchUnclamped;
+    return widthTexels > 0.0f ? std::min(widthTexels, maxRadius()) : 0.0f;
   }
 
   // n offsets evenly spread over [-1, 1] x {0}, the midpoints of n equal pieces (a segment light's

@@ -56,8 +56,9 @@ float minMapDepth(const LightMap& map) {
 
 // The disk kernels below and the receivers' loop are also compiled for AVX2, picked at load time where
 // the CPU has it (GCC function multi-versioning): their vector phases then run 8 lanes wide instead of
-// 4. No multiply-add is fused (no FMA in the list, and this file is compiled with -ffp-contract=off for
-// the AVX-512 path below), so every path rounds alike: V is bit-identical on every CPU.
+// 4; the receivers' loop also for AVX-512F (16 lanes). No multiply-add is fused (no FMA in the list, and this file is
+// compiled with -ffp-contract=off for the AVX-512 path below), so every path rounds alike: V is bit-identical on every
+// CPU.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
 #define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
 #define PENUMBRA_RECEIVER_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
@@ -409,15 +410,21 @@ bool cpuHasAvx512() {
   return has;
 }
 
-// Taps [0, 16) of p: each tap's compare threshold and its texel's depth (+inf outside the map).
-[[gnu::target("avx512f")]] inline void nearestTaps16(const DepthTexels& map, const ShadowReceiver& r,
-                                                     float radiusTexels, const Vec2* p, const Vec2& rotation,
-                                                     bool diskInsideMap, __m512& threshold, __m512& depth) {
+// Taps [0, 16) of p split into their x and y parts.
+[[gnu::target("avx512f")]] inline void deinterleave16(const Vec2* p, __m512& px, __m512& py) {
   static_assert(sizeof(Vec2) == 2 * sizeof(float));
   const __m512 lo = _mm512_loadu_ps(&p[0].x), hi = _mm512_loadu_ps(&p[8].x);
   const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
   const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
-  const __m512 px = _mm512_permutex2var_ps(lo, even, hi), py = _mm512_permutex2var_ps(lo, odd, hi);
+  px = _mm512_permutex2var_ps(lo, even, hi);
+  py = _mm512_permutex2var_ps(lo, odd, hi);
+}
+
+// Sixteen taps at pattern offsets (px, py): each tap's compare threshold and its texel's depth (+inf
+// outside the map).
+[[gnu::target("avx512f")]] inline void nearestTaps16(const DepthTexels& map, const ShadowReceiver& r,
+                                                     float radiusTexels, __m512 px, __m512 py, const Vec2& rotation,
+                                                     bool diskInsideMap, __m512& threshold, __m512& depth) {
   const __m512 cosA = _mm512_set1_ps(rotation.x), sinA = _mm512_set1_ps(rotation.y);
   const __m512 radius = _mm512_set1_ps(radiusTexels);
   const __m512 ox = _mm512_mul_ps(radius, _mm512_sub_ps(_mm512_mul_ps(px, cosA), _mm512_mul_ps(py, sinA)));
@@ -475,7 +482,9 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
     __m128 lanes = _mm_setzero_ps();
     for (size_t k = 0; k < n; k += 16) {
       __m512 threshold, d;
-      nearestTaps16(map, r, radiusTexels, pattern.data() + first + k, rotation, inside, threshold, d);
+      __m512 px, py;
+      deinterleave16(pattern.data() + first + k, px, py);
+      nearestTaps16(map, r, radiusTexels, px, py, rotation, inside, threshold, d);
       const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
       blockers += std::popcount(static_cast<unsigned>(blocked));
       lanes = addQuarters(lanes, _mm512_maskz_mov_ps(blocked, d));
@@ -488,8 +497,31 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
   return result;
 }
 
-[[gnu::target("avx512f")]] float pcfDiskNearest16(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
-                                                  std::span<const Vec2> pattern, const Vec2& rotation) {
+// searchBlockersRow with 16 taps (pcss' default search): the pattern split once per row, the receivers
+// read from the row, each pixel's search searchBlockers16's, operation for operation.
+[[gnu::target("avx512f")]] void searchBlockersRow16(const DepthTexels& map, const ReceiverRow& receivers,
+                                                    std::span<const int32_t> pixels, const float* radiusTexels,
+                                                    const Vec2* rotations, std::span<const Vec2> pattern,
+                                                    BlockerSearch* out) {
+  __m512 px, py;
+  deinterleave16(pattern.data(), px, py);
+  for (const int32_t x : pixels) {
+    const ShadowReceiver r = receivers[x];
+    const auto i = static_cast<size_t>(x);
+    __m512 threshold, d;
+    nearestTaps16(map, r, radiusTexels[i], px, py, rotations[i], diskInside(map, r, radiusTexels[i]), threshold, d);
+    const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
+    const int blockers = std::popcount(static_cast<unsigned>(blocked));
+    const float depthSum = quarterLanes(addQuarters(_mm_setzero_ps(), _mm512_maskz_mov_ps(blocked, d)));
+    BlockerSearch& result = out[i];
+    result.blockers = blockers;
+    result.meanDepth = blockers > 0 ? depthSum / static_cast<float>(blockers) : 0.0f;
+  }
+}
+
+[[gnu::target("avx512f")]] inline float pcfDiskNearest16(const DepthTexels& map, const ShadowReceiver& r,
+                                                         float radiusTexels, std::span<const Vec2> pattern,
+                                                         const Vec2& rotation) {
   const bool inside = diskInside(map, r, radiusTexels);
   const __m512 one = _mm512_set1_ps(1.0f);
   float sum = 0.0f;
@@ -498,7 +530,9 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
     __m128 lanes = _mm_setzero_ps();
     for (size_t k = 0; k < n; k += 16) {
       __m512 threshold, d;
-      nearestTaps16(map, r, radiusTexels, pattern.data() + first + k, rotation, inside, threshold, d);
+      __m512 px, py;
+      deinterleave16(pattern.data() + first + k, px, py);
+      nearestTaps16(map, r, radiusTexels, px, py, rotation, inside, threshold, d);
       const __mmask16 lit = _mm512_cmp_ps_mask(d, threshold, _CMP_NLT_UQ);
       lanes = addQuarters(lanes, _mm512_maskz_mov_ps(lit, one));
     }
@@ -508,8 +542,8 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
 }
 
 // pcfDisk's taps 16 at a time (AVX-512F), as the scalar loop computes them.
-[[gnu::target("avx512f")]] float pcfDisk16(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
-                                           std::span<const Vec2> pattern, const Vec2& rotation) {
+[[gnu::target("avx512f")]] inline float pcfDisk16(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
+                                                  std::span<const Vec2> pattern, const Vec2& rotation) {
   // Each tap reads texels up to 1.5 texels beyond the disk (its 1-texel box, and floor's texel).
   const bool inside = diskInside(map, r, radiusTexels + 1.0f);
   const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
@@ -576,11 +610,57 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
   return std::clamp(sum / static_cast<float>(pattern.size()), 0.0f, 1.0f);
 }
 
+// pcfDiskRow and pcfDiskNearestRow with the 16-tap kernels: each pixel's filter the per-pixel call's.
+[[gnu::target("avx512f")]] void pcfDiskRow16(const DepthTexels& map, const ReceiverRow& receivers,
+                                             std::span<const int32_t> pixels, const float* radiusTexels,
+                                             const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+  for (const int32_t x : pixels) {
+    const auto i = static_cast<size_t>(x);
+    out[i] = pcfDisk16(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+  }
+}
+[[gnu::target("avx512f")]] void pcfDiskNearestRow16(const DepthTexels& map, const ReceiverRow& receivers,
+                                                    std::span<const int32_t> pixels, const float* radiusTexels,
+                                                    const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+  for (const int32_t x : pixels) {
+    const auto i = static_cast<size_t>(x);
+    out[i] = pcfDiskNearest16(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+  }
+}
+
 }  // namespace
 #if !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif
 #endif
+
+void pcfDiskRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+#if PENUMBRA_AVX512_KERNELS
+  if (!pattern.empty() && pattern.size() % 16 == 0 && cpuHasAvx512()) {
+    pcfDiskRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
+    return;
+  }
+#endif
+  for (const int32_t x : pixels) {
+    const auto i = static_cast<size_t>(x);
+    out[i] = pcfDisk(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+  }
+}
+
+void pcfDiskNearestRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                       const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+#if PENUMBRA_AVX512_KERNELS
+  if (!pattern.empty() && pattern.size() % 16 == 0 && cpuHasAvx512()) {
+    pcfDiskNearestRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
+    return;
+  }
+#endif
+  for (const int32_t x : pixels) {
+    const auto i = static_cast<size_t>(x);
+    out[i] = pcfDiskNearest(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+  }
+}
 
 PENUMBRA_KERNEL_CLONES
 BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
@@ -607,6 +687,21 @@ BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, fl
   result.blockers = blockers;
   if (blockers > 0) result.meanDepth = depthSum / static_cast<float>(blockers);
   return result;
+}
+
+void searchBlockersRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                       const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern,
+                       BlockerSearch* out) {
+#if PENUMBRA_AVX512_KERNELS
+  if (pattern.size() == 16 && cpuHasAvx512()) {
+    searchBlockersRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
+    return;
+  }
+#endif
+  for (const int32_t x : pixels) {
+    const auto i = static_cast<size_t>(x);
+    out[i] = searchBlockers(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+  }
 }
 
 PENUMBRA_KERNEL_CLONES

@@ -236,6 +236,19 @@ struct BlockerSearch {
 BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,
                              std::span<const Vec2> pattern, const Vec2& rotation);
 
+// searchBlockers at each listed pixel x of a row of receivers (makeReceiverRow), with radius
+// radiusTexels[x] and rotation rotations[x], into out[x]: the same results, with the work that does not
+// depend on the pixel done once per row.
+void searchBlockersRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                       const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern,
+                       BlockerSearch* out);
+
+// pcfDisk and pcfDiskNearest at each listed pixel x of a row of receivers, into out[x]: the same values.
+void pcfDiskRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out);
+void pcfDiskNearestRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                       const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out);
+
 // PCF over a disk: the mean of 1-texel box compares (pcfBox width 1) at the pattern's offsets.
 float pcfDisk(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels, std::span<const Vec2> pattern,
               const Vec2& rotation);

@@ -271,6 +271,66 @@ TEST(ShadowMap, BlockerSearchAveragesTheBlockersItFinds) {
 // taps, the same compare and the same order of sums, so every result must be equal — V does not
 // depend on the CPU. Half the receivers are placed so that one tap lands exactly on a texel border,
 // where one rounding more or less (a fused multiply-add in one path) moves it to the next texel.
+// The row kernels (pcss' searches and filters a row at a time) are searchBlockers, pcfDisk and
+// pcfDiskNearest at each listed pixel, to the bit: on real G-buffers and maps, with radii from under a
+// texel to wider than the map, disks straddling the map's border, every pixel or every third listed, and
+// patterns the 16-tap row paths take and others.
+TEST(ShadowMap, DiskKernelRowsAreThePerPixelKernelsToTheBit) {
+  const auto bits = [](float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+  };
+  uint32_t state = 777u;
+  const auto uniform = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  };
+  int searched = 0, partial = 0;
+  for (const char* name : {"crowded", "teapots"}) {
+    const Scene scene = loadScene(name);
+    const LightMap map = renderLightMap(scene, scene.lights.front(), 256);
+    const GBuffer gbuffer = renderGBuffer(scene, 120, 80);
+    for (const int taps : {16, 7, 32}) {
+      const std::vector<Vec2> pattern = vogelDisk(taps);
+      ReceiverRow row;
+      std::vector<float> radius(static_cast<size_t>(gbuffer.width()));
+      std::vector<Vec2> rotation(radius.size());
+      std::vector<BlockerSearch> got(radius.size());
+      std::vector<float> box(radius.size()), nearest(radius.size());
+      std::vector<int32_t> pixels;
+      for (int y = 0; y < gbuffer.height(); ++y) {
+        makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), DepthBias{},
+                        row);
+        pixels.clear();
+        for (int x = 0; x < gbuffer.width(); ++x) {
+          if (!row.inMap[static_cast<size_t>(x)] || (y % 2 == 1 && x % 3 != 0)) continue;
+          radius[static_cast<size_t>(x)] = uniform() < 0.05f ? 300.0f : 0.2f + 40.0f * uniform();
+          rotation[static_cast<size_t>(x)] = pixelRotation(x, y);
+          pixels.push_back(x);
+        }
+        searchBlockersRow(depthTexels(map), row, pixels, radius.data(), rotation.data(), pattern, got.data());
+        pcfDiskRow(depthTexels(map), row, pixels, radius.data(), rotation.data(), pattern, box.data());
+        pcfDiskNearestRow(depthTexels(map), row, pixels, radius.data(), rotation.data(), pattern, nearest.data());
+        for (const int32_t x : pixels) {
+          const auto i = static_cast<size_t>(x);
+          const BlockerSearch want = searchBlockers(map, row[x], radius[i], pattern, rotation[i]);
+          ASSERT_EQ(got[i].blockers, want.blockers) << name << " " << taps << " taps, pixel " << x << "," << y;
+          ASSERT_EQ(bits(got[i].meanDepth), bits(want.meanDepth)) << name << " " << taps << " taps, pixel " << x;
+          ASSERT_EQ(bits(box[i]), bits(pcfDisk(map, row[x], radius[i], pattern, rotation[i])))
+              << name << " " << taps << " taps, pixel " << x << "," << y;
+          ASSERT_EQ(bits(nearest[i]), bits(pcfDiskNearest(map, row[x], radius[i], pattern, rotation[i])))
+              << name << " " << taps << " taps, pixel " << x << "," << y;
+          ++searched;
+          partial += want.blockers > 0 && want.blockers < taps;
+        }
+      }
+    }
+  }
+  EXPECT_GT(searched, 20000);
+  EXPECT_GT(partial, 1000) << "the searches must find some blockers, not all, for the depth sums to be compared";
+}
+
 TEST(ShadowMap, DiskKernelsMatchAScalarOracleTapForTap) {
   LightMap m = orthoMap(1024);
   uint32_t state = 12345u;
