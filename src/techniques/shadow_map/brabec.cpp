@@ -521,20 +521,6 @@ float TileNearestTable::nearest(int tx0, int tx1, int ty0, int ty1, int32_t obje
 
 }  // namespace brabec
 
-// What the hard test found for one camera pixel, and the warped point the searches start from.
-struct BrabecTechnique::Pixel {
-  enum Class : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
-  uint8_t cls = Miss;
-  int32_t key = kNoObject;         //!< interpolation id: the blocker's when blocked, the receiver's otherwise
-  int32_t objectId = kNoObject;    //!< the receiver's own id (P'_ID)
-  float s = 0.0f, t = 0.0f;        //!< P' in map coordinates, texels
-  float lsDepth = 0.0f;            //!< P'z, world units
-  float zLayer = 0.0f;             //!< P'z less the bias: the searches' depth layer
-  float dzds = 0.0f, dzdt = 0.0f;  //!< receiver plane's depth change per texel, world units
-  float texelWorld = 1.0f;         //!< texelWorldSize(P'z)
-  float blockerDepth = 0.0f;       //!< depth of the texel over P when blocked
-};
-
 BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(options) {
   const int given = int(options.rScale.has_value()) + int(options.rBias.has_value()) + int(options.rShrink.has_value());
   if (given != 0 && given != 3) {
@@ -653,6 +639,44 @@ BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, 
     p.cls = Pixel::Lit;
   }
   return p;
+}
+
+void BrabecTechnique::classifyRow(const GBuffer& gbuffer, int y, const ReceiverRow& receivers, uint8_t* cls,
+                                  int32_t* key) const {
+  const int width = gbuffer.width();
+  const int32_t* ids = gbuffer.objectId.row(y);
+  const Vec3* positions = gbuffer.wsPosition.row(y);
+  const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
+  const float* depth = map_.lsDepth.data();
+  const int32_t* mapIds = map_.objectId.data();
+  const bool directional = light_->isDirectional();
+  const Vec3 direction = directional ? light_->direction() : Vec3(0.0f), center = light_->center();
+  for (int x = 0; x < width; ++x) {
+    const auto i = static_cast<size_t>(x);
+    const int32_t id = ids[x];
+    key[i] = id;
+    if (id == kNoObject) {
+      cls[i] = Pixel::Miss;
+      continue;
+    }
+    // classify's tests in its order: the side of the light's centre, the map's bounds, the hard test.
+    const Vec3 wsToLight = directional ? direction : center - positions[x];
+    if (glm::dot(normals[x], wsToLight) <= 0.0f) {
+      cls[i] = Pixel::BackFacing;
+      continue;
+    }
+    if (!receivers.inMap[i]) {  // in the map, floor(s) and floor(t) lie in [0, size)
+      cls[i] = Pixel::OutOfMap;
+      continue;
+    }
+    const auto texel = static_cast<size_t>(receivers.nearestTexel[i]);
+    if (depth[texel] < receivers.nearestThreshold[i]) {  // hardShadow's compare
+      cls[i] = Pixel::Blocked;
+      key[i] = mapIds[texel];
+    } else {
+      cls[i] = Pixel::Lit;
+    }
+  }
 }
 
 float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) const {
@@ -877,14 +901,10 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     std::vector<uint8_t>& known = scratchKnown_;
     std::vector<int32_t>& key = scratchKey_;
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
+      const size_t row = static_cast<size_t>(y) * width;
+      classifyRow(gbuffer, y, receivers, cls.data() + row, key.data() + row);
       int64_t hitCount = 0;
-      for (int x = 0; x < width; ++x) {
-        const Pixel p = classify(gbuffer, x, y, receivers[x]);
-        const size_t k = static_cast<size_t>(y) * width + x;
-        cls[k] = p.cls;
-        key[k] = p.key;
-        hitCount += p.cls != Pixel::Miss;
-      }
+      for (int x = 0; x < width; ++x) hitCount += cls[row + static_cast<size_t>(x)] != Pixel::Miss;
       hits += hitCount;
     });
     auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };

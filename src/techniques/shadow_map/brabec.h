@@ -265,12 +265,28 @@ class BrabecTechnique final : public ShadowTechnique {
   const LightMap& lightMap() const { return map_; }
 
  private:
+  friend struct BrabecTestAccess;  // tests hold classifyRow to classify, pixel for pixel
   void prepareImpl(const Scene& scene, const Light& light) override;
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
-  struct Pixel;
+  // What the hard test found for one camera pixel, and the warped point the searches start from.
+  struct Pixel {
+    enum Class : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
+    uint8_t cls = Miss;
+    int32_t key = kNoObject;         //!< interpolation id: the blocker's when blocked, the receiver's otherwise
+    int32_t objectId = kNoObject;    //!< the receiver's own id (P'_ID)
+    float s = 0.0f, t = 0.0f;        //!< P' in map coordinates, texels
+    float lsDepth = 0.0f;            //!< P'z, world units
+    float zLayer = 0.0f;             //!< P'z less the bias: the searches' depth layer
+    float dzds = 0.0f, dzdt = 0.0f;  //!< receiver plane's depth change per texel, world units
+    float texelWorld = 1.0f;         //!< texelWorldSize(P'z)
+    float blockerDepth = 0.0f;       //!< depth of the texel over P when blocked
+  };
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
   // The same with the pixel's receiver already set up (makeReceiverRow: a row's at once).
   Pixel classify(const GBuffer& gbuffer, int x, int y, const ShadowReceiver& receiver) const;
+  // classify's class and interpolation id of every pixel of row y, from the row's receivers: the hard
+  // test read from the row (its nearest texel and threshold), no Pixel built.
+  void classifyRow(const GBuffer& gbuffer, int y, const ReceiverRow& receivers, uint8_t* cls, int32_t* key) const;
   // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
   // the texel the search found, (0, 0) when it found none; `raised` (optional) whether the coverage
   // bound raised V.

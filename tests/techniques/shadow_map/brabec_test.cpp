@@ -16,7 +16,9 @@
 
 #include "penumbra/error.h"
 #include "penumbra/primitives.h"
+#include "penumbra/raster.h"
 #include "penumbra/reference.h"
+#include "penumbra/scene_io.h"
 #include "techniques/shadow_map/brabec.h"
 #include "techniques/shadow_map_fixture.h"
 
@@ -833,4 +835,45 @@ TEST(BrabecCoverage, KeepsNormalSizeModels) {
 }
 
 }  // namespace
+
+// classifyRow (the interpolated pass's classes and ids, a row at a time from the row's receivers) is
+// classify's, pixel for pixel, on every light shape of the built-in scenes and a real mesh.
+struct BrabecTestAccess {
+  static void expectRowsMatchPixels(const Scene& scene, const Light& light, const GBuffer& gbuffer,
+                                    const std::string& where, int& compared, int& blocked) {
+    BrabecOptions o;
+    o.lightMap.size = 300;
+    BrabecTechnique technique(o);
+    technique.prepare(scene, light);
+    ReceiverRow receivers;
+    std::vector<uint8_t> cls(static_cast<size_t>(gbuffer.width()));
+    std::vector<int32_t> key(cls.size());
+    for (int y = 0; y < gbuffer.height(); ++y) {
+      makeReceiverRow(technique.map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(),
+                      o.bias, receivers);
+      technique.classifyRow(gbuffer, y, receivers, cls.data(), key.data());
+      for (int x = 0; x < gbuffer.width(); ++x) {
+        const BrabecTechnique::Pixel p = technique.classify(gbuffer, x, y);
+        ASSERT_EQ(cls[static_cast<size_t>(x)], p.cls) << where << " pixel " << x << "," << y;
+        ASSERT_EQ(key[static_cast<size_t>(x)], p.key) << where << " pixel " << x << "," << y;
+        ++compared;
+        blocked += p.cls == BrabecTechnique::Pixel::Blocked;
+      }
+    }
+  }
+};
+
+TEST(Brabec, RowClassesAreThePixelClasses) {
+  int compared = 0, blocked = 0;
+  for (const char* name : {"crowded", "concave", "teapots", "wuson"}) {
+    const Scene scene = loadScene(name);
+    const GBuffer gbuffer = renderGBuffer(scene, 90, 70);
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+      BrabecTestAccess::expectRowsMatchPixels(scene, scene.lights[l], gbuffer,
+                                              std::string(name) + " light " + std::to_string(l), compared, blocked);
+  }
+  EXPECT_GT(compared, 20000);
+  EXPECT_GT(blocked, 1000);
+}
+
 }  // namespace penumbra
