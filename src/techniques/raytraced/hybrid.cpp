@@ -24,12 +24,14 @@
 // (lightAtMapOrigin: the light's centre under the default tight fit). Map size, fit and depth bias as
 // every light-map technique's (shadow_map.h).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "../shadow_map/shadow_map.h"
@@ -64,31 +66,74 @@ class HybridTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
 
-  // The blocker search's class of one pixel, written as a stand-in ray into `sums` (few_ray.h's tile
-  // classes read them): lit, umbra (carrying the search's width ratio), or uncertain. Returns the
-  // search's width ratio, 0 when it found no blocker.
-  float classify(const GBuffer& gbuffer, int x, int y, raytraced::RaySums& sums) const {
+  // A quad's classified pixel: its search, written as a stand-in ray into `sums` (few_ray.h's tile
+  // classes read them): lit, umbra (carrying the search's width ratio), or uncertain. `filterLit` is the
+  // filter's lit fraction where the search found some blockers but not all. Returns the search's width
+  // ratio, 0 when it found no blocker.
+  float standIn(const ShadowReceiver& r, const BlockerSearch& found, float filterLit, raytraced::RaySums& sums) const {
     sums = raytraced::RaySums{1.0f, 1.0f, 0.0f, 0};  // lit
-    const ShadowReceiver r =
-        makeReceiver(map_, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y), options_.bias);
-    if (!r.inMap || !(r.lsDepth > zMin_)) return 0.0f;
-    const float zr = r.lsDepth;
-    const float radius = std::min(searchScale_ * (zr - zMin_) / r.texelWorld, static_cast<float>(map_.size));
-    const BlockerSearch found = searchBlockers(map_, r, radius, blockerDisk_, rotations_(x, y));
     if (found.blockers == 0) return 0.0f;
-    const float zb = found.meanDepth;
-    const float ratio = std::max(0.0f, map_.orthographic ? zr - zb : (zr - zb) / zb);
+    const float ratio = ratioOf(r, found);
     bool umbra = found.blockers == static_cast<int>(blockerDisk_.size());
     if (!umbra) {
-      // The search region (at the nearest depth in the map) is wider than the penumbra: PCSS's
-      // estimate of it, the disk of radius R (z_r - z_b) / z_b, decides where all its taps agree.
-      const float filterRadius = std::min(lightSize_ * ratio / r.texelWorld, static_cast<float>(map_.size));
-      const float lit = pcfDiskNearest(map_, r, filterRadius, blockerDisk_, rotations_(x, y));
-      if (lit == 1.0f) return ratio;  // lit: the stand-in set above
-      umbra = lit == 0.0f;
+      if (filterLit == 1.0f) return ratio;  // lit: the stand-in set above
+      umbra = filterLit == 0.0f;
     }
     sums = raytraced::RaySums{1.0f, umbra ? 0.0f : 0.5f, ratio, 1};
     return ratio;
+  }
+  // PCSS's width ratio (z_r - z_b) / z_b (orthographic: z_r - z_b), at least 0.
+  float ratioOf(const ShadowReceiver& r, const BlockerSearch& found) const {
+    const float zr = r.lsDepth, zb = found.meanDepth;
+    return std::max(0.0f, map_.orthographic ? zr - zb : (zr - zb) / zb);
+  }
+
+  // The quads' searches of one row of pixels (the first pixel of each quad on this row that sees
+  // geometry and has no pixel of its quad above it chosen): the blocker searches of the listed pixels
+  // in one call, then, where a search found some blockers but not all, the same taps over PCSS's
+  // penumbra estimate, the disk of radius R (z_r - z_b) / z_b: where all its taps agree they decide
+  // (the search region, at the nearest depth in the map, is wider than the penumbra).
+  struct RowScratch {
+    ReceiverRow receivers;
+    std::vector<int32_t> pixels, filtered;
+    std::vector<float> radius;
+    std::vector<Vec2> rotation;
+    std::vector<BlockerSearch> found;
+    std::vector<float> lit;
+  };
+  void searchRow(const GBuffer& gbuffer, int y, RowScratch& w) const {
+    const auto n = static_cast<size_t>(gbuffer.width());
+    w.radius.resize(n);
+    w.rotation.resize(n);
+    w.found.resize(n);
+    w.lit.resize(n);
+    makeReceiverRow(map_, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), options_.bias,
+                    w.receivers);
+    // The pixels whose receiver is out of the map, or nearer than every blocker, need no search: lit.
+    size_t kept = 0;
+    for (const int32_t x : w.pixels) {
+      const auto i = static_cast<size_t>(x);
+      w.found[i] = BlockerSearch{};
+      w.lit[i] = 1.0f;
+      const ShadowReceiver r = w.receivers[x];
+      if (!r.inMap || !(r.lsDepth > zMin_)) continue;
+      w.radius[i] = std::min(searchScale_ * (r.lsDepth - zMin_) / r.texelWorld, static_cast<float>(map_.size));
+      w.rotation[i] = rotations_(x, y);
+      w.pixels[kept++] = x;
+    }
+    w.pixels.resize(kept);
+    const DepthTexels texels = depthTexels(map_);
+    searchBlockersRow(texels, w.receivers, w.pixels, w.radius.data(), w.rotation.data(), blockerDisk_, w.found.data());
+    w.filtered.clear();
+    for (const int32_t x : w.pixels) {
+      const auto i = static_cast<size_t>(x);
+      const BlockerSearch& found = w.found[i];
+      if (found.blockers == 0 || found.blockers == static_cast<int>(blockerDisk_.size())) continue;
+      const ShadowReceiver r = w.receivers[x];
+      w.radius[i] = std::min(lightSize_ * ratioOf(r, found) / r.texelWorld, static_cast<float>(map_.size));
+      w.filtered.push_back(x);
+    }
+    pcfDiskNearestRow(texels, w.receivers, w.filtered, w.radius.data(), w.rotation.data(), blockerDisk_, w.lit.data());
   }
 
   HybridOptions options_;
@@ -113,23 +158,55 @@ void HybridTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
 
   // 1. The map's class of each 2 x 2 quad, from a search at its first pixel that sees geometry (a
   // quarter of the searches; a tile is uniform only if its 16 quads agree, as raytraced-soft's 16
-  // probes), given to the quad's pixels; and the tiles' classes.
-  tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& range) {
-    for (int tile = range.begin(); tile < range.end(); ++tile) {
-      const auto [x0, y0, x1, y1] = state_.frame.bounds(tile);
-      for (int qy = y0; qy < y1; qy += 2)
-        for (int qx = x0; qx < x1; qx += 2) {
+  // probes), given to the quad's pixels; and the tiles' classes. A row of tiles at a time, each pair of
+  // rows searched a row of pixels per call (searchRow).
+  const int width = gbuffer.width(), height = gbuffer.height();
+  const int tilesX = state_.frame.tilesX;
+  tbb::enumerable_thread_specific<std::array<RowScratch, 2>> scratch;
+  tbb::parallel_for(tbb::blocked_range<int>(0, state_.frame.tilesY), [&](const tbb::blocked_range<int>& tileRows) {
+    std::array<RowScratch, 2>& w = scratch.local();
+    for (int tileRow = tileRows.begin(); tileRow < tileRows.end(); ++tileRow) {
+      const int y0 = tileRow * raytraced::kTile, y1 = std::min(y0 + raytraced::kTile, height);
+      for (int qy = y0; qy < y1; qy += 2) {
+        // Each quad's chosen pixel: its first pixel that sees geometry, in row order.
+        const int rows = std::min(qy + 2, y1) - qy;
+        w[0].pixels.clear();
+        w[1].pixels.clear();
+        for (int qx = 0; qx < width; qx += 2) {
+          const int xEnd = std::min(qx + 2, width);
+          bool chosen = false;
+          for (int row = 0; row < rows && !chosen; ++row)
+            for (int x = qx; x < xEnd && !chosen; ++x)
+              if (gbuffer.hit(x, qy + row)) {
+                w[static_cast<size_t>(row)].pixels.push_back(x);
+                chosen = true;
+              }
+        }
+        for (int row = 0; row < rows; ++row)
+          if (!w[static_cast<size_t>(row)].pixels.empty()) searchRow(gbuffer, qy + row, w[static_cast<size_t>(row)]);
+        // The quads' stand-ins, given to their pixels that see geometry.
+        for (int qx = 0; qx < width; qx += 2) {
+          const int xEnd = std::min(qx + 2, width);
           RaySums sums;
           float ratio = -1.0f;
-          for (int y = qy; y < std::min(qy + 2, y1); ++y)
-            for (int x = qx; x < std::min(qx + 2, x1); ++x) {
+          for (int row = 0; row < rows; ++row)
+            for (int x = qx; x < xEnd; ++x) {
+              const int y = qy + row;
               if (!gbuffer.hit(x, y)) continue;
-              if (ratio < 0.0f) ratio = classify(gbuffer, x, y, sums);
+              if (ratio < 0.0f) {  // the quad's chosen pixel, searched on its row
+                const RowScratch& r = w[static_cast<size_t>(row)];
+                const auto i = static_cast<size_t>(x);
+                ratio = standIn(r.receivers[x], r.found[i], r.lit[i], sums);
+              }
               state_.frame.at(x, y) = sums;
               searchRatio_(x, y) = ratio;
             }
         }
-      state_.frame.tiles[static_cast<size_t>(tile)] = classifyTile(gbuffer, state_.frame, tile);
+      }
+      for (int tx = 0; tx < tilesX; ++tx) {
+        const int tile = tileRow * tilesX + tx;
+        state_.frame.tiles[static_cast<size_t>(tile)] = classifyTile(gbuffer, state_.frame, tile);
+      }
     }
   });
   state_.stageMs[0] = stageTimer.elapsedMs();
