@@ -99,10 +99,15 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
 void filterPenumbrae(const GBuffer& gbuffer, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
                      Image<float>& scratch, Image<float>& out) {
   const Image<float>& noisy = *input.noisy;
-  // Pixels outside the active tiles keep their input; both passes write only inside them.
-  resetInParallel(scratch, gbuffer.width(), gbuffer.height(), 1.0f);
-  resetInParallel(out, gbuffer.width(), gbuffer.height(), 1.0f);
-  std::copy(noisy.begin(), noisy.end(), out.begin());
+  const int width = gbuffer.width(), height = gbuffer.height();
+  // Pixels outside the active tiles keep their input; both passes write only inside them. The second
+  // pass reads the first's result only inside them too, so `scratch` needs no fill.
+  scratch.resizeForOverwrite(width, height);
+  out.resizeForOverwrite(width, height);
+  tbb::parallel_for(tbb::blocked_range<int>(0, height, 32), [&](const tbb::blocked_range<int>& rows) {
+    std::copy(noisy.row(rows.begin()), noisy.row(rows.begin()) + static_cast<size_t>(rows.size()) * width,
+              out.row(rows.begin()));
+  });
   filterPass(gbuffer, input, options, noisy, noisy, 1, 0, scratch);
   filterPass(gbuffer, input, options, scratch, noisy, 0, 1, out);
 }
