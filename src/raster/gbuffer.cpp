@@ -148,7 +148,15 @@ void writeTile(const Scene& scene, const FlatScene& flat, const raster::TileSamp
     for (int i = 0; i < samples.width; ++i) {
       const int k = j * raster::kTileSize + i;
       const int32_t triangle = samples.triangle[k];
-      if (triangle < 0) continue;
+      if (triangle < 0) {  // resetGBuffer's values
+        wsPosition[i] = Vec3(0.0f);
+        wsNormal[i] = Vec3(0.0f);
+        wsGeometricNormal[i] = Vec3(0.0f);
+        objectId[i] = kNoObject;
+        triangleId[i] = -1;
+        csDepth[i] = kInfinity;
+        continue;
+      }
       if (triangle != cached) {
         gatherTriangle(scene, flat, triangle, d);
         cached = triangle;
@@ -188,11 +196,22 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height) {
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& g) {
   checkImageSize(width, height, "renderGBuffer");
   scene.camera.validate();
-  resetGBuffer(g, width, height);
   const Bounds3 bounds = scene.bounds();
-  if (bounds.empty()) return;
-  const std::optional<Mat4> clipFromWs = fittedClipFromWs(scene.camera, bounds, width, height);
-  if (!clipFromWs) return;
+  const std::optional<Mat4> clipFromWs =
+      bounds.empty() ? std::nullopt : fittedClipFromWs(scene.camera, bounds, width, height);
+  if (!clipFromWs) {  // nothing in view
+    resetGBuffer(g, width, height);
+    return;
+  }
+  // The rasterizer visits every tile and writeTile writes every pixel of it, an empty one as the
+  // empty G-buffer holds it: no fill first (and a fresh image's pages are first touched by the tiles'
+  // threads).
+  g.wsPosition.resizeForOverwrite(width, height);
+  g.wsNormal.resizeForOverwrite(width, height);
+  g.wsGeometricNormal.resizeForOverwrite(width, height);
+  g.objectId.resizeForOverwrite(width, height);
+  g.triangleId.resizeForOverwrite(width, height);
+  g.csDepth.resizeForOverwrite(width, height);
   FlatScene flat;
   flattenScene(scene, *clipFromWs, flat);
   raster::RasterInput input;
