@@ -610,21 +610,15 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
   return std::clamp(sum / static_cast<float>(pattern.size()), 0.0f, 1.0f);
 }
 
-// pcfDiskRow and pcfDiskNearestRow with the 16-tap kernels: each pixel's filter the per-pixel call's.
-[[gnu::target("avx512f")]] void pcfDiskRow16(const DepthTexels& map, const ReceiverRow& receivers,
-                                             std::span<const int32_t> pixels, const float* radiusTexels,
-                                             const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+// pcfDiskRow and pcfDiskNearestRow with a 16-tap kernel (pcfDisk16 or pcfDiskNearest16, inlined here):
+// each pixel's filter the per-pixel call's.
+template <float (*kKernel)(const DepthTexels&, const ShadowReceiver&, float, std::span<const Vec2>, const Vec2&)>
+[[gnu::target("avx512f")]] void filterRow16(const DepthTexels& map, const ReceiverRow& receivers,
+                                            std::span<const int32_t> pixels, const float* radiusTexels,
+                                            const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
   for (const int32_t x : pixels) {
     const auto i = static_cast<size_t>(x);
-    out[i] = pcfDisk16(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
-  }
-}
-[[gnu::target("avx512f")]] void pcfDiskNearestRow16(const DepthTexels& map, const ReceiverRow& receivers,
-                                                    std::span<const int32_t> pixels, const float* radiusTexels,
-                                                    const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
-  for (const int32_t x : pixels) {
-    const auto i = static_cast<size_t>(x);
-    out[i] = pcfDiskNearest16(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+    out[i] = kKernel(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
   }
 }
 
@@ -634,32 +628,57 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
 #endif
 #endif
 
-void pcfDiskRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
-                const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+namespace {
+
+// A kernel over a row's listed pixels (..Row16 below), and one pixel's (searchBlockers, pcfDisk, ...).
+template <class Out>
+using RowKernel = void (*)(const DepthTexels&, const ReceiverRow&, std::span<const int32_t>, const float*, const Vec2*,
+                           std::span<const Vec2>, Out*);
+template <class Out>
+using PixelKernel = Out (*)(const DepthTexels&, const ShadowReceiver&, float, std::span<const Vec2>, const Vec2&);
+
+// Runs `row16` over the listed pixels where it is given, `vectors` (the pattern suits it) and the CPU
+// has AVX-512F; else `perPixel` (which dispatches itself) at each pixel.
+template <class Out>
+void runRow(RowKernel<Out> row16, bool vectors, PixelKernel<Out> perPixel, const DepthTexels& map,
+            const ReceiverRow& receivers, std::span<const int32_t> pixels, const float* radiusTexels,
+            const Vec2* rotations, std::span<const Vec2> pattern, Out* out) {
 #if PENUMBRA_AVX512_KERNELS
-  if (!pattern.empty() && pattern.size() % 16 == 0 && cpuHasAvx512()) {
-    pcfDiskRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
+  if (row16 && vectors && cpuHasAvx512()) {
+    row16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
     return;
   }
+#else
+  (void)row16;
+  (void)vectors;
 #endif
   for (const int32_t x : pixels) {
     const auto i = static_cast<size_t>(x);
-    out[i] = pcfDisk(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
+    out[i] = perPixel(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
   }
+}
+
+#if PENUMBRA_AVX512_KERNELS
+constexpr RowKernel<BlockerSearch> kSearchBlockersRow16 = searchBlockersRow16;
+constexpr RowKernel<float> kPcfDiskRow16 = filterRow16<pcfDisk16>;
+constexpr RowKernel<float> kPcfDiskNearestRow16 = filterRow16<pcfDiskNearest16>;
+#else
+constexpr RowKernel<BlockerSearch> kSearchBlockersRow16 = nullptr;
+constexpr RowKernel<float> kPcfDiskRow16 = nullptr, kPcfDiskNearestRow16 = nullptr;
+#endif
+
+}  // namespace
+
+void pcfDiskRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
+                const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
+  runRow<float>(kPcfDiskRow16, !pattern.empty() && pattern.size() % 16 == 0, pcfDisk, map, receivers, pixels,
+                radiusTexels, rotations, pattern, out);
 }
 
 void pcfDiskNearestRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
                        const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern, float* out) {
-#if PENUMBRA_AVX512_KERNELS
-  if (!pattern.empty() && pattern.size() % 16 == 0 && cpuHasAvx512()) {
-    pcfDiskNearestRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
-    return;
-  }
-#endif
-  for (const int32_t x : pixels) {
-    const auto i = static_cast<size_t>(x);
-    out[i] = pcfDiskNearest(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
-  }
+  runRow<float>(kPcfDiskNearestRow16, !pattern.empty() && pattern.size() % 16 == 0, pcfDiskNearest, map, receivers,
+                pixels, radiusTexels, rotations, pattern, out);
 }
 
 PENUMBRA_KERNEL_CLONES
@@ -692,16 +711,8 @@ BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, fl
 void searchBlockersRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
                        const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern,
                        BlockerSearch* out) {
-#if PENUMBRA_AVX512_KERNELS
-  if (pattern.size() == 16 && cpuHasAvx512()) {
-    searchBlockersRow16(map, receivers, pixels, radiusTexels, rotations, pattern, out);
-    return;
-  }
-#endif
-  for (const int32_t x : pixels) {
-    const auto i = static_cast<size_t>(x);
-    out[i] = searchBlockers(map, receivers[x], radiusTexels[i], pattern, rotations[i]);
-  }
+  runRow<BlockerSearch>(kSearchBlockersRow16, pattern.size() == 16, searchBlockers, map, receivers, pixels,
+                        radiusTexels, rotations, pattern, out);
 }
 
 PENUMBRA_KERNEL_CLONES
