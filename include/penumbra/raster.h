@@ -18,9 +18,11 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height);
 // every frame then costs a pass over its memory, not fresh pages.
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& out);
 
-// Which surfaces a light map keeps per texel: the nearest (the shadow map), or also the deepest
-// (LightMap::lsFarDepth, rasterized in the same pass; the ribbon techniques' far layer).
-enum class LightMapLayers { Nearest, NearestAndFarthest };
+// Which surfaces a light map keeps per texel: the nearest surface's depth alone (LightMap::objectId
+// left empty, for the techniques that compare depths only), the nearest with its object id (the
+// shadow map), or also the deepest (LightMap::lsFarDepth, rasterized in the same pass; the ribbon
+// techniques' far layer).
+enum class LightMapLayers { NearestDepth, Nearest, NearestAndFarthest };
 
 // How a light map is fitted to the scene bounds each time it is rendered (src/raster/light_map.cpp).
 enum class LightMapFit {
@@ -51,7 +53,7 @@ struct LightMap {
   float halfWidth = 1.0f;           //!< orthographic, world units
   float zNear = 0.0f, zFar = 1.0f;  //!< light-space depth range that holds the scene
   Image<float> lsDepth;             //!< light-space depth z (distance along +z); kInfinity where empty
-  Image<int32_t> objectId;          //!< kNoObject where empty
+  Image<int32_t> objectId;          //!< kNoObject where empty; empty (0 x 0) with LightMapLayers::NearestDepth
   // LightMapLayers::NearestAndFarthest only (else empty): the light-space depth of the deepest
   // surface along the texel's ray; kInfinity where empty.
   Image<float> lsFarDepth;

@@ -168,12 +168,16 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   fresh.lsDepth = std::move(out.lsDepth);
   fresh.objectId = std::move(out.objectId);
   const bool farthest = layers == LightMapLayers::NearestAndFarthest;
+  const bool ids = layers != LightMapLayers::NearestDepth;
   if (farthest) fresh.lsFarDepth = std::move(out.lsFarDepth);
   out = std::move(fresh);
   LightMap& m = out;
   m.size = size;
   resetInParallel(m.lsDepth, size, size, kInfinity);
-  resetInParallel(m.objectId, size, size, kNoObject);
+  if (ids)
+    resetInParallel(m.objectId, size, size, kNoObject);
+  else
+    m.objectId.resizeForOverwrite(0, 0);  // keeps its storage for a later map that wants ids
   if (farthest) resetInParallel(m.lsFarDepth, size, size, kInfinity);
   const Bounds3 bounds = scene.bounds();
   m.lsFrame = lightMapFrame(light, bounds, fit);
@@ -301,7 +305,7 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
         const glm::uvec3& t = triangles[static_cast<size_t>(triangle)];
         const Vec3& b = samples.barycentrics[k];
         m.lsDepth(samples.x0 + i, samples.y0 + j) = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];
-        m.objectId(samples.x0 + i, samples.y0 + j) = payloads[static_cast<size_t>(triangle)];
+        if (ids) m.objectId(samples.x0 + i, samples.y0 + j) = payloads[static_cast<size_t>(triangle)];
       }
   });
 }

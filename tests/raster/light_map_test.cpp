@@ -163,6 +163,29 @@ TEST(LightMap, RenderingIntoAUsedMapEqualsAFreshRender) {
   expectSameMap(reused, renderLightMap(scene, below, 200));
 }
 
+// LightMapLayers::NearestDepth: the depths of the map with ids, to the bit, and no ids; a map rendered
+// with ids into it afterwards equals a fresh one.
+TEST(LightMap, DepthOnlyMapHasTheSameDepthsAndNoIds) {
+  const Scene scene = rastertest::objectsScene();
+  for (const Light& light :
+       {Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f), Light::directional(Vec3(0.4f, 1.0f, -0.3f), radians(0.53f))}) {
+    const LightMap withIds = renderLightMap(scene, light, 200);
+    LightMap depthOnly;
+    renderLightMap(scene, light, 200, depthOnly, LightMapFit::Tight, LightMapLayers::NearestDepth);
+    EXPECT_EQ(depthOnly.objectId.size(), 0u);
+    ASSERT_EQ(depthOnly.lsDepth.size(), withIds.lsDepth.size());
+    size_t differing = 0, covered = 0;
+    for (size_t i = 0; i < withIds.lsDepth.size(); ++i) {
+      differing += std::memcmp(&depthOnly.lsDepth[i], &withIds.lsDepth[i], sizeof(float)) != 0;
+      covered += std::isfinite(withIds.lsDepth[i]);
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(covered, 2000u) << "the map must hold surfaces for the comparison to mean something";
+    renderLightMap(scene, light, 200, depthOnly);
+    expectSameMap(depthOnly, withIds);
+  }
+}
+
 // The far layer (LightMapLayers::NearestAndFarthest) against the last hit along each texel's ray,
 // found by tracing on past every hit; the nearest layer is the same as without it, bit for bit.
 TEST(LightMap, FarLayerMatchesTheLastHitAlongEachTexelsRay) {

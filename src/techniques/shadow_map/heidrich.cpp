@@ -644,7 +644,8 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   for (size_t j = 0; j < samples; ++j) {
     const float u = static_cast<float>(j) / static_cast<float>(k);
     const Vec3 wsSample = light.a() + u * (light.b() - light.a());
-    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.lightMap, maps_[j]);
+    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.lightMap, maps_[j],
+                    LightMapLayers::NearestDepth);  // its compares and skins read depths only
     // The point the map looks from: the sample itself, or its lattice point in a stable map, so that
     // the facing test and the map agree.
     wsSamples_.push_back(maps_[j].wsOrigin);

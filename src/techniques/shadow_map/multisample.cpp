@@ -75,17 +75,14 @@ class MultisampleTechnique final : public ShadowTechnique {
     for (uint32_t k = 0; k < sampler.count(); ++k) {
       const auto [pointLight, weight] =
           pointLightAtSample(light, scene, sampler.sample(k, options_.seed), options_.lightMap.fit);
-      // Rendered into the scratch map, whose depth and id storage persist across samples and frames.
-      // The sample keeps the map but its ids (only depths are compared: half the memory of N maps),
-      // which go back to the scratch map with the depth storage the sample had before: a steady
-      // prepare touches no fresh page.
-      createShadowMap(scene, pointLight, options_.lightMap, scratch_);
+      // Depths only (only depths are compared: half the memory of N maps with ids), rendered into the
+      // scratch map, whose depth storage goes to the sample in exchange for the storage the sample had
+      // before: a steady prepare touches no fresh page.
+      createShadowMap(scene, pointLight, options_.lightMap, scratch_, LightMapLayers::NearestDepth);
       LightMap& map = maps_[k];
       Image<float> previousDepth = std::move(map.lsDepth);
       map = std::move(scratch_);
-      scratch_.objectId = std::move(map.objectId);
       scratch_.lsDepth = std::move(previousDepth);
-      map.objectId = Image<int32_t>();
       weights_.push_back(weight);
       weightSum += weight;
       reportProgress(static_cast<double>(k + 1) / sampler.count());

@@ -32,7 +32,7 @@ class PcfTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.lightMap, map_);
+    createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
