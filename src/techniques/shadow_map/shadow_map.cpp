@@ -13,6 +13,9 @@
 #define PENUMBRA_AVX512_KERNELS 1
 #endif
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include "penumbra/error.h"
 #include "penumbra/motion.h"
 
@@ -38,20 +41,26 @@ Light lightAtMapOrigin(const Light& light, const LightMap& map) {
 }
 
 float minMapDepth(const LightMap& map) {
-  // Eight independent running minima: one chain would wait a compare's latency per texel. min is
-  // exact, so the lanes give the same value as one pass (NaN texels are skipped either way).
-  constexpr size_t kMinLanes = 8;
-  float lane[kMinLanes];
-  std::fill(lane, lane + kMinLanes, kInfinity);
-  const float* d = map.lsDepth.data();
-  const size_t n = map.lsDepth.size();
-  size_t i = 0;
-  for (; i + kMinLanes <= n; i += kMinLanes)
-    for (size_t l = 0; l < kMinLanes; ++l) lane[l] = d[i + l] < lane[l] ? d[i + l] : lane[l];
-  float m = kInfinity;
-  for (; i < n; ++i) m = d[i] < m ? d[i] : m;
-  for (size_t l = 0; l < kMinLanes; ++l) m = lane[l] < m ? lane[l] : m;
-  return m;
+  // Rows in parallel, each row's least depth with eight independent running minima (one chain would
+  // wait a compare's latency per texel). min is exact, so any split gives the same value as one pass
+  // (NaN texels are skipped either way).
+  const int size = map.size;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, size, 16), kInfinity,
+      [&](const tbb::blocked_range<int>& rows, float m) {
+        constexpr size_t kMinLanes = 8;
+        float lane[kMinLanes];
+        std::fill(lane, lane + kMinLanes, kInfinity);
+        const float* d = map.lsDepth.row(rows.begin());
+        const size_t n = static_cast<size_t>(rows.size()) * static_cast<size_t>(size);
+        size_t i = 0;
+        for (; i + kMinLanes <= n; i += kMinLanes)
+          for (size_t l = 0; l < kMinLanes; ++l) lane[l] = d[i + l] < lane[l] ? d[i + l] : lane[l];
+        for (; i < n; ++i) m = d[i] < m ? d[i] : m;
+        for (size_t l = 0; l < kMinLanes; ++l) m = lane[l] < m ? lane[l] : m;
+        return m;
+      },
+      [](float a, float b) { return b < a ? b : a; });
 }
 
 // The disk kernels below and the receivers' loop are also compiled for AVX2, picked at load time where
