@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -329,6 +330,25 @@ TEST(ShadowMap, DiskKernelRowsAreThePerPixelKernelsToTheBit) {
   }
   EXPECT_GT(searched, 20000);
   EXPECT_GT(partial, 1000) << "the searches must find some blockers, not all, for the depth sums to be compared";
+}
+
+// minMapDepth (rows in parallel): the least finite depth of the map, NaN and empty texels skipped, kInfinity
+// for a map with none; on odd sizes, whose rows do not fill its eight lanes.
+TEST(ShadowMap, MinMapDepthIsTheLeastDepth) {
+  for (const int size : {1, 7, 130, 1024}) {
+    LightMap m = orthoMap(size);
+    uint32_t state = static_cast<uint32_t>(size);
+    float want = kInfinity;
+    for (float& d : m.lsDepth) {
+      state = state * 1664525u + 1013904223u;
+      const uint32_t r = state >> 8;
+      d = r % 7 == 0 ? kInfinity : r % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : 1.0f + (r % 100003) * 1e-3f;
+      if (std::isfinite(d)) want = std::min(want, d);
+    }
+    EXPECT_EQ(minMapDepth(m), want) << size;
+    std::fill(m.lsDepth.begin(), m.lsDepth.end(), kInfinity);
+    EXPECT_EQ(minMapDepth(m), kInfinity) << size;
+  }
 }
 
 TEST(ShadowMap, DiskKernelsMatchAScalarOracleTapForTap) {
