@@ -80,8 +80,9 @@
 //    the depth in one two-channel texel.
 //  - All maps share one orientation, the segment's light frame (Light::lightFrame: +z from the
 //    segment's centre to the scene's centre); each is a perspective map fitted to the scene from its
-//    own sample point (renderLightMap). Each pixel is transformed into map 0's light space once; the
-//    other maps share its axes and differ by their origin only (heidrich::receiverInMap).
+//    own sample point (renderLightMap). Each pixel is taken into map 0's light space and moved by each
+//    map's origin there (heidrich::receiverInMap), a row of pixels per map at once in the visibility
+//    pass (makeReceiverRowInFrame, shadow_map.h: the same receivers to the bit).
 //  - The depth channel's compare is the hard shadow of shadow_map.h (receiver plane, slope-scaled
 //    bias); receivers outside a map are lit by that sample point.
 //

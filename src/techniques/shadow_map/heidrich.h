@@ -78,7 +78,8 @@ void makeTwoChannelMap(const LightMap& map, const Image<float>& visibility, cons
 
 // makeReceiver (shadow_map.h) for a perspective map, from the receiver's position and geometric normal
 // already in the map's light space: the maps of one segment share their axes, so a pixel transforms
-// its point and normal once and each map only subtracts its origin's offset.
+// its point and normal once and each map only subtracts its origin's offset. The definition, one pixel
+// at a time, of what the visibility pass computes a row at a time (makeReceiverRowInFrame).
 ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsPosition, const Vec3& lsNormal, const DepthBias& bias);
 
 }  // namespace heidrich
