@@ -21,10 +21,10 @@
 // The kernels are vectorized (shadow_map.cpp: an AVX2 clone picked at load time, and 16 taps per
 // 512-bit vector with one gather each where the CPU has AVX-512F), V bit-identical on every path,
 // and run a row of pixels per call (the searches, then each filter's pixels), so that what does not
-// depend on the pixel is done once a row; lit pixels and umbra are decided by the search alone. No early-out skips the
-// search: a receiver tilted towards the light sweeps more depth over a search region than the bias allows, so bounds of
-// the map per region or tile rarely decide a pixel, and the 16-tap search costs less than a few tile
-// tests.
+// depend on the pixel is done once a row; lit pixels and umbra are decided by the search alone. No
+// early-out skips the search: a receiver tilted towards the light sweeps more depth over a search
+// region than the bias allows, so bounds of the map per region or tile rarely decide a pixel, and the
+// 16-tap search costs less than a few tile tests.
 // Directional lights use the orthographic variant: R is tan(angular_diameter / 2), the solar disk's
 // radius at unit distance, and the radii are R (z_r - z) and R (z_r - z_b) in world units (no
 // perspective division).
@@ -133,7 +133,8 @@ class PcssTechnique final : public ShadowTechnique {
         const auto i = static_cast<size_t>(x);
         // In texels: the world radius at the receiver's depth over the texel size there.
         const float searchRadius = searchScale_ * (r.lsDepth - zMin_) / r.texelWorld;
-        local[kClamped] += searchRadius > maxRadius();
+        w.searchClamped[i] = searchRadius > maxRadius();
+        local[kClamped] += w.searchClamped[i];
         w.radius[i] = std::min(searchRadius, maxRadius());
         w.rotation[i] = rotation(x, y);
         w.pixels.push_back(x);
@@ -145,7 +146,7 @@ class PcssTechnique final : public ShadowTechnique {
       w.nearest.clear();
       for (const int32_t x : w.pixels) {
         const auto i = static_cast<size_t>(x);
-        const float filterRadius = filterRadiusOf(receivers[x], w.blockers[i], w.radius[i] < maxRadius(), local);
+        const float filterRadius = filterRadiusOf(receivers[x], w.blockers[i], !w.searchClamped[i], local);
         if (filterRadius < 0.0f) {  // decided by the search
           out[x] = w.blockers[i].blockers == 0 ? 1.0f : 0.0f;
           continue;
@@ -185,10 +186,12 @@ class PcssTechnique final : public ShadowTechnique {
     std::vector<int32_t> pixels;             //!< the row's pixels that search
     std::vector<int32_t> bilinear, nearest;  //!< those that filter, by filter
     std::vector<float> radius;               //!< per pixel: the search's radius, then the filter's, texels
+    std::vector<uint8_t> searchClamped;      //!< per pixel: the search's radius was cut to the map's size
     std::vector<Vec2> rotation;              //!< per pixel: the patterns' rotation
     std::vector<BlockerSearch> blockers;
     void resize(size_t n) {
       radius.resize(n);
+      searchClamped.resize(n);
       rotation.resize(n);
       blockers.resize(n);
       pixels.reserve(n);

@@ -65,9 +65,9 @@ float minMapDepth(const LightMap& map) {
 
 // The disk kernels below and the receivers' loop are also compiled for AVX2, picked at load time where
 // the CPU has it (GCC function multi-versioning): their vector phases then run 8 lanes wide instead of
-// 4; the receivers' loop also for AVX-512F (16 lanes). No multiply-add is fused (no FMA in the list, and this file is
-// compiled with -ffp-contract=off for the AVX-512 path below), so every path rounds alike: V is bit-identical on every
-// CPU.
+// 4; the receivers' loop also for AVX-512F (16 lanes). No multiply-add is fused (no FMA in the list,
+// and this file is compiled with -ffp-contract=off for the AVX-512 path below), so every path rounds
+// alike: V is bit-identical on every CPU.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
 #define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
 #define PENUMBRA_RECEIVER_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
