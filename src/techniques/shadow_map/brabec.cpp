@@ -613,9 +613,7 @@ BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, 
   p.objectId = p.key = gbuffer.objectId(x, y);
   const Vec3 wsP = gbuffer.wsPosition(x, y);
   const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-  // A surface turned away from the light's centre is in its own shadow: no search can light it.
-  const Vec3 wsToLight = light_->isDirectional() ? light_->direction() : light_->center() - wsP;  // sign only
-  if (glm::dot(wsNg, wsToLight) <= 0.0f) {
+  if (facesAwayFromLight(wsP, wsNg)) {
     p.cls = Pixel::BackFacing;
     return p;
   }
@@ -649,8 +647,6 @@ void BrabecTechnique::classifyRow(const GBuffer& gbuffer, int y, const ReceiverR
   const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
   const float* depth = map_.lsDepth.data();
   const int32_t* mapIds = map_.objectId.data();
-  const bool directional = light_->isDirectional();
-  const Vec3 direction = directional ? light_->direction() : Vec3(0.0f), center = light_->center();
   for (int x = 0; x < width; ++x) {
     const auto i = static_cast<size_t>(x);
     const int32_t id = ids[x];
@@ -660,8 +656,7 @@ void BrabecTechnique::classifyRow(const GBuffer& gbuffer, int y, const ReceiverR
       continue;
     }
     // classify's tests in its order: the side of the light's centre, the map's bounds, the hard test.
-    const Vec3 wsToLight = directional ? direction : center - positions[x];
-    if (glm::dot(normals[x], wsToLight) <= 0.0f) {
+    if (facesAwayFromLight(positions[x], normals[x])) {
       cls[i] = Pixel::BackFacing;
       continue;
     }

@@ -284,6 +284,11 @@ class BrabecTechnique final : public ShadowTechnique {
   Pixel classify(const GBuffer& gbuffer, int x, int y) const;
   // The same with the pixel's receiver already set up (makeReceiverRow: a row's at once).
   Pixel classify(const GBuffer& gbuffer, int x, int y, const ShadowReceiver& receiver) const;
+  // A surface turned away from the light's centre is in its own shadow: no search can light it.
+  bool facesAwayFromLight(const Vec3& wsP, const Vec3& wsNg) const {
+    const Vec3 wsToLight = light_->isDirectional() ? light_->direction() : light_->center() - wsP;  // sign only
+    return glm::dot(wsNg, wsToLight) <= 0.0f;
+  }
   // classify's class and interpolation id of every pixel of row y, from the row's receivers: the hard
   // test read from the row (its nearest texel and threshold), no Pixel built.
   void classifyRow(const GBuffer& gbuffer, int y, const ReceiverRow& receivers, uint8_t* cls, int32_t* key) const;
