@@ -480,6 +480,26 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
          r.t + reach < static_cast<float>(map.size);
 }
 
+// One group of 16 search taps at pattern offsets (px, py): adds its blocked taps to `blockers` and their
+// depths to the running quarter sums `lanes` (laneSum's order).
+[[gnu::target("avx512f")]] inline void blockerTaps16(const DepthTexels& map, const ShadowReceiver& r,
+                                                     float radiusTexels, __m512 px, __m512 py, const Vec2& rotation,
+                                                     bool diskInsideMap, int& blockers, __m128& lanes) {
+  __m512 threshold, d;
+  nearestTaps16(map, r, radiusTexels, px, py, rotation, diskInsideMap, threshold, d);
+  const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
+  blockers += std::popcount(static_cast<unsigned>(blocked));
+  lanes = addQuarters(lanes, _mm512_maskz_mov_ps(blocked, d));
+}
+
+// A search's result from its blocked taps and the sum of their depths.
+inline BlockerSearch blockerResult(int blockers, float depthSum) {
+  BlockerSearch result;
+  result.blockers = blockers;
+  if (blockers > 0) result.meanDepth = depthSum / static_cast<float>(blockers);
+  return result;
+}
+
 [[gnu::target("avx512f")]] BlockerSearch searchBlockers16(const DepthTexels& map, const ShadowReceiver& r,
                                                           float radiusTexels, std::span<const Vec2> pattern,
                                                           const Vec2& rotation) {
@@ -490,20 +510,13 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
     const size_t n = std::min(kTapChunk, pattern.size() - first);
     __m128 lanes = _mm_setzero_ps();
     for (size_t k = 0; k < n; k += 16) {
-      __m512 threshold, d;
       __m512 px, py;
       deinterleave16(pattern.data() + first + k, px, py);
-      nearestTaps16(map, r, radiusTexels, px, py, rotation, inside, threshold, d);
-      const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
-      blockers += std::popcount(static_cast<unsigned>(blocked));
-      lanes = addQuarters(lanes, _mm512_maskz_mov_ps(blocked, d));
+      blockerTaps16(map, r, radiusTexels, px, py, rotation, inside, blockers, lanes);
     }
     depthSum += quarterLanes(lanes);
   }
-  BlockerSearch result;
-  result.blockers = blockers;
-  if (blockers > 0) result.meanDepth = depthSum / static_cast<float>(blockers);
-  return result;
+  return blockerResult(blockers, depthSum);
 }
 
 // searchBlockersRow with 16 taps (pcss' default search): the pattern split once per row, the receivers
@@ -517,14 +530,11 @@ inline bool diskInside(const DepthTexels& map, const ShadowReceiver& r, float ra
   for (const int32_t x : pixels) {
     const ShadowReceiver r = receivers[x];
     const auto i = static_cast<size_t>(x);
-    __m512 threshold, d;
-    nearestTaps16(map, r, radiusTexels[i], px, py, rotations[i], diskInside(map, r, radiusTexels[i]), threshold, d);
-    const __mmask16 blocked = _mm512_cmp_ps_mask(d, threshold, _CMP_LT_OQ);
-    const int blockers = std::popcount(static_cast<unsigned>(blocked));
-    const float depthSum = quarterLanes(addQuarters(_mm_setzero_ps(), _mm512_maskz_mov_ps(blocked, d)));
-    BlockerSearch& result = out[i];
-    result.blockers = blockers;
-    result.meanDepth = blockers > 0 ? depthSum / static_cast<float>(blockers) : 0.0f;
+    int blockers = 0;
+    __m128 lanes = _mm_setzero_ps();
+    blockerTaps16(map, r, radiusTexels[i], px, py, rotations[i], diskInside(map, r, radiusTexels[i]), blockers, lanes);
+    // searchBlockers16's sum starts from 0: 0 + s is s for the non-negative sums here.
+    out[i] = blockerResult(blockers, quarterLanes(lanes));
   }
 }
 
