@@ -17,6 +17,7 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+#include <tbb/concurrent_vector.h>
 
 #include "core/mesh_fingerprint.h"
 #include "core/scene_caches.h"
@@ -28,6 +29,7 @@ struct RayScene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<int32_t> objectIds;  // geometry id (= object index) -> object id
+  PacketLog* log = nullptr;        // attachLog's; RayScene is otherwise immutable once built
 
   std::mutex errorMutex;
   std::string firstError;  // first message reported by Embree since the last check
@@ -244,14 +246,33 @@ void RayScene::occluded16(const Ray* rays, int count, bool* out) const {
   for (int i = 0; i < count; ++i) out[i] = packet.blocked(i);
 }
 
+struct PacketLog::Impl {
+  tbb::concurrent_vector<LoggedPacket> packets;
+};
+
+PacketLog::PacketLog() : impl_(std::make_unique<Impl>()) {}
+PacketLog::~PacketLog() = default;
+
+void PacketLog::add(const RayPacket16& rays, int count, bool closestHit) {
+  impl_->packets.push_back(LoggedPacket{rays, count, closestHit});
+}
+
+std::vector<LoggedPacket> PacketLog::packets() const {
+  return std::vector<LoggedPacket>(impl_->packets.begin(), impl_->packets.end());
+}
+
+void RayScene::attachLog(PacketLog* log) const { impl_->log = log; }
+
 void RayScene::occluded16(RayPacket16& packet, int count) const {
   if (count <= 0) return;
+  if (impl_->log) impl_->log->add(packet, count, false);
   PacketQuery query(count);
   rtcOccluded16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRay16*>(&packet));
 }
 
 void RayScene::intersect16(RayHitPacket16& packet, int count) const {
   if (count <= 0) return;
+  if (impl_->log) impl_->log->add(packet.ray, count, true);
   PacketQuery query(count);
   for (int i = 0; i < 16; ++i) {
     packet.hit.geomId[i] = HitPacket16::kNoHit;

@@ -48,6 +48,30 @@ struct alignas(64) RayHitPacket16 {
   HitPacket16 hit;
 };
 
+// A packet query as it was handed to Embree: the rays before the traversal wrote them, the lanes
+// [0, count) traced, and the query (closest hit or occlusion).
+struct LoggedPacket {
+  RayPacket16 rays;
+  int count = 0;
+  bool closestHit = false;
+};
+
+// The packets a RayScene traces while the log is attached (RayScene::attachLog), from any thread:
+// what a benchmark replays through Embree alone to compare a technique's ray throughput with Embree's
+// on the very same rays (bench/few_ray_bench.cpp). Single-ray queries are not logged.
+class PacketLog {
+ public:
+  PacketLog();
+  ~PacketLog();
+  void add(const RayPacket16& rays, int count, bool closestHit);
+  // Every packet logged so far, in no particular order between threads.
+  std::vector<LoggedPacket> packets() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 class RayScene {
  public:
   explicit RayScene(const Scene& scene);
@@ -69,6 +93,11 @@ class RayScene {
   void intersect16(RayHitPacket16& packet, int count) const;
   // The closest hit within [tMin, tMax], or nothing. Thread-safe.
   std::optional<RayHit> intersect(const Ray& ray) const;
+
+  // Logs every packet query into `log` from now on (nullptr: stops). For measurements: attached, each
+  // query copies its packet; detached, a query pays one load and branch. Not to be changed while
+  // another thread traces.
+  void attachLog(PacketLog* log) const;
 
  private:
   struct Impl;

@@ -12,6 +12,17 @@
 namespace penumbra::rt {
 namespace {
 
+// The lane loops below are also compiled for AVX2 and AVX-512F, picked at load time where the CPU has
+// them (GCC function multi-versioning): 8 or 16 lanes a step instead of 4, so one packet's rays are one
+// or two steps. No multiply-add is fused (none is in the list, and this file is compiled with
+// -ffp-contract=off), and division and square root round alike at every width: the rays are
+// bit-identical on every CPU.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
+#define PENUMBRA_LANE_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define PENUMBRA_LANE_CLONES
+#endif
+
 // The lane-invariant values of a light, hoisted out of the lane loops.
 struct LightConstants {
   Vec3 center, u, v, a, ab, direction;
@@ -55,20 +66,25 @@ inline void segmentTo(float xx, float xy, float xz, float ox, float oy, float oz
   fix |= static_cast<int32_t>(!(len2 > 0.0f) | !(len2 < kInfinity));
 }
 
+// A lane loop's outputs. The loops are cloned functions, called, not inlined, so the outputs come in as
+// restrict-qualified parameters (PENUMBRA_LANE_OUTPUTS; GCC trusts restrict on parameters, not on a
+// struct's members) and are gathered here inside the loop's own function.
 struct Out {
-  float* __restrict orgX;
-  float* __restrict orgY;
-  float* __restrict orgZ;
-  float* __restrict tMin;
-  float* __restrict dirX;
-  float* __restrict dirY;
-  float* __restrict dirZ;
-  float* __restrict tMax;
-  float* __restrict weight;
-  int32_t* __restrict fix;
+  float* dirX;
+  float* dirY;
+  float* dirZ;
+  float* tMax;
+  float* weight;
+  int32_t* fix;
 };
+#define PENUMBRA_LANE_OUTPUTS                                                                     \
+  float* __restrict dirX, float* __restrict dirY, float* __restrict dirZ, float* __restrict tMax, \
+      float* __restrict weight, int32_t* __restrict fix
+#define PENUMBRA_LANE_OUT \
+  Out { dirX, dirY, dirZ, tMax, weight, fix }
 
-void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon, const Out& out) {
+inline __attribute__((always_inline)) void sphereKernel(const LightConstants& k, const ShadowLanes& __restrict in,
+                                                        int count, float epsilon, const Out out) {
   for (int i = 0; i < count; ++i) {
     // Light::sample's set-up: the silhouette disk seen from P, its frame around P -> centre.
     const float tx = k.center.x - in.px[i], ty = k.center.y - in.py[i], tz = k.center.z - in.pz[i];
@@ -107,7 +123,8 @@ void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int 
 
 // Disk, rect and segment lights: the light point does not depend on P.
 template <LightShape kShape>
-void planarLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon, const Out& out) {
+inline __attribute__((always_inline)) void planarKernel(const LightConstants& k, const ShadowLanes& __restrict in,
+                                                        int count, float epsilon, const Out out) {
   for (int i = 0; i < count; ++i) {
     float xx, xy, xz;
     if constexpr (kShape == LightShape::Disk) {
@@ -139,9 +156,13 @@ void planarLanes(const LightConstants& k, const ShadowLanes& __restrict in, int 
   }
 }
 
-void directionalLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, const Out& out) {
-  // The weights' normalization: the limb-darkening law's mean over the disk.
-  const float lawMean = 1.0f - kLimbDarkeningU / 3.0f;
+inline __attribute__((always_inline)) void directionalKernel(const LightConstants& k, const ShadowLanes& __restrict in,
+                                                             int count, const Out out) {
+  // The limb-darkening law's coefficient, 0 for a uniform disk (whose weights are then 1 exactly), and
+  // the weights' normalization, the law's mean over the disk: floats, not a bool select, so that the
+  // loop vectorizes.
+  const float u = k.limbDarkened ? kLimbDarkeningU : 0.0f;
+  const float lawMean = 1.0f - u / 3.0f;
   for (int i = 0; i < count; ++i) {
     float qx, qy;
     concentric(in.ux[i], in.uy[i], qx, qy);
@@ -154,10 +175,34 @@ void directionalLanes(const LightConstants& k, const ShadowLanes& __restrict in,
     out.dirZ[i] = sz * inv;
     out.tMax[i] = kInfinity;
     const float mu = std::sqrt(std::max(0.0f, 1.0f - (qx * qx + qy * qy)));
-    out.weight[i] = k.limbDarkened ? (1.0f - kLimbDarkeningU * (1.0f - mu)) / lawMean : 1.0f;
+    out.weight[i] = (1.0f - u * (1.0f - mu)) / lawMean;
     out.fix[i] = 0;
   }
 }
+
+// The kernels, each compiled for every target of PENUMBRA_LANE_CLONES.
+PENUMBRA_LANE_CLONES void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count,
+                                      float epsilon, PENUMBRA_LANE_OUTPUTS) {
+  sphereKernel(k, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void diskLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon,
+                                    PENUMBRA_LANE_OUTPUTS) {
+  planarKernel<LightShape::Disk>(k, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void rectLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon,
+                                    PENUMBRA_LANE_OUTPUTS) {
+  planarKernel<LightShape::Rect>(k, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void segmentLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count,
+                                       float epsilon, PENUMBRA_LANE_OUTPUTS) {
+  planarKernel<LightShape::Segment>(k, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void directionalLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count,
+                                           PENUMBRA_LANE_OUTPUTS) {
+  directionalKernel(k, in, count, PENUMBRA_LANE_OUT);
+}
+#undef PENUMBRA_LANE_OUTPUTS
+#undef PENUMBRA_LANE_OUT
 
 }  // namespace
 
@@ -166,13 +211,11 @@ void sinCosQuarterPi(float a, float& s, float& c) { sinCosPoly(a, s, c); }
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight) {
   alignas(64) int32_t fix[16];
-  const Out out{packet.orgX, packet.orgY, packet.orgZ, packet.tMin, packet.dirX,
-                packet.dirY, packet.dirZ, packet.tMax, weight,      fix};
   for (int i = 0; i < count; ++i) {
-    out.orgX[i] = lanes.ox[i];
-    out.orgY[i] = lanes.oy[i];
-    out.orgZ[i] = lanes.oz[i];
-    out.tMin[i] = 0.0f;
+    packet.orgX[i] = lanes.ox[i];
+    packet.orgY[i] = lanes.oy[i];
+    packet.orgZ[i] = lanes.oz[i];
+    packet.tMin[i] = 0.0f;
   }
   LightConstants k;
   k.center = light.center();
@@ -181,28 +224,28 @@ void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, fl
   bool scalar = false;
   switch (light.shape()) {
     case LightShape::Sphere:
-      sphereLanes(k, lanes, count, epsilon, out);
+      sphereLanes(k, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
       break;
     case LightShape::Disk:
       k.frame = Frame::fromZ(light.normal());
-      planarLanes<LightShape::Disk>(k, lanes, count, epsilon, out);
+      diskLanes(k, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
       break;
     case LightShape::Rect:
       k.u = light.u();
       k.v = light.v();
-      planarLanes<LightShape::Rect>(k, lanes, count, epsilon, out);
+      rectLanes(k, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
       break;
     case LightShape::Segment:
       k.a = light.a();
       k.ab = light.b() - light.a();
-      planarLanes<LightShape::Segment>(k, lanes, count, epsilon, out);
+      segmentLanes(k, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
       break;
     case LightShape::Directional:
       k.direction = light.direction();
       k.frame = Frame::fromZ(k.direction);
       k.tanHalf = std::tan(0.5f * light.angularDiameter());
       k.limbDarkened = light.profile() == LightProfile::LimbDarkened;
-      directionalLanes(k, lanes, count, out);
+      directionalLanes(k, lanes, count, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
       break;
     case LightShape::Polygon:
       scalar = true;  // a triangle picked by area per sample: not worth a vector form

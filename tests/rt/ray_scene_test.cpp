@@ -1,6 +1,6 @@
 // Tests of the Embree wrapper (src/rt/ray_scene.cpp): closest hits and occlusion on quads whose
 // answers are known exactly (t, object id, triangle id, barycentrics, normal), packets against
-// single rays, the empty scene, degenerate triangles, bad indices, and the shadow-ray epsilon.
+// single rays, the packet log, the empty scene, degenerate triangles, bad indices, and the shadow-ray epsilon.
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -113,6 +113,40 @@ TEST(RayScene, Occluded16MatchesSingleRays) {
   }
   EXPECT_GT(hits, 100);  // both answers occur
   EXPECT_LT(hits, 1000);
+}
+
+TEST(RayScene, AnAttachedLogKeepsEachPacketAsItWasHandedToEmbree) {
+  const RayScene rays(twoQuads());
+  // Lane 0 hits quad A (t = 3 along -z), lane 1 misses both quads; a third lane is not traced.
+  RayHitPacket16 packet;
+  for (int lane = 0; lane < 3; ++lane) {
+    packet.ray.orgX[lane] = lane == 1 ? 5.0f : -0.5f;
+    packet.ray.orgZ[lane] = 3.0f;
+    packet.ray.dirZ[lane] = -1.0f;
+    packet.ray.tMax[lane] = 10.0f;
+  }
+  PacketLog log;
+  rays.attachLog(&log);
+  RayPacket16 occlusion = packet.ray;
+  rays.occluded16(occlusion, 2);
+  rays.intersect16(packet, 2);
+  rays.attachLog(nullptr);
+  rays.occluded16(occlusion, 2);  // detached: not logged
+  EXPECT_TRUE(occlusion.blocked(0));
+  EXPECT_FLOAT_EQ(packet.ray.tMax[0], 3.0f);
+
+  const std::vector<LoggedPacket> logged = log.packets();
+  ASSERT_EQ(logged.size(), 2u);
+  int closest = 0;
+  for (const LoggedPacket& p : logged) {
+    EXPECT_EQ(p.count, 2);
+    closest += p.closestHit;
+    // The rays before the traversal wrote tMax.
+    EXPECT_EQ(p.rays.tMax[0], 10.0f);
+    EXPECT_EQ(p.rays.orgX[1], 5.0f);
+    EXPECT_EQ(p.rays.dirZ[1], -1.0f);
+  }
+  EXPECT_EQ(closest, 1);
 }
 
 TEST(RayScene, EmptySceneHitsNothing) {
