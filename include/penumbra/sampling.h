@@ -64,8 +64,10 @@ class CmjSampler {
   // sampleInStratum(strata[i], patterns[i]) for the count <= 16 lanes of a ray packet, bit for bit,
   // into ux[i], uy[i]. Each step is one loop over the lanes, which the compiler vectorizes; the rare
   // permutation round that must be repeated, and a grid side that is not a power of two, finish lane
-  // by lane.
-  void sampleLanes(const uint32_t* strata, const uint32_t* patterns, int count, float* ux, float* uy) const {
+  // by lane. Always inlined, so that a caller compiled for wider vectors (a target clone) vectorizes
+  // it at its own width.
+  [[gnu::always_inline]] void sampleLanes(const uint32_t* strata, const uint32_t* patterns, int count, float* ux,
+                                          float* uy) const {
     alignas(64) uint32_t column[16], row[16], sx[16], sy[16];
     for (int i = 0; i < count; ++i) {
       row[i] = rowOf(strata[i]);
@@ -86,8 +88,9 @@ class CmjSampler {
   // sampleInStratum's last step for the lanes: the jitter inside each cell. The integers are below
   // 2^31, so they convert to float as signed ones (one instruction; an unsigned conversion is several).
   template <bool kPowersOfTwo>
-  void jitterLanes(const uint32_t* strata, const uint32_t* patterns, const uint32_t* column, const uint32_t* row,
-                   const uint32_t* sx, const uint32_t* sy, int count, float* ux, float* uy) const {
+  [[gnu::always_inline]] void jitterLanes(const uint32_t* strata, const uint32_t* patterns, const uint32_t* column,
+                                          const uint32_t* row, const uint32_t* sx, const uint32_t* sy, int count,
+                                          float* ux, float* uy) const {
     const float m = static_cast<float>(m_), n = static_cast<float>(n_);
     const float invM = 1.0f / m, invN = 1.0f / n;
     auto f = [](uint32_t i) { return static_cast<float>(static_cast<int32_t>(i)); };
@@ -144,8 +147,8 @@ class CmjSampler {
   }
   // out[i] = permute(index[i], l, patterns[i] * salt) for count lanes: the first round for every
   // lane at once, the further rounds (when a round lands at or above l) lane by lane.
-  static void permuteLanes(const uint32_t* index, uint32_t l, const uint32_t* patterns, uint32_t salt, int count,
-                           uint32_t* out) {
+  [[gnu::always_inline]] static void permuteLanes(const uint32_t* index, uint32_t l, const uint32_t* patterns,
+                                                  uint32_t salt, int count, uint32_t* out) {
     if (l <= 1) {
       for (int i = 0; i < count; ++i) out[i] = 0;
       return;

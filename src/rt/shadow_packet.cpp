@@ -7,21 +7,15 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/target_clones.h"
 #include "rt/shadow_ray.h"
 
 namespace penumbra::rt {
 namespace {
 
-// The lane loops below are also compiled for AVX2 and AVX-512F, picked at load time where the CPU has
-// them (GCC function multi-versioning): 8 or 16 lanes a step instead of 4, so one packet's rays are one
-// or two steps. No multiply-add is fused (none is in the list, and this file is compiled with
-// -ffp-contract=off), and division and square root round alike at every width: the rays are
-// bit-identical on every CPU.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
-#define PENUMBRA_LANE_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define PENUMBRA_LANE_CLONES
-#endif
+// The lane loops below are also compiled for AVX2 and AVX-512F (core/target_clones.h): 8 or 16 lanes
+// a step instead of 4, so one packet's rays are one or two steps, bit-identical on every CPU.
+#define PENUMBRA_LANE_CLONES PENUMBRA_CLONES_AVX512
 
 // The lane-invariant values of a light, hoisted out of the lane loops.
 struct LightConstants {
@@ -66,9 +60,8 @@ inline void segmentTo(float xx, float xy, float xz, float ox, float oy, float oz
   fix |= static_cast<int32_t>(!(len2 > 0.0f) | !(len2 < kInfinity));
 }
 
-// A lane loop's outputs. The loops are cloned functions, called, not inlined, so the outputs come in as
-// restrict-qualified parameters (PENUMBRA_LANE_OUTPUTS; GCC trusts restrict on parameters, not on a
-// struct's members) and are gathered here inside the loop's own function.
+// A lane loop's outputs: they come into the cloned functions as restrict parameters
+// (PENUMBRA_LANE_OUTPUTS, core/target_clones.h) and are gathered here inside the loop's own function.
 struct Out {
   float* dirX;
   float* dirY;

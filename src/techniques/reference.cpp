@@ -31,6 +31,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/image_fill.h"
+#include "core/target_clones.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "penumbra/sampling.h"
@@ -39,6 +40,67 @@
 #include "rt/shadow_ray.h"
 
 namespace penumbra {
+namespace {
+
+// What the lanes' set-up reads of the light: rt::lightSide's direction to its centre.
+struct LightCentre {
+  float x, y, z;           //!< the centre (local lights)
+  float dirX, dirY, dirZ;  //!< the direction (directional lights)
+};
+
+// Lanes [0, count): the ray origin (rt::offsetOrigin: the point moved epsilon along its geometric
+// normal, to the side of the light's centre) and the pixel's sample pattern (hashCombine(seed, pixel))
+// of each lane's point, normal and pixel index; operation for operation as those functions and
+// Light::directionToCenter, selects for their branches, so that the loop vectorizes.
+template <bool kDirectional>
+inline __attribute__((always_inline)) void setUpKernel(const LightCentre& c, float epsilon, uint64_t seed, int count,
+                                                       const float* __restrict px, const float* __restrict py,
+                                                       const float* __restrict pz, const float* __restrict nx,
+                                                       const float* __restrict ny, const float* __restrict nz,
+                                                       const uint64_t* __restrict pixel, float* __restrict ox,
+                                                       float* __restrict oy, float* __restrict oz,
+                                                       uint32_t* __restrict pattern) {
+  for (int i = 0; i < count; ++i) {
+    float ux = c.dirX, uy = c.dirY, uz = c.dirZ;
+    if constexpr (!kDirectional) {
+      const float dx = c.x - px[i], dy = c.y - py[i], dz = c.z - pz[i];
+      const float len = std::sqrt((dx * dx + dy * dy) + dz * dz);
+      const bool positive = len > 0.0f;
+      ux = positive ? dx / len : 0.0f;
+      uy = positive ? dy / len : 0.0f;
+      uz = positive ? dz / len : 1.0f;
+    }
+    const float side = (nx[i] * ux + ny[i] * uy) + nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
+    const float offset = side * epsilon;
+    ox[i] = px[i] + offset * nx[i];
+    oy[i] = py[i] + offset * ny[i];
+    oz[i] = pz[i] + offset * nz[i];
+    pattern[i] = hashCombine(seed, pixel[i]);
+  }
+}
+
+#define PENUMBRA_SET_UP_PARAMETERS                                                                                    \
+  const LightCentre &c, float epsilon, uint64_t seed, int count, const float *__restrict px,                          \
+      const float *__restrict py, const float *__restrict pz, const float *__restrict nx, const float *__restrict ny, \
+      const float *__restrict nz, const uint64_t *__restrict pixel, float *__restrict ox, float *__restrict oy,       \
+      float *__restrict oz, uint32_t *__restrict pattern
+PENUMBRA_CLONES_AVX512 void setUpLocalLanes(PENUMBRA_SET_UP_PARAMETERS) {
+  setUpKernel<false>(c, epsilon, seed, count, px, py, pz, nx, ny, nz, pixel, ox, oy, oz, pattern);
+}
+PENUMBRA_CLONES_AVX512 void setUpDirectionalLanes(PENUMBRA_SET_UP_PARAMETERS) {
+  setUpKernel<true>(c, epsilon, seed, count, px, py, pz, nx, ny, nz, pixel, ox, oy, oz, pattern);
+}
+#undef PENUMBRA_SET_UP_PARAMETERS
+
+// CmjSampler::sampleLanes, compiled for AVX2 and AVX-512F too (its hashes' unsigned conversions are
+// one instruction there).
+PENUMBRA_CLONES_AVX512 void sampleLanes(const CmjSampler& sampler, const uint32_t* __restrict strata,
+                                        const uint32_t* __restrict patterns, int count, float* __restrict ux,
+                                        float* __restrict uy) {
+  sampler.sampleLanes(strata, patterns, count, ux, uy);
+}
+
+}  // namespace
 
 ReferenceTechnique::~ReferenceTechnique() = default;
 
@@ -71,6 +133,16 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const uint32_t spp = options_.samplesPerPixel;
   const uint64_t seed = options_.seed;
   const CmjSampler sampler(spp);
+  LightCentre centre{};
+  if (light.isDirectional()) {
+    centre.dirX = light.direction().x;
+    centre.dirY = light.direction().y;
+    centre.dirZ = light.direction().z;
+  } else {
+    centre.x = light.center().x;
+    centre.y = light.center().y;
+    centre.z = light.center().z;
+  }
 
   // When spp fills the sampler's m x n grid, every cell holds one sample and the cells are visited in
   // 4 x 4 tiles, so each 16-ray packet aims at one small patch of the light: a narrow frustum that
@@ -134,6 +206,8 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       rowErrorMax[static_cast<size_t>(y)] = std::max(rowErrorMax[static_cast<size_t>(y)], stdError_(x, y));
     };
     alignas(64) uint32_t laneStrata[16], lanePatterns[16];
+    alignas(64) float laneNx[16], laneNy[16], laneNz[16];
+    alignas(64) uint64_t lanePixels[16];
     // One pixel's set-up: its point, the shadow rays' origin and its sample pattern.
     auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin) {
       wsP = gbuffer.wsPosition(px, y);
@@ -152,7 +226,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     };
     // Traces lanes [0, count): their sample points, rays and occlusion.
     auto trace = [&](int count) {
-      sampler.sampleLanes(laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
+      sampleLanes(sampler, laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
       rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
       rays.occluded16(packet, count);
     };
@@ -167,12 +241,32 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         localHits += group;
         Vec3 wsP, wsOrigin;
         if (wholePixels) {
+          // Every lane holds its pixel's point, normal and index; the origins and patterns are made
+          // for all of them in one vector loop (once per sample where spp > 1, which costs less than
+          // a pixel-by-pixel set-up).
           const int n = static_cast<int>(spp);
           for (int j = 0; j < group; ++j) {
-            const uint32_t pattern = setUp(xs[j], y, wsP, wsOrigin);
-            fillLanes(wsP, wsOrigin, pattern, 0, j * n, n);
+            const Vec3 p = gbuffer.wsPosition(xs[j], y), ng = gbuffer.wsGeometricNormal(xs[j], y);
+            const uint64_t pixel = static_cast<uint64_t>(y) * width + xs[j];
+            for (int lane = j * n; lane < (j + 1) * n; ++lane) {
+              lanes.px[lane] = p.x;
+              lanes.py[lane] = p.y;
+              lanes.pz[lane] = p.z;
+              laneNx[lane] = ng.x;
+              laneNy[lane] = ng.y;
+              laneNz[lane] = ng.z;
+              lanePixels[lane] = pixel;
+            }
           }
-          trace(group * n);
+          const int count = group * n;
+          (light.isDirectional() ? setUpDirectionalLanes : setUpLocalLanes)(
+              centre, epsilon, seed, count, lanes.px, lanes.py, lanes.pz, laneNx, laneNy, laneNz, lanePixels, lanes.ox,
+              lanes.oy, lanes.oz, lanePatterns);
+          for (int lane = 0; lane < count; ++lane) {
+            const uint32_t index = static_cast<uint32_t>(lane % n);
+            laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, lanePatterns[lane]);
+          }
+          trace(count);
           for (int j = 0; j < group; ++j) {
             Sums sums;
             add(sums, j * n, n);

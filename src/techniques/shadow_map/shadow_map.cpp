@@ -16,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include "core/target_clones.h"
 #include "penumbra/error.h"
 #include "penumbra/motion.h"
 
@@ -63,18 +64,11 @@ float minMapDepth(const LightMap& map) {
       [](float a, float b) { return b < a ? b : a; });
 }
 
-// The disk kernels below and the receivers' loop are also compiled for AVX2, picked at load time where
-// the CPU has it (GCC function multi-versioning): their vector phases then run 8 lanes wide instead of
-// 4; the receivers' loop also for AVX-512F (16 lanes). No multiply-add is fused (no FMA in the list,
-// and this file is compiled with -ffp-contract=off for the AVX-512 path below), so every path rounds
-// alike: V is bit-identical on every CPU.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__AVX2__)
-#define PENUMBRA_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
-#define PENUMBRA_RECEIVER_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define PENUMBRA_RECEIVER_CLONES
-#define PENUMBRA_KERNEL_CLONES
-#endif
+// The disk kernels below are also compiled for AVX2 and the receivers' loop for AVX2 and AVX-512F
+// (core/target_clones.h): their vector phases run 8 or 16 lanes wide instead of 4, and every path
+// rounds alike, so V is bit-identical on every CPU.
+#define PENUMBRA_KERNEL_CLONES PENUMBRA_CLONES_AVX2
+#define PENUMBRA_RECEIVER_CLONES PENUMBRA_CLONES_AVX512
 
 namespace {
 
