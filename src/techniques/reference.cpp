@@ -16,8 +16,9 @@
 // 16-ray Embree packets, each aimed at one 4 x 4 tile of the sample grid (a small patch of the
 // light); at up to 16 spp a packet holds 16 / spp whole neighbouring pixels of a row instead, so its lanes
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
-// packing); the sample points and the rays are made sixteen at a time in vector form
-// (CmjSampler::sampleLanes, rt::buildShadowRays); the hot loop allocates nothing; rows run in
+// packing); the rays' origins, the sample patterns and points and the rays are made sixteen at a
+// time in vector form (setUpLocalLanes, CmjSampler::sampleLanes, rt::buildShadowRays), compiled for
+// AVX2 and AVX-512F too (core/target_clones.h); the hot loop allocates nothing; rows run in
 // parallel with oneTBB. The Embree scene is built by the first prepare and kept by later ones while
 // every object's id, positions and triangles are the same (a light or camera moving over a static scene).
 #include "penumbra/reference.h"
@@ -37,7 +38,6 @@
 #include "penumbra/sampling.h"
 #include "rt/ray_scene.h"
 #include "rt/shadow_packet.h"
-#include "rt/shadow_ray.h"
 
 namespace penumbra {
 namespace {
@@ -208,21 +208,32 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     alignas(64) uint32_t laneStrata[16], lanePatterns[16];
     alignas(64) float laneNx[16], laneNy[16], laneNz[16];
     alignas(64) uint64_t lanePixels[16];
-    // One pixel's set-up: its point, the shadow rays' origin and its sample pattern.
-    auto setUp = [&](int px, int y, Vec3& wsP, Vec3& wsOrigin) {
-      wsP = gbuffer.wsPosition(px, y);
-      const Vec3 wsNg = gbuffer.wsGeometricNormal(px, y);
-      wsOrigin = rt::offsetOrigin(light, wsP, wsNg, epsilon);
-      return hashCombine(seed, static_cast<uint64_t>(y) * width + px);
-    };
-    // Lanes [lane, lane + count): one pixel's samples first .. first + count - 1.
-    auto fillLanes = [&](const Vec3& wsP, const Vec3& wsOrigin, uint32_t pattern, uint32_t first, int lane, int count) {
-      for (int i = 0; i < count; ++i) {
-        const uint32_t index = first + static_cast<uint32_t>(i);
-        laneStrata[lane + i] = fullGrid ? gridOrder[index] : sampler.stratum(index, pattern);
-        lanePatterns[lane + i] = pattern;
-        lanes.setPoint(lane + i, wsP, wsOrigin);
+    // Lanes [0, group n): lane i is sample first + i % n of pixel xs[i / n] of row y. Every lane holds
+    // its pixel's point, normal and index, and the origins and patterns are made for all of them in one
+    // vector loop (for each sample where n > 1, which costs less than a pixel-by-pixel set-up).
+    auto fillLanes = [&](int y, int group, int n, uint32_t first) {
+      for (int j = 0; j < group; ++j) {
+        const Vec3 p = gbuffer.wsPosition(xs[j], y), ng = gbuffer.wsGeometricNormal(xs[j], y);
+        const uint64_t pixel = static_cast<uint64_t>(y) * width + xs[j];
+        for (int lane = j * n; lane < (j + 1) * n; ++lane) {
+          lanes.px[lane] = p.x;
+          lanes.py[lane] = p.y;
+          lanes.pz[lane] = p.z;
+          laneNx[lane] = ng.x;
+          laneNy[lane] = ng.y;
+          laneNz[lane] = ng.z;
+          lanePixels[lane] = pixel;
+        }
       }
+      const int count = group * n;
+      (light.isDirectional() ? setUpDirectionalLanes : setUpLocalLanes)(
+          centre, epsilon, seed, count, lanes.px, lanes.py, lanes.pz, laneNx, laneNy, laneNz, lanePixels, lanes.ox,
+          lanes.oy, lanes.oz, lanePatterns);
+      for (int lane = 0; lane < count; ++lane) {
+        const uint32_t index = first + static_cast<uint32_t>(lane % n);
+        laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, lanePatterns[lane]);
+      }
+      return count;
     };
     // Traces lanes [0, count): their sample points, rays and occlusion.
     auto trace = [&](int count) {
@@ -239,34 +250,9 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           if (gbuffer.hit(x, y)) xs[group++] = x;
         if (group == 0) break;
         localHits += group;
-        Vec3 wsP, wsOrigin;
         if (wholePixels) {
-          // Every lane holds its pixel's point, normal and index; the origins and patterns are made
-          // for all of them in one vector loop (once per sample where spp > 1, which costs less than
-          // a pixel-by-pixel set-up).
           const int n = static_cast<int>(spp);
-          for (int j = 0; j < group; ++j) {
-            const Vec3 p = gbuffer.wsPosition(xs[j], y), ng = gbuffer.wsGeometricNormal(xs[j], y);
-            const uint64_t pixel = static_cast<uint64_t>(y) * width + xs[j];
-            for (int lane = j * n; lane < (j + 1) * n; ++lane) {
-              lanes.px[lane] = p.x;
-              lanes.py[lane] = p.y;
-              lanes.pz[lane] = p.z;
-              laneNx[lane] = ng.x;
-              laneNy[lane] = ng.y;
-              laneNz[lane] = ng.z;
-              lanePixels[lane] = pixel;
-            }
-          }
-          const int count = group * n;
-          (light.isDirectional() ? setUpDirectionalLanes : setUpLocalLanes)(
-              centre, epsilon, seed, count, lanes.px, lanes.py, lanes.pz, laneNx, laneNy, laneNz, lanePixels, lanes.ox,
-              lanes.oy, lanes.oz, lanePatterns);
-          for (int lane = 0; lane < count; ++lane) {
-            const uint32_t index = static_cast<uint32_t>(lane % n);
-            laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, lanePatterns[lane]);
-          }
-          trace(count);
+          trace(fillLanes(y, group, n, 0));
           for (int j = 0; j < group; ++j) {
             Sums sums;
             add(sums, j * n, n);
@@ -274,12 +260,10 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           }
           continue;
         }
-        const uint32_t pattern = setUp(xs[0], y, wsP, wsOrigin);
         Sums sums;
         for (uint32_t first = 0; first < spp; first += 16) {
           const int count = static_cast<int>(std::min<uint32_t>(16, spp - first));
-          fillLanes(wsP, wsOrigin, pattern, first, 0, count);
-          trace(count);
+          trace(fillLanes(y, 1, count, first));
           add(sums, 0, count);
         }
         finish(sums, xs[0], y);
