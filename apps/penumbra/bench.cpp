@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 
 #include "cli.h"
+#include "core/image_fill.h"
 #include "penumbra/error.h"
 #include "penumbra/motion.h"
 #include "penumbra/raster.h"
@@ -42,6 +43,10 @@ std::vector<ReportRow> benchSequence(const Setup& setup, const Motion& motion, c
   std::vector<std::vector<PassTimings>> steady(names.size());
   std::vector<double> firstFrameMs(names.size(), 0.0);
   GBuffer gbuffer;
+  // The techniques' output, one image kept across the frames and techniques, as a renderer keeps its
+  // render target (runTechnique).
+  Image<float> target;
+  resetInParallel(target, setup.width, setup.height, 1.0f);
   for (int k = 0; k < motion.frames; ++k) {
     Setup frame = setup;
     frame.scene = sceneAtFrame(setup.scene, motion, k);
@@ -52,7 +57,7 @@ std::vector<ReportRow> benchSequence(const Setup& setup, const Motion& motion, c
       if (!rows[i]) continue;
       const TechniqueInfo& info = findTechnique(names[i]);
       try {
-        TechniqueRun run = runTechnique(frame, gbuffer, info, given[i], 1, &instances[i]);
+        TechniqueRun run = runTechnique(frame, gbuffer, info, given[i], 1, &instances[i], &target);
         if (k == 0) {
           rows[i]->technique = info.name;
           rows[i]->params = describeParams(run.params);
@@ -130,11 +135,15 @@ int runBench(const BenchOptions& options) {
   // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
   if (motion) report.rows = benchSequence(setup, *motion, names, given, notRun, gbufferMs);
+  // The techniques' output, made (and its pages touched) before any is timed and kept across them, as
+  // a renderer keeps its render target when it switches techniques (runTechnique).
+  Image<float> target;
+  resetInParallel(target, setup.width, setup.height, 1.0f);
   for (size_t i = 0; i < names.size() && !motion; ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     std::optional<TechniqueRun> attempt;
     try {
-      attempt = runTechnique(setup, gbuffer, info, given[i], repeat);
+      attempt = runTechnique(setup, gbuffer, info, given[i], repeat, nullptr, &target);
     } catch (const std::exception& e) {
       notRun.add(info.name, e.what());
       continue;

@@ -130,9 +130,12 @@ struct TechniqueRun {
 // firstFrameMs: the first run's total; V and stats: the last run). With `instance`, the technique object is
 // kept there and the next call with it reuses it instead of building another (a sequence's frames,
 // where a frame's prepare may reuse what the previous one built, as a renderer's would); `given`
-// must then be the same at every call.
+// must then be the same at every call. With `target`, V is written there instead of into run.v: the
+// caller's image, kept from call to call as a renderer keeps its render target (a fresh image's pages
+// are faulted in by the pass that first writes them, which is then timed for the caller's memory).
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
-                          int repeat = 1, std::unique_ptr<ShadowTechnique>* instance = nullptr);
+                          int repeat = 1, std::unique_ptr<ShadowTechnique>* instance = nullptr,
+                          Image<float>* target = nullptr);
 
 // Techniques that could not take the scene, for compare and bench: each keeps its row in the report
 // with the reason (printed too), never ending the run; exitCode() is 1, after saying which, when the

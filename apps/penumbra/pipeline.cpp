@@ -312,8 +312,9 @@ double median(std::vector<double> values) {
 }
 
 TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const TechniqueInfo& info, const ParamSet& given,
-                          int repeat, std::unique_ptr<ShadowTechnique>* instance) {
+                          int repeat, std::unique_ptr<ShadowTechnique>* instance, Image<float>* target) {
   TechniqueRun run;
+  Image<float>& v = target ? *target : run.v;
   run.name = info.name;
   run.params = resolveParams(info.name, info.params, given);
   std::unique_ptr<ShadowTechnique> fresh;
@@ -326,7 +327,7 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
   const int runs = std::max(1, repeat);
   for (int r = 0; r < runs; ++r) {
     technique->prepare(setup.scene, setupLight(setup));
-    technique->visibility(gbuffer, run.v);
+    technique->visibility(gbuffer, v);
     if (r == 0) run.firstFrameMs = technique->timings().total();
     // The first run builds what the later ones reuse and faults in fresh memory: with more than one
     // run, the medians are over the steady runs after it.
@@ -337,9 +338,9 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
     }
   }
   bar.finish();
-  if (run.v.width() != gbuffer.width() || run.v.height() != gbuffer.height())
-    fail("internal: technique '{}' wrote a {}x{} visibility image for a {}x{} G-buffer", info.name, run.v.width(),
-         run.v.height(), gbuffer.width(), gbuffer.height());
+  if (v.width() != gbuffer.width() || v.height() != gbuffer.height())
+    fail("internal: technique '{}' wrote a {}x{} visibility image for a {}x{} G-buffer", info.name, v.width(),
+         v.height(), gbuffer.width(), gbuffer.height());
   for (const std::string& pass : order) run.timings.add(pass, median(passMs[pass]));
   run.stats = technique->stats();
   if (instance && fresh) *instance = std::move(fresh);
