@@ -197,9 +197,60 @@ PENUMBRA_LANE_CLONES void directionalLanes(const LightConstants& k, const Shadow
 #undef PENUMBRA_LANE_OUTPUTS
 #undef PENUMBRA_LANE_OUT
 
+// rt::offsetOrigin per lane: the point moved epsilon along its geometric normal, to the side of the
+// light's centre (Light::directionToCenter: towards the centre, unit, or +z from the centre itself;
+// a directional light's direction), with selects for the branches.
+template <bool kDirectional>
+inline __attribute__((always_inline)) void originKernel(const LightConstants& k, float epsilon, int count,
+                                                        const float* __restrict px, const float* __restrict py,
+                                                        const float* __restrict pz, const float* __restrict nx,
+                                                        const float* __restrict ny, const float* __restrict nz,
+                                                        float* __restrict ox, float* __restrict oy,
+                                                        float* __restrict oz) {
+  for (int i = 0; i < count; ++i) {
+    float ux = k.direction.x, uy = k.direction.y, uz = k.direction.z;
+    if constexpr (!kDirectional) {
+      const float dx = k.center.x - px[i], dy = k.center.y - py[i], dz = k.center.z - pz[i];
+      const float len = std::sqrt((dx * dx + dy * dy) + dz * dz);
+      const bool positive = len > 0.0f;
+      ux = positive ? dx / len : 0.0f;
+      uy = positive ? dy / len : 0.0f;
+      uz = positive ? dz / len : 1.0f;
+    }
+    const float side = (nx[i] * ux + ny[i] * uy) + nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
+    const float offset = side * epsilon;
+    ox[i] = px[i] + offset * nx[i];
+    oy[i] = py[i] + offset * ny[i];
+    oz[i] = pz[i] + offset * nz[i];
+  }
+}
+#define PENUMBRA_ORIGIN_PARAMETERS                                                                                    \
+  const LightConstants &k, float epsilon, int count, const float *__restrict px, const float *__restrict py,          \
+      const float *__restrict pz, const float *__restrict nx, const float *__restrict ny, const float *__restrict nz, \
+      float *__restrict ox, float *__restrict oy, float *__restrict oz
+PENUMBRA_LANE_CLONES void localOrigins(PENUMBRA_ORIGIN_PARAMETERS) {
+  originKernel<false>(k, epsilon, count, px, py, pz, nx, ny, nz, ox, oy, oz);
+}
+PENUMBRA_LANE_CLONES void directionalOrigins(PENUMBRA_ORIGIN_PARAMETERS) {
+  originKernel<true>(k, epsilon, count, px, py, pz, nx, ny, nz, ox, oy, oz);
+}
+#undef PENUMBRA_ORIGIN_PARAMETERS
+
 }  // namespace
 
 void sinCosQuarterPi(float a, float& s, float& c) { sinCosPoly(a, s, c); }
+
+void offsetOrigins(const Light& light, float epsilon, const float* nx, const float* ny, const float* nz, int count,
+                   ShadowLanes& lanes) {
+  LightConstants k;
+  if (light.isDirectional()) {
+    k.direction = light.direction();
+    directionalOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, nx, ny, nz, lanes.ox, lanes.oy, lanes.oz);
+  } else {
+    k.center = light.center();
+    localOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, nx, ny, nz, lanes.ox, lanes.oy, lanes.oz);
+  }
+}
 
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight) {

@@ -36,6 +36,12 @@ struct alignas(64) ShadowLanes {
   }
 };
 
+// Sets the ray origins of lanes [0, count) (lanes.ox, oy, oz) from their points (lanes.px, py, pz) and
+// the geometric normals (nx, ny, nz) of the surfaces there: rt::offsetOrigin(light, P, Ng, epsilon)
+// for each lane, operation for operation (Light::directionToCenter's too), in one vector loop.
+void offsetOrigins(const Light& light, float epsilon, const float* nx, const float* ny, const float* nz, int count,
+                   ShadowLanes& lanes);
+
 // Writes lanes [0, count) of `packet` (origin, direction, tMin, tMax; the rest as the packet holds
 // them) and weight[i], the light's profile weight of lane i's sample. `epsilon` as rt::shadowRay.
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,

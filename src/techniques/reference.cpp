@@ -17,7 +17,7 @@
 // light); at up to 16 spp a packet holds 16 / spp whole neighbouring pixels of a row instead, so its lanes
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
 // packing); the rays' origins, the sample patterns and points and the rays are made sixteen at a
-// time in vector form (setUpLocalLanes, CmjSampler::sampleLanes, rt::buildShadowRays), compiled for
+// time in vector form (rt::offsetOrigins, patternLanes, CmjSampler::sampleLanes, rt::buildShadowRays), compiled for
 // AVX2 and AVX-512F too (core/target_clones.h); the hot loop allocates nothing; rows run in
 // parallel with oneTBB. The Embree scene is built by the first prepare and kept by later ones while
 // every object's id, positions and triangles are the same (a light or camera moving over a static scene).
@@ -42,55 +42,12 @@
 namespace penumbra {
 namespace {
 
-// What the lanes' set-up reads of the light: rt::lightSide's direction to its centre.
-struct LightCentre {
-  float x, y, z;           //!< the centre (local lights)
-  float dirX, dirY, dirZ;  //!< the direction (directional lights)
-};
-
-// Lanes [0, count): the ray origin (rt::offsetOrigin: the point moved epsilon along its geometric
-// normal, to the side of the light's centre) and the pixel's sample pattern (hashCombine(seed, pixel))
-// of each lane's point, normal and pixel index; operation for operation as those functions and
-// Light::directionToCenter, selects for their branches, so that the loop vectorizes.
-template <bool kDirectional>
-inline __attribute__((always_inline)) void setUpKernel(const LightCentre& c, float epsilon, uint64_t seed, int count,
-                                                       const float* __restrict px, const float* __restrict py,
-                                                       const float* __restrict pz, const float* __restrict nx,
-                                                       const float* __restrict ny, const float* __restrict nz,
-                                                       const uint64_t* __restrict pixel, float* __restrict ox,
-                                                       float* __restrict oy, float* __restrict oz,
-                                                       uint32_t* __restrict pattern) {
-  for (int i = 0; i < count; ++i) {
-    float ux = c.dirX, uy = c.dirY, uz = c.dirZ;
-    if constexpr (!kDirectional) {
-      const float dx = c.x - px[i], dy = c.y - py[i], dz = c.z - pz[i];
-      const float len = std::sqrt((dx * dx + dy * dy) + dz * dz);
-      const bool positive = len > 0.0f;
-      ux = positive ? dx / len : 0.0f;
-      uy = positive ? dy / len : 0.0f;
-      uz = positive ? dz / len : 1.0f;
-    }
-    const float side = (nx[i] * ux + ny[i] * uy) + nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
-    const float offset = side * epsilon;
-    ox[i] = px[i] + offset * nx[i];
-    oy[i] = py[i] + offset * ny[i];
-    oz[i] = pz[i] + offset * nz[i];
-    pattern[i] = hashCombine(seed, pixel[i]);
-  }
+// Lanes [0, count): the sample pattern hashCombine(seed, pixel) of each lane's pixel, in one vector
+// loop (compiled for AVX2 and AVX-512F too).
+PENUMBRA_CLONES_AVX512 void patternLanes(uint64_t seed, int count, const uint64_t* __restrict pixel,
+                                         uint32_t* __restrict pattern) {
+  for (int i = 0; i < count; ++i) pattern[i] = hashCombine(seed, pixel[i]);
 }
-
-#define PENUMBRA_SET_UP_PARAMETERS                                                                                    \
-  const LightCentre &c, float epsilon, uint64_t seed, int count, const float *__restrict px,                          \
-      const float *__restrict py, const float *__restrict pz, const float *__restrict nx, const float *__restrict ny, \
-      const float *__restrict nz, const uint64_t *__restrict pixel, float *__restrict ox, float *__restrict oy,       \
-      float *__restrict oz, uint32_t *__restrict pattern
-PENUMBRA_CLONES_AVX512 void setUpLocalLanes(PENUMBRA_SET_UP_PARAMETERS) {
-  setUpKernel<false>(c, epsilon, seed, count, px, py, pz, nx, ny, nz, pixel, ox, oy, oz, pattern);
-}
-PENUMBRA_CLONES_AVX512 void setUpDirectionalLanes(PENUMBRA_SET_UP_PARAMETERS) {
-  setUpKernel<true>(c, epsilon, seed, count, px, py, pz, nx, ny, nz, pixel, ox, oy, oz, pattern);
-}
-#undef PENUMBRA_SET_UP_PARAMETERS
 
 // CmjSampler::sampleLanes, compiled for AVX2 and AVX-512F too (its hashes' unsigned conversions are
 // one instruction there).
@@ -133,16 +90,6 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const uint32_t spp = options_.samplesPerPixel;
   const uint64_t seed = options_.seed;
   const CmjSampler sampler(spp);
-  LightCentre centre{};
-  if (light.isDirectional()) {
-    centre.dirX = light.direction().x;
-    centre.dirY = light.direction().y;
-    centre.dirZ = light.direction().z;
-  } else {
-    centre.x = light.center().x;
-    centre.y = light.center().y;
-    centre.z = light.center().z;
-  }
 
   // When spp fills the sampler's m x n grid, every cell holds one sample and the cells are visited in
   // 4 x 4 tiles, so each 16-ray packet aims at one small patch of the light: a narrow frustum that
@@ -226,9 +173,8 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         }
       }
       const int count = group * n;
-      (light.isDirectional() ? setUpDirectionalLanes : setUpLocalLanes)(
-          centre, epsilon, seed, count, lanes.px, lanes.py, lanes.pz, laneNx, laneNy, laneNz, lanePixels, lanes.ox,
-          lanes.oy, lanes.oz, lanePatterns);
+      rt::offsetOrigins(light, epsilon, laneNx, laneNy, laneNz, count, lanes);
+      patternLanes(seed, count, lanePixels, lanePatterns);
       for (int lane = 0; lane < count; ++lane) {
         const uint32_t index = first + static_cast<uint32_t>(lane % n);
         laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, lanePatterns[lane]);

@@ -1,7 +1,7 @@
 // Tests of the vector shadow-ray builder (src/rt/shadow_packet.h): every lane is the ray the scalar
 // path builds (rt::shadowRay towards Light::sample) for every light shape, to float rounding, the
-// degenerate lanes exactly; the polynomial sine and cosine are within a few ulp of libm's; packets
-// built in place trace as the same rays traced one at a time.
+// degenerate lanes exactly; the lanes' origins are rt::offsetOrigin's to the bit; the polynomial sine and cosine are
+// within a few ulp of libm's; packets built in place trace as the same rays traced one at a time.
 #include <cmath>
 #include <vector>
 
@@ -91,6 +91,41 @@ TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
       float weight[16];
       rt::buildShadowRays(light, lanes, count, epsilon, packet, weight);
       for (int i = 0; i < count; ++i) expectLaneMatches(light, lanes, i, packet, weight, epsilon);
+    }
+  }
+}
+
+TEST(ShadowPacket, OffsetOriginsAreTheScalarOriginsToTheBit) {
+  const float epsilon = 1e-3f;
+  for (const auto& [name, light] : everyShape()) {
+    SCOPED_TRACE(name);
+    for (uint32_t trial = 0; trial < 16; ++trial) {
+      rt::ShadowLanes lanes;
+      alignas(64) float nx[16], ny[16], nz[16];
+      const int count = 1 + static_cast<int>((trial * 5) % 16);
+      for (int i = 0; i < count; ++i) {
+        const uint32_t k = trial * 131 + static_cast<uint32_t>(i) * 11;
+        // Points anywhere, the light's centre itself among them (where the direction to it is +z), and
+        // normals turned every way, some across the direction to the light.
+        Vec3 p(6.0f * unit(k) - 3.0f, 5.0f * unit(k + 1) - 1.0f, 6.0f * unit(k + 2) - 3.0f);
+        if (i == 3 && !light.isDirectional()) p = light.center();
+        Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
+        if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
+        lanes.px[i] = p.x;
+        lanes.py[i] = p.y;
+        lanes.pz[i] = p.z;
+        nx[i] = n.x;
+        ny[i] = n.y;
+        nz[i] = n.z;
+      }
+      rt::offsetOrigins(light, epsilon, nx, ny, nz, count, lanes);
+      for (int i = 0; i < count; ++i) {
+        const Vec3 o =
+            rt::offsetOrigin(light, Vec3(lanes.px[i], lanes.py[i], lanes.pz[i]), Vec3(nx[i], ny[i], nz[i]), epsilon);
+        EXPECT_EQ(lanes.ox[i], o.x) << "lane " << i;
+        EXPECT_EQ(lanes.oy[i], o.y) << "lane " << i;
+        EXPECT_EQ(lanes.oz[i], o.z) << "lane " << i;
+      }
     }
   }
 }
