@@ -61,7 +61,8 @@ inline void segmentTo(float xx, float xy, float xz, float ox, float oy, float oz
 }
 
 // A lane loop's outputs: they come into the cloned functions as restrict parameters
-// (PENUMBRA_LANE_OUTPUTS, core/target_clones.h) and are gathered here inside the loop's own function.
+// (PENUMBRA_LANE_OUTPUTS; core/target_clones.h says why) and are gathered here inside the loop's own
+// function.
 struct Out {
   float* dirX;
   float* dirY;

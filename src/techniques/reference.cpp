@@ -17,10 +17,11 @@
 // light); at up to 16 spp a packet holds 16 / spp whole neighbouring pixels of a row instead, so its lanes
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
 // packing); the rays' origins, the sample patterns and points and the rays are made sixteen at a
-// time in vector form (rt::offsetOrigins, patternLanes, CmjSampler::sampleLanes, rt::buildShadowRays), compiled for
-// AVX2 and AVX-512F too (core/target_clones.h); the hot loop allocates nothing; rows run in
-// parallel with oneTBB. The Embree scene is built by the first prepare and kept by later ones while
-// every object's id, positions and triangles are the same (a light or camera moving over a static scene).
+// time in vector form (rt::offsetOrigins, patternLanes, CmjSampler::sampleLanes,
+// rt::buildShadowRays), compiled for AVX2 and AVX-512F too (core/target_clones.h); the hot loop
+// allocates nothing; rows run in parallel with oneTBB. The Embree scene is built by the first prepare
+// and kept by later ones while every object's id, positions and triangles are the same (a light or
+// camera moving over a static scene).
 #include "penumbra/reference.h"
 
 #include <algorithm>
