@@ -241,15 +241,16 @@ PENUMBRA_LANE_CLONES void directionalOrigins(PENUMBRA_ORIGIN_PARAMETERS) {
 
 void sinCosQuarterPi(float a, float& s, float& c) { sinCosPoly(a, s, c); }
 
-void offsetOrigins(const Light& light, float epsilon, const float* nx, const float* ny, const float* nz, int count,
-                   ShadowLanes& lanes) {
+void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& lanes) {
   LightConstants k;
   if (light.isDirectional()) {
     k.direction = light.direction();
-    directionalOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, nx, ny, nz, lanes.ox, lanes.oy, lanes.oz);
+    directionalOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, lanes.nx, lanes.ny, lanes.nz, lanes.ox,
+                       lanes.oy, lanes.oz);
   } else {
     k.center = light.center();
-    localOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, nx, ny, nz, lanes.ox, lanes.oy, lanes.oz);
+    localOrigins(k, epsilon, count, lanes.px, lanes.py, lanes.pz, lanes.nx, lanes.ny, lanes.nz, lanes.ox, lanes.oy,
+                 lanes.oz);
   }
 }
 

@@ -20,27 +20,37 @@
 
 namespace penumbra::rt {
 
-// Per lane: the shaded point P, the ray origin O and the light-sample coordinates u in [0,1)^2.
+// Per lane: the shaded point P, the geometric normal Ng there, the ray origin O and the light-sample
+// coordinates u in [0,1)^2.
 struct alignas(64) ShadowLanes {
   float px[16], py[16], pz[16];
+  float nx[16], ny[16], nz[16];  //!< read by offsetOrigins only
   float ox[16], oy[16], oz[16];
   float ux[16], uy[16];
 
+  // P and an O made by the caller.
   void setPoint(int lane, const Vec3& wsP, const Vec3& wsOrigin) {
-    px[lane] = wsP.x;
-    py[lane] = wsP.y;
-    pz[lane] = wsP.z;
-    ox[lane] = wsOrigin.x;
-    oy[lane] = wsOrigin.y;
-    oz[lane] = wsOrigin.z;
+    set(px, py, pz, lane, wsP);
+    set(ox, oy, oz, lane, wsOrigin);
+  }
+  // P and Ng, for offsetOrigins to make O.
+  void setSurface(int lane, const Vec3& wsP, const Vec3& wsNg) {
+    set(px, py, pz, lane, wsP);
+    set(nx, ny, nz, lane, wsNg);
+  }
+
+ private:
+  static void set(float* x, float* y, float* z, int lane, const Vec3& v) {
+    x[lane] = v.x;
+    y[lane] = v.y;
+    z[lane] = v.z;
   }
 };
 
-// Sets the ray origins of lanes [0, count) (lanes.ox, oy, oz) from their points (lanes.px, py, pz) and
-// the geometric normals (nx, ny, nz) of the surfaces there: rt::offsetOrigin(light, P, Ng, epsilon)
-// for each lane, operation for operation (Light::directionToCenter's too), in one vector loop.
-void offsetOrigins(const Light& light, float epsilon, const float* nx, const float* ny, const float* nz, int count,
-                   ShadowLanes& lanes);
+// Sets the ray origins of lanes [0, count) (ox, oy, oz) from their points and geometric normals:
+// rt::offsetOrigin(light, P, Ng, epsilon) for each lane, operation for operation
+// (Light::directionToCenter's too), in one vector loop.
+void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& lanes);
 
 // Writes lanes [0, count) of `packet` (origin, direction, tMin, tMax; the rest as the packet holds
 // them) and weight[i], the light's profile weight of lane i's sample. `epsilon` as rt::shadowRay.

@@ -154,7 +154,6 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       rowErrorMax[static_cast<size_t>(y)] = std::max(rowErrorMax[static_cast<size_t>(y)], stdError_(x, y));
     };
     alignas(64) uint32_t laneStrata[16], lanePatterns[16];
-    alignas(64) float laneNx[16], laneNy[16], laneNz[16];
     alignas(64) uint64_t lanePixels[16];
     // Lanes [0, group n): lane i is sample first + i % n of pixel xs[i / n] of row y. Every lane holds
     // its pixel's point, normal and index, and the origins and patterns are made for all of them in one
@@ -164,17 +163,12 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         const Vec3 p = gbuffer.wsPosition(xs[j], y), ng = gbuffer.wsGeometricNormal(xs[j], y);
         const uint64_t pixel = static_cast<uint64_t>(y) * width + xs[j];
         for (int lane = j * n; lane < (j + 1) * n; ++lane) {
-          lanes.px[lane] = p.x;
-          lanes.py[lane] = p.y;
-          lanes.pz[lane] = p.z;
-          laneNx[lane] = ng.x;
-          laneNy[lane] = ng.y;
-          laneNz[lane] = ng.z;
+          lanes.setSurface(lane, p, ng);
           lanePixels[lane] = pixel;
         }
       }
       const int count = group * n;
-      rt::offsetOrigins(light, epsilon, laneNx, laneNy, laneNz, count, lanes);
+      rt::offsetOrigins(light, epsilon, count, lanes);
       patternLanes(seed, count, lanePixels, lanePatterns);
       for (int lane = 0; lane < count; ++lane) {
         const uint32_t index = first + static_cast<uint32_t>(lane % n);

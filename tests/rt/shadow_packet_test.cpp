@@ -101,7 +101,6 @@ TEST(ShadowPacket, OffsetOriginsAreTheScalarOriginsToTheBit) {
     SCOPED_TRACE(name);
     for (uint32_t trial = 0; trial < 16; ++trial) {
       rt::ShadowLanes lanes;
-      alignas(64) float nx[16], ny[16], nz[16];
       const int count = 1 + static_cast<int>((trial * 5) % 16);
       for (int i = 0; i < count; ++i) {
         const uint32_t k = trial * 131 + static_cast<uint32_t>(i) * 11;
@@ -111,17 +110,12 @@ TEST(ShadowPacket, OffsetOriginsAreTheScalarOriginsToTheBit) {
         if (i == 3 && !light.isDirectional()) p = light.center();
         Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
         if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
-        lanes.px[i] = p.x;
-        lanes.py[i] = p.y;
-        lanes.pz[i] = p.z;
-        nx[i] = n.x;
-        ny[i] = n.y;
-        nz[i] = n.z;
+        lanes.setSurface(i, p, n);
       }
-      rt::offsetOrigins(light, epsilon, nx, ny, nz, count, lanes);
+      rt::offsetOrigins(light, epsilon, count, lanes);
       for (int i = 0; i < count; ++i) {
-        const Vec3 o =
-            rt::offsetOrigin(light, Vec3(lanes.px[i], lanes.py[i], lanes.pz[i]), Vec3(nx[i], ny[i], nz[i]), epsilon);
+        const Vec3 o = rt::offsetOrigin(light, Vec3(lanes.px[i], lanes.py[i], lanes.pz[i]),
+                                        Vec3(lanes.nx[i], lanes.ny[i], lanes.nz[i]), epsilon);
         EXPECT_EQ(lanes.ox[i], o.x) << "lane " << i;
         EXPECT_EQ(lanes.oy[i], o.y) << "lane " << i;
         EXPECT_EQ(lanes.oz[i], o.z) << "lane " << i;

@@ -123,22 +123,15 @@ int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const 
                                    uint32_t last, FewRayFrame& frame) const {
   if (count == 0) return 0;
   rt::ShadowLanes lanes;
-  alignas(64) float offsetX[16], offsetY[16], nx[16], ny[16], nz[16];
+  alignas(64) float offsetX[16], offsetY[16];
   for (int i = 0; i < count; ++i) {
     const int x = xs[i], y = ys[i];
-    const Vec3 wsP = gbuffer.wsPosition(x, y);
-    const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-    lanes.px[i] = wsP.x;
-    lanes.py[i] = wsP.y;
-    lanes.pz[i] = wsP.z;
-    nx[i] = wsNg.x;
-    ny[i] = wsNg.y;
-    nz[i] = wsNg.z;
+    lanes.setSurface(i, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y));
     const uint64_t pixel = static_cast<uint64_t>(y) * frame.width + x;
     offsetX[i] = unitFloat(hashCombine(seed_, 2 * pixel));
     offsetY[i] = unitFloat(hashCombine(seed_, 2 * pixel + 1));
   }
-  rt::offsetOrigins(light_, epsilon_, nx, ny, nz, count, lanes);
+  rt::offsetOrigins(light_, epsilon_, count, lanes);
   const bool directional = light_.isDirectional();
   RayHitPacket16 packet;
   alignas(64) float weights[16], tLight[16];
