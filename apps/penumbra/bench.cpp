@@ -34,19 +34,15 @@ struct BenchOptions {
 // frame's G-buffer is rendered once (into the same buffer) and timed. A row's timings are each pass's
 // median over the frames after the first (steady frames); the first frame's total, which builds what
 // the others reuse, is its `first_frame_ms`. Rows in `names`' order; a technique that cannot take a
-// frame leaves the sequence with its reason.
+// frame leaves the sequence with its reason. Every technique writes its V into `target`.
 std::vector<ReportRow> benchSequence(const Setup& setup, const Motion& motion, const std::vector<std::string>& names,
                                      const std::vector<ParamSet>& given, NotRunTechniques& notRun,
-                                     std::vector<double>& gbufferMs) {
+                                     std::vector<double>& gbufferMs, Image<float>& target) {
   std::vector<std::unique_ptr<ShadowTechnique>> instances(names.size());
   std::vector<std::optional<ReportRow>> rows(names.size(), ReportRow{});
   std::vector<std::vector<PassTimings>> steady(names.size());
   std::vector<double> firstFrameMs(names.size(), 0.0);
   GBuffer gbuffer;
-  // The techniques' output, one image kept across the frames and techniques, as a renderer keeps its
-  // render target (runTechnique).
-  Image<float> target;
-  resetInParallel(target, setup.width, setup.height, 1.0f);
   for (int k = 0; k < motion.frames; ++k) {
     Setup frame = setup;
     frame.scene = sceneAtFrame(setup.scene, motion, k);
@@ -134,11 +130,11 @@ int runBench(const BenchOptions& options) {
                                             "others reuse and faults in fresh memory"}};
   // As in compare: a technique that cannot take this scene costs its row, and fails the run only when named.
   NotRunTechniques notRun(report, !options.techniques.empty(), options.baseline);
-  if (motion) report.rows = benchSequence(setup, *motion, names, given, notRun, gbufferMs);
-  // The techniques' output, made (and its pages touched) before any is timed and kept across them, as
-  // a renderer keeps its render target when it switches techniques (runTechnique).
+  // The techniques' output, made (and its pages touched) before any is timed and kept across them and
+  // across a sequence's frames, as a renderer keeps its render target (runTechnique).
   Image<float> target;
   resetInParallel(target, setup.width, setup.height, 1.0f);
+  if (motion) report.rows = benchSequence(setup, *motion, names, given, notRun, gbufferMs, target);
   for (size_t i = 0; i < names.size() && !motion; ++i) {
     const TechniqueInfo& info = findTechnique(names[i]);
     std::optional<TechniqueRun> attempt;

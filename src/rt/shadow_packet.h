@@ -28,22 +28,14 @@ struct alignas(64) ShadowLanes {
   float ox[16], oy[16], oz[16];
   float ux[16], uy[16];
 
-  // P and an O made by the caller.
-  void setPoint(int lane, const Vec3& wsP, const Vec3& wsOrigin) {
-    set(px, py, pz, lane, wsP);
-    set(ox, oy, oz, lane, wsOrigin);
-  }
   // P and Ng, for offsetOrigins to make O.
   void setSurface(int lane, const Vec3& wsP, const Vec3& wsNg) {
-    set(px, py, pz, lane, wsP);
-    set(nx, ny, nz, lane, wsNg);
-  }
-
- private:
-  static void set(float* x, float* y, float* z, int lane, const Vec3& v) {
-    x[lane] = v.x;
-    y[lane] = v.y;
-    z[lane] = v.z;
+    px[lane] = wsP.x;
+    py[lane] = wsP.y;
+    pz[lane] = wsP.z;
+    nx[lane] = wsNg.x;
+    ny[lane] = wsNg.y;
+    nz[lane] = wsNg.z;
   }
 };
 

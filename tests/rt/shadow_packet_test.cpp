@@ -19,6 +19,16 @@ namespace {
 
 float unit(uint32_t i) { return static_cast<float>(hash32(i) >> 8) * 0x1p-24f; }
 
+// Lane i's point P and an origin O made here (rt::offsetOrigins makes it in the techniques).
+void setPoint(rt::ShadowLanes& lanes, int i, const Vec3& wsP, const Vec3& wsOrigin) {
+  lanes.px[i] = wsP.x;
+  lanes.py[i] = wsP.y;
+  lanes.pz[i] = wsP.z;
+  lanes.ox[i] = wsOrigin.x;
+  lanes.oy[i] = wsOrigin.y;
+  lanes.oz[i] = wsOrigin.z;
+}
+
 std::vector<std::pair<const char*, Light>> everyShape() {
   return {{"sphere", Light::sphere(Vec3(0.3f, 4.0f, -0.2f), 0.7f)},
           {"large near sphere", Light::sphere(Vec3(0.0f, 1.9f, 0.5f), 1.2f)},
@@ -80,7 +90,7 @@ TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
         const uint32_t k = trial * 97 + static_cast<uint32_t>(i) * 7;
         const Vec3 p(4.0f * unit(k) - 2.0f, 0.5f * unit(k + 1), 4.0f * unit(k + 2) - 2.0f);
         const Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, 1.0f, unit(k + 4) - 0.5f));
-        lanes.setPoint(i, p, rt::offsetOrigin(light, p, n, epsilon));
+        setPoint(lanes, i, p, rt::offsetOrigin(light, p, n, epsilon));
         // The corners and the centre of [0,1)^2 as well as random points: the concentric map's axes
         // and diagonals, where its wedge changes.
         const float corners[5] = {0.0f, 0.5f, 0x1.fffffep-1f, 0.25f, 0.75f};
@@ -133,7 +143,7 @@ TEST(ShadowPacket, DegenerateLanesTakeTheScalarPathExactly) {
   // light's sample point itself. Lane 2: an ordinary point below both.
   const Vec3 points[3] = {Vec3(0.1f, 2.1f, 0.0f), Vec3(0.0f, 2.0f, 0.0f), Vec3(0.3f, 0.0f, 0.2f)};
   for (int i = 0; i < 3; ++i) {
-    lanes.setPoint(i, points[i], points[i] + Vec3(0.0f, epsilon, 0.0f));
+    setPoint(lanes, i, points[i], points[i] + Vec3(0.0f, epsilon, 0.0f));
     lanes.ux[i] = 0.5f;
     lanes.uy[i] = 0.5f;
   }
@@ -184,7 +194,7 @@ TEST(ShadowPacket, PacketsBuiltInPlaceTraceAsSingleRays) {
     for (int i = 0; i < count; ++i) {
       const uint32_t k = trial * 131 + static_cast<uint32_t>(i) * 5;
       const Vec3 p(3.0f * unit(k) - 1.5f, 0.0f, 3.0f * unit(k + 1) - 1.5f);
-      lanes.setPoint(i, p, p + Vec3(0.0f, epsilon, 0.0f));
+      setPoint(lanes, i, p, p + Vec3(0.0f, epsilon, 0.0f));
       lanes.ux[i] = unit(k + 2);
       lanes.uy[i] = unit(k + 3);
     }

@@ -11,7 +11,6 @@
 
 #include "core/image_fill.h"
 #include "rt/shadow_packet.h"
-#include "rt/shadow_ray.h"
 
 namespace penumbra::raytraced {
 namespace {
