@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 #include <tbb/blocked_range.h>
@@ -40,8 +41,14 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
   const int tileSize = input.activeTiles ? input.tileSize : std::max(width, height);
   const int tilesX = input.activeTiles ? input.tilesX : 1;
   const int tilesY = (height + tileSize - 1) / tileSize;
+  // The second pass asks this of every tap: shifts instead of two integer divisions where the tile
+  // size is a power of two (the few-ray techniques' 8).
+  const bool powerOfTwo = std::has_single_bit(static_cast<unsigned>(tileSize));
+  const int tileShift = std::countr_zero(static_cast<unsigned>(tileSize));
   auto active = [&](int x, int y) {
-    return !input.activeTiles || input.activeTiles[static_cast<size_t>(y / tileSize) * tilesX + x / tileSize];
+    if (!input.activeTiles) return true;
+    const int tx = powerOfTwo ? x >> tileShift : x / tileSize, ty = powerOfTwo ? y >> tileShift : y / tileSize;
+    return input.activeTiles[static_cast<size_t>(ty) * tilesX + tx] != 0;
   };
   // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile: that
   // lookup's two divisions were a good part of a tap's cost.
