@@ -423,6 +423,12 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
           for (int i = 0; i < samples.width; ++i) {
             const int32_t tri = tile.farWinner[j * kTileSize + i];
             if (tri < 0) continue;
+            // One surface under the pixel (the near layer's triangle is also the deepest): the same
+            // solve as the near layer's, already made.
+            if (tri == tile.winner[j * kTileSize + i]) {
+              farBarycentrics[j * kTileSize + i] = barycentrics[j * kTileSize + i];
+              continue;
+            }
             if (tri != cachedTriangle) {
               const glm::uvec3& v = input.triangles[static_cast<size_t>(tri)];
               h = HomogeneousTriangle(input.clipPositions[v.x], input.clipPositions[v.y], input.clipPositions[v.z]);
