@@ -50,8 +50,7 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
     const int tx = powerOfTwo ? x >> tileShift : x / tileSize, ty = powerOfTwo ? y >> tileShift : y / tileSize;
     return input.activeTiles[static_cast<size_t>(ty) * tilesX + tx] != 0;
   };
-  // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile: that
-  // lookup's two divisions were a good part of a tap's cost.
+  // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile.
   const bool sameInput = &in == &outside;
   tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
