@@ -12,6 +12,8 @@
 #include <bit>
 #include <cmath>
 #include <memory>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -67,11 +69,12 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
 // the tile, at a corner: the float layer is monotone in s and in t) and, with ids, P's id.
 template <bool kInner, bool kIdTest>
 bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
-  // Written without early returns (the id test and the depth test combined), so that the loop over a
-  // row of tiles in searchRows vectorizes.
+  // Both loads and every test combined with & and |, not && and ||: no branch and no conditional
+  // load, so that the loop over a row of tiles in openTileSpan vectorizes.
   const size_t k = static_cast<size_t>(ty) * m.tilesPerRow + tx;
   if constexpr (kInner) {
-    const bool idOpen = !kIdTest || m.tileObjectId[k] == kMixedTile || m.tileObjectId[k] == q.objectId;
+    const int32_t id = m.tileObjectId[k];
+    const bool idOpen = !kIdTest | (id == kMixedTile) | (id == q.objectId);
     const float sA = static_cast<float>(tx << kTileShift) + 0.5f;
     const float sB = static_cast<float>(std::min(m.size - 1, (tx << kTileShift) + kTileSize - 1)) + 0.5f;
     const float tA = static_cast<float>(ty << kTileShift) + 0.5f;
@@ -79,10 +82,27 @@ bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
     const float rowA = q.zLayer + q.dzdt * (tA - q.t), rowB = q.zLayer + q.dzdt * (tB - q.t);
     const float colA = q.dzds * (sA - q.s), colB = q.dzds * (sB - q.s);
     const float lo = std::min(std::min(rowA + colA, rowA + colB), std::min(rowB + colA, rowB + colB));
-    return idOpen && m.tileMaxDepth[k] >= lo;
+    return idOpen & (m.tileMaxDepth[k] >= lo);
   } else {
-    return m.tileMinDepth[k] < q.zLayer && !(kIdTest && m.tileObjectId[k] == q.objectId);
+    const bool idOpen = !kIdTest | (m.tileObjectId[k] != q.objectId);
+    return (m.tileMinDepth[k] < q.zLayer) & idOpen;
   }
+}
+
+// The first and the last of tiles tx0 .. tx0 + count - 1 of tile row ty that may qualify, as offsets
+// from tx0 (first > last: none). Two select reductions the compiler vectorizes; the result is kept in
+// locals until the end, so no store may alias the map's pointers.
+template <bool kInner, bool kIdTest>
+std::pair<int, int> openTileSpan(const SearchMap& map, const SearchQuery& query, int tx0, int ty, int count, int none) {
+  const SearchMap m = map;
+  const SearchQuery q = query;
+  int first = none, last = -1;
+  for (int i = 0; i < count; ++i) {
+    const bool open = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty);
+    first = std::min(first, open ? i : none);
+    last = std::max(last, open ? i : -1);
+  }
+  return {first, last};
 }
 
 template <bool kInner, bool kIdTest, bool kJitter>
@@ -105,22 +125,12 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
   const int tx0 = sLo >> kTileShift, ty0 = tLo >> kTileShift;
   const int tilesX = (sHi >> kTileShift) - tx0 + 1, tilesY = (tHi >> kTileShift) - ty0 + 1;
   const bool gridded = tiled && tilesX <= kGrid && tilesY <= kGrid;
-  // Per tile row: the first and the last tile that may qualify (first > last: none).
+  // Per tile row: the first and the last tile that may qualify (first > last: none), set when the
+  // search first reaches the row (kUnset before): a search that finds its texel within a few rows
+  // never looks at the tile rows beyond them.
+  constexpr int kUnset = kGrid + 1;
   int firstOpen[kGrid], lastOpen[kGrid];
-  if (gridded) {
-    for (int j = 0; j < tilesY; ++j) {
-      // Two select reductions over the row, which the compiler vectorizes (a grid spans up to kGrid^2
-      // tiles, and most searches build one).
-      int first = kGrid, last = -1;
-      for (int i = 0; i < tilesX; ++i) {
-        const bool open = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty0 + j);
-        first = std::min(first, open ? i : kGrid);
-        last = std::max(last, open ? i : -1);
-      }
-      firstOpen[j] = first;
-      lastOpen[j] = last;
-    }
-  }
+  if (gridded) std::fill_n(firstOpen, tilesY, kUnset);
 
   // Lower bound of the squared distance of any texel of row t (its centre line, less the jitter).
   auto rowGap2 = [&](int t) {
@@ -136,6 +146,8 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
     // best so far (equal may still win the tie on t), no later row can.
     if (gap2 >= r2 || (bestKey != kNoKey && gap2 > std::bit_cast<float>(bestKey))) break;
     const int ty = t >> kTileShift;
+    if (gridded && firstOpen[ty - ty0] == kUnset)
+      std::tie(firstOpen[ty - ty0], lastOpen[ty - ty0]) = openTileSpan<kInner, kIdTest>(m, q, tx0, ty, tilesX, kGrid);
     if (!gridded || firstOpen[ty - ty0] <= lastOpen[ty - ty0]) {
       // The chord of the radius, or of the best distance so far once a texel is found (a texel at that
       // same distance may still win the tie); small slack so float rounding in sqrt never drops a
@@ -189,6 +201,13 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
           hit.distance2 = std::bit_cast<float>(key);
         }
       }
+    } else {
+      // No tile of this tile row may qualify: its other rows, on either side, are passed over without
+      // a visit. The rows left keep their nearest-first order, and a row that would have ended the
+      // search is at least as far as the next one visited, which ends it the same way.
+      const int rowLo = ty << kTileShift, rowHi = rowLo + kTileSize - 1;
+      if (up >= rowLo) up = rowLo - 1;
+      if (down <= rowHi) down = rowHi + 1;
     }
     const bool canUp = up >= tLo, canDown = down <= tHi;
     if (!canUp && !canDown) break;
@@ -276,12 +295,15 @@ int countRowBlocked(const float* __restrict depth, int a, int b, int stride, flo
   return blocked;
 }
 
-// The same count from a lattice row (lattice[m] is texel m * stride): lattice columns a/k .. b/k, the
-// texel's s computed as above, so each compare is the strided loop's.
-int countLatticeRowBlocked(const float* __restrict lattice, int a, int b, int stride, float s, float zRow, float dzds) {
+// The same count over columns lo .. hi of a row (map texels, or lattice columns when stride > 1), only
+// those in [a, b] counted: every row of a footprint runs the same number of iterations, so the loop's
+// exit is predicted where the rows' own spans (a few texels each, all different) were not. The compare
+// is countRowBlocked's, texel for texel (a lattice's column m is texel m * stride).
+int countMaskedRowBlocked(const float* __restrict row, int lo, int hi, int a, int b, int stride, float s, float zRow,
+                          float dzds) {
   int blocked = 0;
-  for (int m = a / stride; m <= b / stride; ++m)
-    blocked += lattice[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s);
+  for (int m = lo; m <= hi; ++m)
+    blocked += (m >= a) & (m <= b) & (row[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s));
   return blocked;
 }
 
@@ -295,7 +317,8 @@ struct StrideDivider {
     if ((q + 1) * k <= x) ++q;
     return q;
   }
-  int multipleAtOrAbove(int x) const { return -floorDiv(-x) * k; }  //!< the smallest multiple of k >= x
+  int ceilDiv(int x) const { return -floorDiv(-x); }
+  int multipleAtOrAbove(int x) const { return ceilDiv(x) * k; }  //!< the smallest multiple of k >= x
   int k;
   double inverse;
 };
@@ -309,20 +332,49 @@ Coverage countRows(const LightMap& map, const LatticeDepths* lattices, int tLo, 
   Coverage c;
   const int n = map.size;
   const StrideDivider divider(stride);
-  for (int j = divider.multipleAtOrAbove(tLo); j <= tHi; j += stride) {
+  // The lattice of this stride, if built: row j / k starts at lattice + (j / k) * columns. Its rows and
+  // columns are counted along with j and divided by the divider, never by an integer division a row.
+  const float* lattice = stride > 1 && lattices ? lattices->row(stride, 0) : nullptr;
+  const size_t latticeColumns = lattice ? static_cast<size_t>(lattices->columns(stride)) : 0;
+  // The rows are gathered first (their spans, in the columns of the row they are read from) and counted
+  // after over the columns of all of them (countMaskedRowBlocked); a footprint of more rows than the
+  // stack holds counts the rest one span at a time, as does a stride without a lattice.
+  struct Row {
+    const float* depth;
+    float zRow;
+    int a, b;
+  };
+  constexpr int kMaxRows = 64;
+  std::array<Row, kMaxRows> rows;
+  int rowCount = 0, lo = n, hi = -1;
+  const bool gathered = stride == 1 || lattice;
+  const int jFirst = divider.multipleAtOrAbove(tLo);
+  size_t latticeRow = jFirst >= 0 ? static_cast<size_t>(divider.floorDiv(jFirst)) : 0;  // used for j >= 0 only
+  const int lastColumn = divider.floorDiv(n - 1);  // the last lattice column (stride 1: the last texel)
+  for (int j = jFirst; j <= tHi; j += stride, latticeRow += j > 0) {
     int i0, i1;
     if (!span(j, i0, i1)) continue;
-    if (stride > 1) i0 = divider.multipleAtOrAbove(i0);
-    if (i0 > i1) continue;
-    c.total += stride > 1 ? divider.floorDiv(i1 - i0) + 1 : i1 - i0 + 1;
+    // The row's lattice columns: texels m * stride for m0 <= m <= m1 (stride 1: the span itself).
+    const int m0 = stride > 1 ? divider.ceilDiv(i0) : i0, m1 = stride > 1 ? divider.floorDiv(i1) : i1;
+    if (m0 > m1) continue;
+    c.total += m1 - m0 + 1;
     if (j < 0 || j >= n) continue;
-    const int a = i0 >= 0 ? i0 : 0, b = std::min(i1, n - 1);
+    // Within the map: columns a .. b.
+    const int a = std::max(m0, 0), b = std::min(m1, lastColumn);
     if (a > b) continue;
     const float zRow = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t);
-    // a is a multiple of the stride, and so is j: both lie on the lattice.
-    const float* lattice = stride > 1 && lattices ? lattices->row(stride, j / stride) : nullptr;
-    c.blocked += lattice ? countLatticeRowBlocked(lattice, a, b, stride, s, zRow, dzds)
-                         : countRowBlocked(map.lsDepth.row(j), a, b, stride, s, zRow, dzds);
+    if (gathered && rowCount < kMaxRows) {
+      rows[static_cast<size_t>(rowCount++)] = {lattice ? lattice + latticeRow * latticeColumns : map.lsDepth.row(j),
+                                               zRow, a, b};
+      lo = std::min(lo, a);
+      hi = std::max(hi, b);
+    } else {
+      c.blocked += countRowBlocked(map.lsDepth.row(j), a * stride, std::min(i1, n - 1), stride, s, zRow, dzds);
+    }
+  }
+  for (int r = 0; r < rowCount; ++r) {
+    const Row& row = rows[static_cast<size_t>(r)];
+    c.blocked += countMaskedRowBlocked(row.depth, lo, hi, row.a, row.b, stride, s, row.zRow, dzds);
   }
   return c;
 }

@@ -734,6 +734,55 @@ TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
   EXPECT_GT(compared, 1000);  // most counts are partial, so a wrong texel would show
 }
 
+// A disk's count against the definition, texel by texel: row j's chord is the texel centres within
+// sqrt(r^2 - dy^2) of s (the same float expression), and with stride k only texels whose s and t are
+// multiples of k count. Strides 1..9 with and without lattices; radii up to 100 texels, so a footprint
+// of more rows than the count gathers at once is counted too; footprints that leave the map.
+TEST(BrabecCoverage, DiskCountsAreTheTexelByTexelCount) {
+  LightMap map;
+  map.size = 203;
+  map.lsDepth = Image<float>(map.size, map.size);
+  map.objectId = Image<int32_t>(map.size, map.size, 0);
+  for (int t = 0; t < map.size; ++t)
+    for (int s = 0; s < map.size; ++s)
+      map.lsDepth(s, t) =
+          2.0f + static_cast<float>(hashCombine(static_cast<uint64_t>(t), static_cast<uint64_t>(s)) % 1000) * 0.002f;
+  brabec::LatticeDepths lattices;
+  lattices.build(map, 9);
+  auto multipleOf = [](int x, int k) { return ((x % k) + k) % k == 0; };
+  int partial = 0;
+  for (uint32_t i = 0; i < 600; ++i) {
+    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
+    const float s = -20.0f + 243.0f * u(1), t = -20.0f + 243.0f * u(2), z = 2.0f + 2.0f * u(3);
+    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f), radius = 0.5f + 100.0f * u(6);
+    const int stride = 1 + static_cast<int>(hashCombine(i, 7) % 9);
+    brabec::Coverage expected;
+    const float r2 = radius * radius;
+    for (int j = static_cast<int>(std::floor(t - radius)) - 1; j <= static_cast<int>(std::ceil(t + radius)) + 1; ++j) {
+      const float dy = static_cast<float>(j) + 0.5f - t;
+      const float rest = r2 - dy * dy;
+      if (!(rest > 0.0f) || !multipleOf(j, stride)) continue;
+      const float half = std::sqrt(rest);
+      const int i0 = static_cast<int>(std::ceil(s - half - 0.5f)), i1 = static_cast<int>(std::floor(s + half - 0.5f));
+      const float zRow = z + dzdt * (static_cast<float>(j) + 0.5f - t);
+      for (int x = i0; x <= i1; ++x) {
+        if (!multipleOf(x, stride)) continue;
+        ++expected.total;
+        if (j >= 0 && j < map.size && x >= 0 && x < map.size)
+          expected.blocked += map.lsDepth(x, j) < zRow + dzds * (static_cast<float>(x) + 0.5f - s);
+      }
+    }
+    const brabec::Coverage plain = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride);
+    const brabec::Coverage latticed = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride, &lattices);
+    ASSERT_EQ(plain.total, expected.total) << i;
+    ASSERT_EQ(plain.blocked, expected.blocked) << i;
+    ASSERT_EQ(latticed.total, expected.total) << i;
+    ASSERT_EQ(latticed.blocked, expected.blocked) << i;
+    partial += expected.blocked > 0 && expected.blocked < expected.total;
+  }
+  EXPECT_GT(partial, 300);  // most counts are partial, so a texel counted wrongly would show
+}
+
 // The too-dark measure of docs/small-occluders.md: over the error mask, the pixels where the
 // reference is mostly lit (V_ref > 0.5) and the technique darker by more than 0.1.
 struct Overdarkening {
