@@ -20,6 +20,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/image_fill.h"
+#include "core/target_clones.h"
 #include "penumbra/error.h"
 #include "penumbra/sampling.h"
 
@@ -295,15 +296,23 @@ int countRowBlocked(const float* __restrict depth, int a, int b, int stride, flo
   return blocked;
 }
 
-// The same count over columns lo .. hi of a row (map texels, or lattice columns when stride > 1), only
-// those in [a, b] counted: every row of a footprint runs the same number of iterations, so the loop's
-// exit is predicted where the rows' own spans (a few texels each, all different) were not. The compare
-// is countRowBlocked's, texel for texel (a lattice's column m is texel m * stride).
-int countMaskedRowBlocked(const float* __restrict row, int lo, int hi, int a, int b, int stride, float s, float zRow,
-                          float dzds) {
+// The same count over the gathered rows of a footprint (row r: depths rows[r], receiver plane zRows[r],
+// its span a[r] .. b[r]), each read over the columns lo .. hi that hold all of them and only the texels
+// of its own span counted: every row runs the same iterations, so the loop's exit is predicted where
+// the rows' own spans (a few texels each, all different) were not. Column m is texel m * stride
+// (lattice columns when stride > 1); the compare is countRowBlocked's, texel for texel. One call per
+// footprint.
+int countGatheredRowsBlocked(int rowCount, const float* const* __restrict rows, const float* __restrict zRows,
+                             const int* __restrict a, const int* __restrict b, int lo, int hi, int stride, float s,
+                             float dzds) {
   int blocked = 0;
-  for (int m = lo; m <= hi; ++m)
-    blocked += (m >= a) & (m <= b) & (row[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s));
+  for (int r = 0; r < rowCount; ++r) {
+    const float* __restrict row = rows[r];
+    const float zRow = zRows[r];
+    const int ra = a[r], rb = b[r];
+    for (int m = lo; m <= hi; ++m)
+      blocked += (m >= ra) & (m <= rb) & (row[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s));
+  }
   return blocked;
 }
 
@@ -337,15 +346,12 @@ Coverage countRows(const LightMap& map, const LatticeDepths* lattices, int tLo, 
   const float* lattice = stride > 1 && lattices ? lattices->row(stride, 0) : nullptr;
   const size_t latticeColumns = lattice ? static_cast<size_t>(lattices->columns(stride)) : 0;
   // The rows are gathered first (their spans, in the columns of the row they are read from) and counted
-  // after over the columns of all of them (countMaskedRowBlocked); a footprint of more rows than the
+  // after over the columns of all of them (countGatheredRowsBlocked); a footprint of more rows than the
   // stack holds counts the rest one span at a time, as does a stride without a lattice.
-  struct Row {
-    const float* depth;
-    float zRow;
-    int a, b;
-  };
   constexpr int kMaxRows = 64;
-  std::array<Row, kMaxRows> rows;
+  std::array<const float*, kMaxRows> rowDepths;
+  std::array<float, kMaxRows> rowZ;
+  std::array<int, kMaxRows> rowA, rowB;
   int rowCount = 0, lo = n, hi = -1;
   const bool gathered = stride == 1 || lattice;
   const int jFirst = divider.multipleAtOrAbove(tLo);
@@ -364,18 +370,20 @@ Coverage countRows(const LightMap& map, const LatticeDepths* lattices, int tLo, 
     if (a > b) continue;
     const float zRow = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t);
     if (gathered && rowCount < kMaxRows) {
-      rows[static_cast<size_t>(rowCount++)] = {lattice ? lattice + latticeRow * latticeColumns : map.lsDepth.row(j),
-                                               zRow, a, b};
+      const auto r = static_cast<size_t>(rowCount++);
+      rowDepths[r] = lattice ? lattice + latticeRow * latticeColumns : map.lsDepth.row(j);
+      rowZ[r] = zRow;
+      rowA[r] = a;
+      rowB[r] = b;
       lo = std::min(lo, a);
       hi = std::max(hi, b);
     } else {
       c.blocked += countRowBlocked(map.lsDepth.row(j), a * stride, std::min(i1, n - 1), stride, s, zRow, dzds);
     }
   }
-  for (int r = 0; r < rowCount; ++r) {
-    const Row& row = rows[static_cast<size_t>(r)];
-    c.blocked += countMaskedRowBlocked(row.depth, lo, hi, row.a, row.b, stride, s, row.zRow, dzds);
-  }
+  if (rowCount > 0)
+    c.blocked += countGatheredRowsBlocked(rowCount, rowDepths.data(), rowZ.data(), rowA.data(), rowB.data(), lo, hi,
+                                          stride, s, dzds);
   return c;
 }
 
@@ -691,39 +699,67 @@ BrabecTechnique::Pixel BrabecTechnique::classify(const GBuffer& gbuffer, int x, 
   return p;
 }
 
+namespace {
+
+// classifyRow's loop over raw rows: every test computed for every pixel and the class picked by
+// selects, so that it vectorizes (the map's texels gathered; a pixel outside the map reads texel 0).
+// towardLight is the light's direction for a directional light, else its centre, from which each
+// pixel's own direction is taken as facesAwayFromLight takes it.
+template <bool kDirectional>
+inline void classifyPixelsLoop(int width, const int32_t* __restrict ids, const Vec3* __restrict positions,
+                               const Vec3* __restrict normals, const int32_t* __restrict inMap,
+                               const int32_t* __restrict nearestTexel, const float* __restrict nearestThreshold,
+                               const float* __restrict depth, const int32_t* __restrict mapIds, float lx, float ly,
+                               float lz, uint8_t* __restrict cls, int32_t* __restrict key) {
+  for (int x = 0; x < width; ++x) {
+    const int32_t id = ids[x];
+    const Vec3 light(lx, ly, lz);
+    const Vec3 toLight = kDirectional ? light : light - positions[x];
+    const bool away = glm::dot(normals[x], toLight) <= 0.0f;
+    const auto texel = static_cast<size_t>(nearestTexel[x]);
+    const bool blocked = depth[texel] < nearestThreshold[x];  // hardShadow's compare
+    const int32_t blocker = mapIds[texel];
+    // classify's tests in its order: a hit, the side of the light's centre, the map's bounds, the hard
+    // test (in the map, floor(s) and floor(t) lie in [0, size)).
+    const bool hit = id != kNoObject, in = inMap[x] != 0;
+    int32_t c = blocked ? brabec::Blocked : brabec::Lit;
+    c = in ? c : brabec::OutOfMap;
+    c = away ? brabec::BackFacing : c;
+    c = hit ? c : brabec::Miss;
+    cls[x] = static_cast<uint8_t>(c);
+    // The blocker's id where the hard test blocks a hit facing the light in the map, else the pixel's
+    // own (as selects: a condition of several parts joined by & becomes branches, which do not vectorize).
+    int32_t k = blocked ? blocker : id;
+    k = in ? k : id;
+    k = away ? id : k;
+    key[x] = hit ? k : id;
+  }
+}
+
+PENUMBRA_CLONES_AVX512 void classifyPixels(int width, const int32_t* __restrict ids, const Vec3* __restrict positions,
+                                           const Vec3* __restrict normals, const int32_t* __restrict inMap,
+                                           const int32_t* __restrict nearestTexel,
+                                           const float* __restrict nearestThreshold, const float* __restrict depth,
+                                           const int32_t* __restrict mapIds, bool directional, float lx, float ly,
+                                           float lz, uint8_t* __restrict cls, int32_t* __restrict key) {
+  if (directional)
+    classifyPixelsLoop<true>(width, ids, positions, normals, inMap, nearestTexel, nearestThreshold, depth, mapIds, lx,
+                             ly, lz, cls, key);
+  else
+    classifyPixelsLoop<false>(width, ids, positions, normals, inMap, nearestTexel, nearestThreshold, depth, mapIds, lx,
+                              ly, lz, cls, key);
+}
+
+}  // namespace
+
 void BrabecTechnique::classifyRow(const GBuffer& gbuffer, int y, const ReceiverRow& receivers, uint8_t* cls,
                                   int32_t* key) const {
-  const int width = gbuffer.width();
-  const int32_t* ids = gbuffer.objectId.row(y);
-  const Vec3* positions = gbuffer.wsPosition.row(y);
-  const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
-  const float* depth = map_.lsDepth.data();
-  const int32_t* mapIds = map_.objectId.data();
-  for (int x = 0; x < width; ++x) {
-    const auto i = static_cast<size_t>(x);
-    const int32_t id = ids[x];
-    key[i] = id;
-    if (id == kNoObject) {
-      cls[i] = Pixel::Miss;
-      continue;
-    }
-    // classify's tests in its order: the side of the light's centre, the map's bounds, the hard test.
-    if (facesAwayFromLight(positions[x], normals[x])) {
-      cls[i] = Pixel::BackFacing;
-      continue;
-    }
-    if (!receivers.inMap[i]) {  // in the map, floor(s) and floor(t) lie in [0, size)
-      cls[i] = Pixel::OutOfMap;
-      continue;
-    }
-    const auto texel = static_cast<size_t>(receivers.nearestTexel[i]);
-    if (depth[texel] < receivers.nearestThreshold[i]) {  // hardShadow's compare
-      cls[i] = Pixel::Blocked;
-      key[i] = mapIds[texel];
-    } else {
-      cls[i] = Pixel::Lit;
-    }
-  }
+  const bool directional = light_->isDirectional();
+  const Vec3 towardLight = directional ? light_->direction() : light_->center();
+  classifyPixels(gbuffer.width(), gbuffer.objectId.row(y), gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y),
+                 receivers.inMap.data(), receivers.nearestTexel.data(), receivers.nearestThreshold.data(),
+                 map_.lsDepth.data(), map_.objectId.data(), directional, towardLight.x, towardLight.y, towardLight.z,
+                 cls, key);
 }
 
 float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) const {
@@ -917,7 +953,8 @@ std::vector<int> groupBorders(int length) {
 void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!light_) fail("brabec: visibility() called before prepare(); call prepare(scene, light) first");
   const int width = gbuffer.width(), height = gbuffer.height();
-  resetInParallel(v, width, height, 1.0f);
+  // Every pixel is written below (the interpolation's groups cover the image), in parallel.
+  v.resizeForOverwrite(width, height);
   searches_ = 0.0;
   hitPixels_ = 0.0;
   if (width == 0 || height == 0) return;
@@ -1025,13 +1062,16 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
             }
           searches += searchCount;
         });
+    // The last pass: a pixel it interpolates is never a group's border, so nothing reads its flags or
+    // direction again, and they are not written.
+    auto fillNothing = [](size_t, size_t) {};
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t searchCount = 0;
       const auto solve = makeSolve(searchCount);
       for (int y = rows.begin(); y < rows.end(); ++y) {
         auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };
         for (size_t g = 0; g + 1 < columns.size(); ++g)
-          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fill, at, out, known.data());
+          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fillNothing, at, out, known.data());
       }
       searches += searchCount;
     });

@@ -251,6 +251,9 @@ Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLay
 // (nearest texel): a segment light.
 Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half);
 
+// What the hard test found for a camera pixel (BrabecTechnique::Pixel::cls).
+enum PixelClass : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
+
 }  // namespace brabec
 
 class BrabecTechnique final : public ShadowTechnique {
@@ -270,7 +273,7 @@ class BrabecTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
   // What the hard test found for one camera pixel, and the warped point the searches start from.
   struct Pixel {
-    enum Class : uint8_t { Miss, OutOfMap, BackFacing, Lit, Blocked };
+    using enum brabec::PixelClass;
     uint8_t cls = Miss;
     int32_t key = kNoObject;         //!< interpolation id: the blocker's when blocked, the receiver's otherwise
     int32_t objectId = kNoObject;    //!< the receiver's own id (P'_ID)

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -911,6 +912,31 @@ struct BrabecTestAccess {
     }
   }
 };
+
+// The pass writes every pixel of V, in every size of image (the interpolation's groups at the edges,
+// one row or one column) and with the interpolation on or off: an image handed in full of NaN (an
+// earlier frame's, as a renderer's target is) comes back with V in [0, 1] everywhere, the same as a
+// fresh one.
+TEST(Brabec, WritesEveryPixelOfAUsedImage) {
+  const Scene scene = loadScene("crowded");
+  for (const bool interpolate : {true, false}) {
+    BrabecOptions options;
+    options.interpolate = interpolate;
+    BrabecTechnique technique(options);
+    technique.prepare(scene, scene.lights.at(0));
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 9}, {9, 1}, {2, 3}, {5, 5}, {67, 41}}) {
+      const GBuffer gbuffer = renderGBuffer(scene, w, h);
+      Image<float> fresh;
+      technique.visibility(gbuffer, fresh);
+      Image<float> used(w, h, std::numeric_limits<float>::quiet_NaN());
+      technique.visibility(gbuffer, used);
+      for (size_t i = 0; i < used.size(); ++i) {
+        ASSERT_TRUE(used[i] >= 0.0f && used[i] <= 1.0f) << w << "x" << h << " pixel " << i;
+        ASSERT_EQ(used[i], fresh[i]) << w << "x" << h << " pixel " << i;
+      }
+    }
+  }
+}
 
 TEST(Brabec, RowClassesAreThePixelClasses) {
   int compared = 0, blocked = 0;
