@@ -508,23 +508,39 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
   const int n = map.size;
   tilesPerRow = (n + kTileSize - 1) / kTileSize;
   const size_t count = static_cast<size_t>(tilesPerRow) * tilesPerRow;
-  minDepth.assign(count, kInfinity);
-  maxDepth.assign(count, -kInfinity);
-  objectId.assign(count, kNoObject);
-  std::vector<uint8_t> seen(count, 0);
-  for (int t = 0; t < n; ++t)
-    for (int s = 0; s < n; ++s) {
-      const size_t k = static_cast<size_t>(t >> kTileShift) * tilesPerRow + (s >> kTileShift);
-      const float d = map.lsDepth(s, t);
-      const int32_t id = map.objectId(s, t);
-      minDepth[k] = std::min(minDepth[k], d);
-      maxDepth[k] = std::max(maxDepth[k], d);
-      if (!seen[k])
+  minDepth.resize(count);
+  maxDepth.resize(count);
+  objectId.resize(count);
+  // In parallel over rows of tiles; each tile's texels in row-major order, its summary kept in locals.
+  const int tiles = tilesPerRow;
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles), [&](const tbb::blocked_range<int>& tileRows) {
+    for (int ty = tileRows.begin(); ty < tileRows.end(); ++ty) {
+      const int t0 = ty << kTileShift, t1 = std::min(n, t0 + kTileSize);
+      for (int tx = 0; tx < tiles; ++tx) {
+        const int s0 = tx << kTileShift, s1 = std::min(n, s0 + kTileSize);
+        float lo = kInfinity, hi = -kInfinity;
+        int32_t id = kNoObject;
+        bool seen = false;
+        for (int t = t0; t < t1; ++t) {
+          const float* depth = map.lsDepth.row(t);
+          const int32_t* ids = map.objectId.row(t);
+          for (int s = s0; s < s1; ++s) {
+            lo = std::min(lo, depth[s]);
+            hi = std::max(hi, depth[s]);
+            if (!seen)
+              id = ids[s];
+            else if (id != ids[s])
+              id = kMixedTile;
+            seen = true;
+          }
+        }
+        const size_t k = static_cast<size_t>(ty) * tiles + tx;
+        minDepth[k] = lo;
+        maxDepth[k] = hi;
         objectId[k] = id;
-      else if (objectId[k] != id)
-        objectId[k] = kMixedTile;
-      seen[k] = 1;
+      }
     }
+  });
 }
 
 TileNearestTable::Entry TileNearestTable::merge(const Entry& a, const Entry& b) {
