@@ -297,23 +297,47 @@ int countRowBlocked(const float* __restrict depth, int a, int b, int stride, flo
 }
 
 // The same count over the gathered rows of a footprint (row r: depths rows[r], receiver plane zRows[r],
-// its span a[r] .. b[r]), each read over the columns lo .. hi that hold all of them and only the texels
-// of its own span counted: every row runs the same iterations, so the loop's exit is predicted where
-// the rows' own spans (a few texels each, all different) were not. Column m is texel m * stride
-// (lattice columns when stride > 1); the compare is countRowBlocked's, texel for texel. One call per
-// footprint.
+// its span a[r] .. b[r]), each read over the same columns, those from lo .. hi widened to whole groups
+// of four within the rows' `columns`, and only the texels of its own span counted: every row runs the
+// same iterations and no row has a remainder loop, where the rows' own spans (a few texels each, all
+// different) mispredicted their loops' exits. Column m is texel m * stride (lattice columns when
+// stride > 1). The compare is countRowBlocked's to the bit: the plane's offset at a column,
+// dzds * ((m * stride + 0.5) - s), is the same for every row and computed once.
 int countGatheredRowsBlocked(int rowCount, const float* const* __restrict rows, const float* __restrict zRows,
-                             const int* __restrict a, const int* __restrict b, int lo, int hi, int stride, float s,
-                             float dzds) {
+                             const int* __restrict a, const int* __restrict b, int lo, int hi, int columns, int stride,
+                             float s, float dzds) {
+  using Float4 = float __attribute__((vector_size(16)));
+  using Int4 = int32_t __attribute__((vector_size(16)));
+  constexpr int kMaxGroups = 64;
+  const int groups = (hi - lo + 4) / 4;
+  const int start = std::min(lo, columns - 4 * groups);
   int blocked = 0;
-  for (int r = 0; r < rowCount; ++r) {
-    const float* __restrict row = rows[r];
-    const float zRow = zRows[r];
-    const int ra = a[r], rb = b[r];
-    for (int m = lo; m <= hi; ++m)
-      blocked += (m >= ra) & (m <= rb) & (row[m] < zRow + dzds * (static_cast<float>(m * stride) + 0.5f - s));
+  if (groups > kMaxGroups || start < 0) {  // a footprint too wide for the stack, or a map under 4 columns
+    for (int r = 0; r < rowCount; ++r)
+      for (int m = a[r]; m <= b[r]; ++m)
+        blocked += rows[r][m] < zRows[r] + dzds * (static_cast<float>(m * stride) + 0.5f - s);
+    return blocked;
   }
-  return blocked;
+  Float4 offset[kMaxGroups];
+  Int4 column[kMaxGroups];
+  const Int4 lanes = {0, 1, 2, 3};
+  for (int g = 0; g < groups; ++g) {
+    column[g] = start + 4 * g + lanes;
+    offset[g] = dzds * (__builtin_convertvector(column[g] * stride, Float4) + 0.5f - s);
+  }
+  Int4 count = {0, 0, 0, 0};
+  for (int r = 0; r < rowCount; ++r) {
+    const float* row = rows[r] + start;
+    const Float4 zRow = {zRows[r], zRows[r], zRows[r], zRows[r]};
+    const Int4 ra = {a[r], a[r], a[r], a[r]}, rb = {b[r], b[r], b[r], b[r]};
+    for (int g = 0; g < groups; ++g) {
+      Float4 depth;
+      __builtin_memcpy(&depth, row + 4 * g, sizeof depth);
+      // Each compare is -1 where true: a texel counts where it lies in the row's span and in front.
+      count += (column[g] >= ra) & (column[g] <= rb) & (depth < zRow + offset[g]);
+    }
+  }
+  return -(count[0] + count[1] + count[2] + count[3]);
 }
 
 // Division by the lattice's stride k, the same for every row of a count: a multiply by 1/k and an
@@ -383,7 +407,7 @@ Coverage countRows(const LightMap& map, const LatticeDepths* lattices, int tLo, 
   }
   if (rowCount > 0)
     c.blocked += countGatheredRowsBlocked(rowCount, rowDepths.data(), rowZ.data(), rowA.data(), rowB.data(), lo, hi,
-                                          stride, s, dzds);
+                                          lastColumn + 1, stride, s, dzds);
   return c;
 }
 
