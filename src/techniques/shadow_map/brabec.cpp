@@ -139,6 +139,19 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
     return g > 0.0f ? g * g : 0.0f;
   };
   int32_t bestKey = kNoKey;
+  if (q.seedS >= sLo && q.seedS <= sHi && q.seedT >= tLo && q.seedT <= tHi) {
+    // The seed's key as its row's scan computes it: when it qualifies, it is the answer so far.
+    const size_t row = static_cast<size_t>(q.seedT) * n;
+    const float tc = static_cast<float>(q.seedT) + 0.5f;
+    const float zRow = kInner ? q.zLayer + q.dzdt * (tc - q.t) : q.zLayer;
+    const int32_t key = texelKey<kInner, kIdTest, kJitter>(
+        m.lsDepth + row, m.objectId + row, kJitter ? m.jitterS + row : nullptr, kJitter ? m.jitterT + row : nullptr,
+        q.seedS, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2);
+    if (key != kNoKey) {
+      bestKey = key;
+      hit = {true, std::bit_cast<float>(key), q.seedS, q.seedT};
+    }
+  }
   int t = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
   int up = t - 1, down = t + 1;
   for (;;) {
@@ -190,7 +203,9 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
             seg = segEnd + 1;
           }
         }
-        if (key != kNoKey && (key < bestKey || (key == bestKey && t < hit.t))) {
+        // Equal keys: the smaller t wins, and in the same row (the seed's) the smaller s, which the scan
+        // below finds first.
+        if (key != kNoKey && (key < bestKey || (key == bestKey && t <= hit.t))) {
           int s = s0;
           while (texelKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s, q.s, tc, q.t, zRow, q.dzds, q.objectId, r2) !=
                  key)
@@ -802,7 +817,7 @@ void BrabecTechnique::classifyRow(const GBuffer& gbuffer, int y, const ReceiverR
                  cls, key);
 }
 
-float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) const {
+float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised, SearchSeeds* seeds) const {
   if (toTexel) *toTexel = Vec2(0.0f);
   if (raised) *raised = false;
   switch (p.cls) {
@@ -871,7 +886,13 @@ float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised) con
   q.inner = inner;
   q.idTest = options_.idTest;
   q.radius = radius;
+  if (seeds) {
+    q.seedS = inner ? seeds->innerS : seeds->outerS;
+    q.seedT = inner ? seeds->innerT : seeds->outerT;
+  }
   const brabec::SearchHit hit = options_.scalarSearch ? brabec::searchScalar(m, q) : brabec::searchVectorized(m, q);
+  if (seeds && hit.found)
+    (inner ? seeds->innerS : seeds->outerS) = hit.s, (inner ? seeds->innerT : seeds->outerT) = hit.t;
   if (!hit.found) {
     if (!inner) return 1.0f;
     if (!options_.coverageBound) return 0.0f;
@@ -1068,13 +1089,13 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
       direction[2 * k + 1] = direction[2 * from + 1];
     };
     const std::vector<int> columns = groupBorders(width), rowBorders = groupBorders(height);
-    auto makeSolve = [&](int64_t& searchCount) {
-      return [&, searchCountPtr = &searchCount](size_t k) {
+    auto makeSolve = [&](int64_t& searchCount, SearchSeeds& seeds) {
+      return [&, searchCountPtr = &searchCount, seedsPtr = &seeds](size_t k) {
         if (known[k]) return;
         const Pixel p = classify(gbuffer, static_cast<int>(k % width), static_cast<int>(k / width));
         Vec2 toTexel;
         bool raised = false;
-        out[k] = evaluate(p, &toTexel, &raised);
+        out[k] = evaluate(p, &toTexel, &raised, seedsPtr);
         storeDirection(k, toTexel);
         known[k] = static_cast<uint8_t>(kKnown | (raised ? kRaised : 0));
         *searchCountPtr += searched(p);
@@ -1086,7 +1107,8 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     // at once (its few rows stay in cache, where a column at a time reads a new line per pixel).
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rowBorders.size()), [&](const tbb::blocked_range<size_t>& range) {
       int64_t searchCount = 0;
-      const auto solve = makeSolve(searchCount);
+      SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+      const auto solve = makeSolve(searchCount, seeds);
       for (size_t r = range.begin(); r < range.end(); ++r)
         for (const int x : columns) solve(static_cast<size_t>(rowBorders[r]) * width + x);
       searches += searchCount;
@@ -1094,7 +1116,8 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, rowBorders.size() - 1), [&](const tbb::blocked_range<size_t>& range) {
           int64_t searchCount = 0;
-          const auto solve = makeSolve(searchCount);
+          SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+          const auto solve = makeSolve(searchCount, seeds);
           for (size_t g = range.begin(); g < range.end(); ++g)
             for (const int x : columns) {
               auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
@@ -1107,7 +1130,8 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     auto fillNothing = [](size_t, size_t) {};
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t searchCount = 0;
-      const auto solve = makeSolve(searchCount);
+      SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+      const auto solve = makeSolve(searchCount, seeds);
       for (int y = rows.begin(); y < rows.end(); ++y) {
         auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };
         for (size_t g = 0; g + 1 < columns.size(); ++g)

@@ -194,6 +194,9 @@ struct SearchQuery {
   bool inner = false;  //!< search a lit texel of P's object (true) or a blocker (false)
   bool idTest = true;
   float radius = 0.0f;  //!< texels; texels at distance < radius qualify
+  // A texel to start from (optional, -1: none), e.g. the one the search found for a pixel nearby: when it
+  // qualifies, the search looks only for nearer ones. The answer does not depend on it, only the cost.
+  int seedS = -1, seedT = -1;
 };
 
 struct SearchHit {
@@ -202,7 +205,10 @@ struct SearchHit {
   int s = -1, t = -1;      //!< the texel
 };
 
+// The nearest qualifying texel (ties: the smallest t, then the smallest s), rows nearest first,
+// vectorized within a row, skipping the tiles that cannot qualify.
 SearchHit searchVectorized(const SearchMap& map, const SearchQuery& query);
+// The same answer from every texel of the radius' box in row-major order: the oracle (no seed).
 SearchHit searchScalar(const SearchMap& map, const SearchQuery& query);
 
 // Per-texel jitter offset in [-amplitude, amplitude], a deterministic hash of (s, t, axis).
@@ -298,7 +304,13 @@ class BrabecTechnique final : public ShadowTechnique {
   // V of a classified pixel; `toTexel` (optional) receives the unit direction in the map from P' to
   // the texel the search found, (0, 0) when it found none; `raised` (optional) whether the coverage
   // bound raised V.
-  float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr, bool* raised = nullptr) const;
+  // `seeds` (optional): the texels the last outer and inner searches of this thread found, where the next
+  // searches start (SearchQuery::seedS), updated by this one.
+  struct SearchSeeds {
+    int outerS = -1, outerT = -1, innerS = -1, innerT = -1;
+  };
+  float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr, bool* raised = nullptr,
+                 SearchSeeds* seeds = nullptr) const;
   // The coverage bound (our extension): max(v, 1 - the blocked fraction of the light's footprint at
   // blocker depth zb around the pixel's P').
   float boundByCoverage(const Pixel& pixel, float v, float zb) const;

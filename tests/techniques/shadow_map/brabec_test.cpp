@@ -106,7 +106,15 @@ TEST(BrabecSearch, VectorizedMatchesScalarOracleOnRandomMaps) {
     m.tileMaxDepth = tileMax.data();
     m.tileObjectId = tileId.data();
     const brabec::SearchHit tiled = brabec::searchVectorized(m, q);
-    for (const brabec::SearchHit* hit : {&plain, &tiled}) {
+    // Seeded: the oracle's own texel, and a texel anywhere near (most do not qualify).
+    brabec::SearchQuery seededQuery = q;
+    seededQuery.seedS = oracle.found ? oracle.s : -1;
+    seededQuery.seedT = oracle.found ? oracle.t : -1;
+    const brabec::SearchHit seededOwn = brabec::searchVectorized(m, seededQuery);
+    seededQuery.seedS = static_cast<int>(q.s - 8.0f + 16.0f * u(8));
+    seededQuery.seedT = static_cast<int>(q.t - 8.0f + 16.0f * u(9));
+    const brabec::SearchHit seededNear = brabec::searchVectorized(m, seededQuery);
+    for (const brabec::SearchHit* hit : {&plain, &tiled, &seededOwn, &seededNear}) {
       ASSERT_EQ(hit->found, oracle.found) << "query " << i;
       if (!oracle.found) continue;
       ASSERT_EQ(hit->s, oracle.s) << "query " << i;
@@ -121,6 +129,52 @@ TEST(BrabecSearch, VectorizedMatchesScalarOracleOnRandomMaps) {
   // Both outcomes must be well represented for the comparison to mean something.
   EXPECT_GT(found, queries / 5);
   EXPECT_LT(found, queries * 4 / 5);
+}
+
+// A seed changes no answer where several texels tie at the nearest distance: the smallest t wins, and
+// within a row the smallest s, whichever of them the search starts from.
+TEST(BrabecSearch, SeedsKeepTheTieRule) {
+  LightMap map;
+  map.size = 61;
+  map.lsDepth = Image<float>(map.size, map.size, 9.0f);
+  map.objectId = Image<int32_t>(map.size, map.size, 1);
+  std::vector<float> tileMin, tileMax;
+  std::vector<int32_t> tileId;
+  int tilesPerRow = 0;
+  // Blockers 3 texels from P' = the centre of texel (30, 30): in one row (left and right), then also
+  // above and below.
+  const std::vector<std::vector<std::pair<int, int>>> layouts = {{{27, 30}, {33, 30}},
+                                                                 {{27, 30}, {33, 30}, {30, 27}, {30, 33}}};
+  for (const auto& blockers : layouts) {
+    for (const auto& [bs, bt] : blockers) {
+      map.lsDepth(bs, bt) = 2.0f;
+      map.objectId(bs, bt) = 0;
+    }
+    brabec::buildTiles(map, tileMin, tileMax, tileId, tilesPerRow);
+    brabec::SearchMap m;
+    m.size = map.size;
+    m.lsDepth = map.lsDepth.data();
+    m.objectId = map.objectId.data();
+    m.tilesPerRow = tilesPerRow;
+    m.tileMinDepth = tileMin.data();
+    m.tileMaxDepth = tileMax.data();
+    m.tileObjectId = tileId.data();
+    brabec::SearchQuery q;
+    q.s = q.t = 30.5f;
+    q.zLayer = 5.0f;
+    q.objectId = 1;
+    q.radius = 6.0f;
+    const brabec::SearchHit oracle = brabec::searchScalar(m, q);
+    ASSERT_TRUE(oracle.found);
+    for (const auto& [bs, bt] : blockers) {
+      q.seedS = bs;
+      q.seedT = bt;
+      const brabec::SearchHit hit = brabec::searchVectorized(m, q);
+      EXPECT_EQ(hit.s, oracle.s) << "seed " << bs << ", " << bt;
+      EXPECT_EQ(hit.t, oracle.t) << "seed " << bs << ", " << bt;
+      EXPECT_EQ(hit.distance2, 9.0f);
+    }
+  }
 }
 
 // The table's nearest tile over a rectangle is the plain loop's, for every size of grid (powers of
