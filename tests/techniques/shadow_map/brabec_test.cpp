@@ -755,17 +755,23 @@ TEST(BrabecCoverage, PolygonAndSegmentFootprints) {
   EXPECT_EQ(seg.blocked, 10);
 }
 
-// The lattices hold the strided texels: a count read from them is the strided count, for disks and
-// polygons, strides 2..9, footprints that leave the map, on a map of random depths.
-TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
+// A map of `size` x `size` texels of random depths in [2, 4), one object.
+LightMap randomDepthMap(int size) {
   LightMap map;
-  map.size = 101;  // no stride divides it: partial lattice rows and columns
+  map.size = size;
   map.lsDepth = Image<float>(map.size, map.size);
   map.objectId = Image<int32_t>(map.size, map.size, 0);
   for (int t = 0; t < map.size; ++t)
     for (int s = 0; s < map.size; ++s)
       map.lsDepth(s, t) =
           2.0f + static_cast<float>(hashCombine(static_cast<uint64_t>(s), static_cast<uint64_t>(t)) % 1000) * 0.002f;
+  return map;
+}
+
+// The lattices hold the strided texels: a count read from them is the strided count, for disks and
+// polygons, strides 2..9, footprints that leave the map, on a map of random depths.
+TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
+  const LightMap map = randomDepthMap(101);  // no stride divides 101: partial lattice rows and columns
   brabec::LatticeDepths lattices;
   lattices.build(map, 9);
   const std::vector<Vec2> quad = {{-1.0f, -0.6f}, {0.9f, -1.0f}, {1.0f, 0.8f}, {-0.7f, 1.0f}};
@@ -794,14 +800,7 @@ TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
 // multiples of k count. Strides 1..9 with and without lattices; radii up to 100 texels, so a footprint
 // of more rows than the count gathers at once is counted too; footprints that leave the map.
 TEST(BrabecCoverage, DiskCountsAreTheTexelByTexelCount) {
-  LightMap map;
-  map.size = 203;
-  map.lsDepth = Image<float>(map.size, map.size);
-  map.objectId = Image<int32_t>(map.size, map.size, 0);
-  for (int t = 0; t < map.size; ++t)
-    for (int s = 0; s < map.size; ++s)
-      map.lsDepth(s, t) =
-          2.0f + static_cast<float>(hashCombine(static_cast<uint64_t>(t), static_cast<uint64_t>(s)) % 1000) * 0.002f;
+  const LightMap map = randomDepthMap(203);
   brabec::LatticeDepths lattices;
   lattices.build(map, 9);
   auto multipleOf = [](int x, int k) { return ((x % k) + k) % k == 0; };
