@@ -71,7 +71,8 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
 template <bool kInner, bool kIdTest>
 bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
   // Both loads and every test combined with & and |, not && and ||: no branch and no conditional
-  // load, so that the loop over a row of tiles in openTileSpan vectorizes.
+  // load in the loop over a row of tiles in openTileSpan (GCC 12 still does not vectorize that loop:
+  // its reductions select the loop's own index).
   const size_t k = static_cast<size_t>(ty) * m.tilesPerRow + tx;
   if constexpr (kInner) {
     const int32_t id = m.tileObjectId[k];
@@ -91,8 +92,8 @@ bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
 }
 
 // The first and the last of tiles tx0 .. tx0 + count - 1 of tile row ty that may qualify, as offsets
-// from tx0 (first > last: none). Two select reductions the compiler vectorizes; the result is kept in
-// locals until the end, so no store may alias the map's pointers.
+// from tx0 (first > last: none): two select reductions, kept in locals until the end, so that no store
+// may alias the map's pointers.
 template <bool kInner, bool kIdTest>
 std::pair<int, int> openTileSpan(const SearchMap& map, const SearchQuery& query, int tx0, int ty, int count, int none) {
   const SearchMap m = map;
