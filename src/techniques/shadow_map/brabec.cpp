@@ -11,6 +11,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <tuple>
 #include <utility>
@@ -71,8 +72,7 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
 template <bool kInner, bool kIdTest>
 bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
   // Both loads and every test combined with & and |, not && and ||: no branch and no conditional
-  // load in the loop over a row of tiles in openTileSpan (GCC 12 still does not vectorize that loop:
-  // its reductions select the loop's own index).
+  // load, so that the loop over a row of tiles in openTileSpan vectorizes.
   const size_t k = static_cast<size_t>(ty) * m.tilesPerRow + tx;
   if constexpr (kInner) {
     const int32_t id = m.tileObjectId[k];
@@ -91,19 +91,27 @@ bool tileMayQualify(const SearchMap& m, const SearchQuery& q, int tx, int ty) {
   }
 }
 
-// The first and the last of tiles tx0 .. tx0 + count - 1 of tile row ty that may qualify, as offsets
-// from tx0 (first > last: none): two select reductions, kept in locals until the end, so that no store
-// may alias the map's pointers.
+// The tiles a search's grid holds along each side (a radius' box of up to 24 x 24 tiles; wider boxes
+// take the tiles one run at a time): three 64-bit words of one byte a tile.
+constexpr int kGrid = 24;
+
+// The first and the last of tiles tx0 .. tx0 + count - 1 (count <= kGrid) of tile row ty that may qualify,
+// as offsets from tx0 (first > last: none): the tests in one loop into bytes, which the compiler
+// vectorizes, then the first and the last nonzero byte found by bit scans over three 64-bit words.
 template <bool kInner, bool kIdTest>
 std::pair<int, int> openTileSpan(const SearchMap& map, const SearchQuery& query, int tx0, int ty, int count, int none) {
   const SearchMap m = map;
   const SearchQuery q = query;
+  alignas(8) uint8_t open[kGrid] = {};
+  for (int i = 0; i < count; ++i) open[i] = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty) ? 1 : 0;
+  static_assert(kGrid == 3 * 8);
+  uint64_t words[3];
+  std::memcpy(words, open, sizeof words);
   int first = none, last = -1;
-  for (int i = 0; i < count; ++i) {
-    const bool open = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty);
-    first = std::min(first, open ? i : none);
-    last = std::max(last, open ? i : -1);
-  }
+  for (int w = 2; w >= 0; --w)
+    if (words[w]) first = 8 * w + std::countr_zero(words[w]) / 8;
+  for (int w = 0; w < 3; ++w)
+    if (words[w]) last = 8 * w + (63 - std::countl_zero(words[w])) / 8;
   return {first, last};
 }
 
@@ -122,7 +130,6 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
   // Tiles: which ones may qualify, decided once per search (a grid on the stack when the radius'
   // box spans few enough tiles), and which tile rows hold any such tile, so empty texel rows cost
   // one lookup.
-  constexpr int kGrid = 24;
   const bool tiled = m.tileMinDepth != nullptr;
   const int tx0 = sLo >> kTileShift, ty0 = tLo >> kTileShift;
   const int tilesX = (sHi >> kTileShift) - tx0 + 1, tilesY = (tHi >> kTileShift) - ty0 + 1;
