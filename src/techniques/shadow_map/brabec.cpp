@@ -160,7 +160,9 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
       hit = {true, std::bit_cast<float>(key), q.seedS, q.seedT};
     }
   }
-  int t = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
+  // The first row, P's own; rows above it (up) and below it (down) lie ever farther from P.
+  const int tStart = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
+  int t = tStart;
   int up = t - 1, down = t + 1;
   for (;;) {
     const float gap2 = rowGap2(t);
@@ -224,6 +226,13 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
           hit.t = t;
           hit.distance2 = std::bit_cast<float>(key);
         }
+      } else if (t != tStart) {
+        // The row's chord misses the texels that may qualify. The rows beyond it on its side of P are
+        // farther, their chords narrower about the same s: within this tile row (the same open span)
+        // they miss too, and are passed over.
+        const int rowLo = ty << kTileShift, rowHi = rowLo + kTileSize - 1;
+        if (t < tStart && up >= rowLo) up = rowLo - 1;
+        if (t > tStart && down <= rowHi) down = rowHi + 1;
       }
     } else {
       // No tile of this tile row may qualify: its other rows, on either side, are passed over without
