@@ -160,10 +160,19 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
       hit = {true, std::bit_cast<float>(key), q.seedS, q.seedT};
     }
   }
-  // The first row, P's own; rows above it (up) and below it (down) lie ever farther from P.
-  const int tStart = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
-  int t = tStart;
+  int t = std::clamp(static_cast<int>(std::floor(q.t)), tLo, tHi);
   int up = t - 1, down = t + 1;
+  // When no tile of row t's tile row may qualify, or row t's chord misses the tiles that may: the tile
+  // row's other rows, on either side, are passed over without a visit. Rows come nearest first, so
+  // those not yet visited are at least as far as t, their chords no wider about the same s (and the
+  // tile row's open tiles the same): none of them has a texel to read. The rows left keep their
+  // order, and a row that would have ended the search is at least as far as the next one visited,
+  // which ends it the same way.
+  auto passOverTileRow = [&] {
+    const int rowLo = (t >> kTileShift) << kTileShift, rowHi = rowLo + kTileSize - 1;
+    if (up >= rowLo) up = rowLo - 1;
+    if (down <= rowHi) down = rowHi + 1;
+  };
   for (;;) {
     const float gap2 = rowGap2(t);
     // Rows come nearest first: once a row cannot hold a texel within the radius, or nearer than the
@@ -226,21 +235,11 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
           hit.t = t;
           hit.distance2 = std::bit_cast<float>(key);
         }
-      } else if (t != tStart) {
-        // The row's chord misses the texels that may qualify. The rows beyond it on its side of P are
-        // farther, their chords narrower about the same s: within this tile row (the same open span)
-        // they miss too, and are passed over.
-        const int rowLo = ty << kTileShift, rowHi = rowLo + kTileSize - 1;
-        if (t < tStart && up >= rowLo) up = rowLo - 1;
-        if (t > tStart && down <= rowHi) down = rowHi + 1;
+      } else {
+        passOverTileRow();
       }
     } else {
-      // No tile of this tile row may qualify: its other rows, on either side, are passed over without
-      // a visit. The rows left keep their nearest-first order, and a row that would have ended the
-      // search is at least as far as the next one visited, which ends it the same way.
-      const int rowLo = ty << kTileShift, rowHi = rowLo + kTileSize - 1;
-      if (up >= rowLo) up = rowLo - 1;
-      if (down <= rowHi) down = rowHi + 1;
+      passOverTileRow();
     }
     const bool canUp = up >= tLo, canDown = down <= tHi;
     if (!canUp && !canDown) break;
