@@ -65,6 +65,53 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
   return best;
 }
 
+// The same smallest key for a short span (at most kShortSpan texels) of a row of n texels, inline: whole
+// groups of four texels from a start within the row that covers [s0, s1], each texel's key computed as
+// texelKey computes it (the same operations lane by lane) and the texels outside [s0, s1] masked to
+// kNoKey. Every span takes the same few groups and no remainder loop, where the called loop ran most of
+// a short span in its scalar remainder.
+constexpr int kShortSpan = 16;
+template <bool kInner, bool kIdTest, bool kJitter>
+inline int32_t rowMinKeyShort(const float* depth, const int32_t* id, const float* js, const float* jt, int s0, int s1,
+                              int n, float ps, float tc, float pt, float zRow, float dzds, int32_t objectId, float r2) {
+  using Float4 = float __attribute__((vector_size(16)));
+  using Int4 = int32_t __attribute__((vector_size(16)));
+  const int groups = (s1 - s0 + 4) / 4;
+  const int start = std::min(s0, n - 4 * groups);  // >= 0: the caller checks n >= kShortSpan
+  const Int4 lanes = {0, 1, 2, 3};
+  const Float4 inf = {kInfinity, kInfinity, kInfinity, kInfinity};
+  Int4 best = {kNoKey, kNoKey, kNoKey, kNoKey};
+  for (int g = 0; g < groups; ++g) {
+    const int base = start + 4 * g;
+    const Int4 s = base + lanes;
+    Float4 d, jitterS = {0, 0, 0, 0}, jitterT = {0, 0, 0, 0};
+    Int4 ids = {0, 0, 0, 0};
+    __builtin_memcpy(&d, depth + base, sizeof d);
+    if constexpr (kIdTest) __builtin_memcpy(&ids, id + base, sizeof ids);
+    if constexpr (kJitter) {
+      __builtin_memcpy(&jitterS, js + base, sizeof jitterS);
+      __builtin_memcpy(&jitterT, jt + base, sizeof jitterT);
+    }
+    const Float4 sc = __builtin_convertvector(s, Float4) + 0.5f;
+    const Float4 dx = (sc + jitterS) - ps;
+    const Float4 dy = (tc + jitterT) - pt;
+    const Float4 d2 = dx * dx + dy * dy;
+    Float4 candidate;
+    if constexpr (kInner) {
+      const Float4 layer = zRow + dzds * (sc - ps);
+      candidate = d >= layer ? d2 : inf;
+    } else {
+      candidate = d < zRow ? d2 : inf;
+    }
+    if constexpr (kIdTest) candidate = (kInner ? (ids == objectId) : (ids != objectId)) ? candidate : inf;
+    candidate = d2 < r2 ? candidate : inf;
+    Int4 key = reinterpret_cast<Int4>(candidate);
+    key = (s >= s0) & (s <= s1) ? key : kNoKey;
+    best = key < best ? key : best;
+  }
+  return std::min(std::min(best[0], best[1]), std::min(best[2], best[3]));
+}
+
 // Whether tile (tx, ty) may hold a qualifying texel. Outer: a blocker needs depth < layer (the tile's
 // nearest depth tells) and, with ids, an id other than P's (a tile all of P's object has none). Inner:
 // a lit texel needs depth >= layer (the tile's farthest depth against the layer's lowest value over
@@ -203,8 +250,11 @@ SearchHit searchRows(const SearchMap& m, const SearchQuery& q) {
         const float zRow = kInner ? q.zLayer + q.dzdt * (tc - q.t) : q.zLayer;
         int32_t key = kNoKey;
         if (!tiled || gridded) {
-          key = rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, q.s, tc, q.t, zRow, q.dzds, q.objectId,
-                                                    r2);
+          key = s1 - s0 < kShortSpan && n >= kShortSpan
+                    ? rowMinKeyShort<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, n, q.s, tc, q.t, zRow, q.dzds,
+                                                               q.objectId, r2)
+                    : rowMinKey<kInner, kIdTest, kJitter>(depth, id, js, jt, s0, s1, q.s, tc, q.t, zRow, q.dzds,
+                                                          q.objectId, r2);
         } else {
           // Runs of tiles that may qualify, each scanned in one vectorized loop.
           int runStart = -1;
