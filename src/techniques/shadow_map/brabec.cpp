@@ -672,12 +672,15 @@ void TileNearestTable::build(const std::vector<float>& tileMinDepth, const std::
     const int half = 1 << (level - 1);
     // Squares that would reach past the grid are never read (queries fit their level's size).
     const int last = n_ - (1 << level);
-    for (int ty = 0; ty <= last; ++ty)
-      for (int tx = 0; tx <= last; ++tx) {
-        auto at = [&](int x, int y) -> const Entry& { return below[static_cast<size_t>(y) * n_ + x]; };
-        here[static_cast<size_t>(ty) * n_ + tx] =
-            merge(merge(at(tx, ty), at(tx + half, ty)), merge(at(tx, ty + half), at(tx + half, ty + half)));
-      }
+    if (last < 0) continue;
+    tbb::parallel_for(tbb::blocked_range<int>(0, last + 1, 8), [&](const tbb::blocked_range<int>& rows) {
+      for (int ty = rows.begin(); ty < rows.end(); ++ty)
+        for (int tx = 0; tx <= last; ++tx) {
+          auto at = [&](int x, int y) -> const Entry& { return below[static_cast<size_t>(y) * n_ + x]; };
+          here[static_cast<size_t>(ty) * n_ + tx] =
+              merge(merge(at(tx, ty), at(tx + half, ty)), merge(at(tx, ty + half), at(tx + half, ty + half)));
+        }
+    });
   }
 }
 
