@@ -33,8 +33,11 @@ inline float integerPower(float x, int n) {
 // >= 1 from `in`, which is read where `inActive` says a tap lies in an active tile and `outside`
 // elsewhere (the second pass reads the first pass's result inside the active tiles and the unfiltered
 // input around them).
-void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
-                const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
+// kPower: options.normalPower when it is one of the exponents instantiated below (so that the normal
+// weight's squarings unroll: the same multiplies as the loop's), 0 otherwise.
+template <int kPower>
+void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
+                    const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
   const int width = g.width(), height = g.height();
   const Image<float>& radius = *input.radius;
   const Image<float>& reach = *input.reach;
@@ -87,7 +90,7 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
             if (!(planeWeight > 0.0f)) continue;
             const float cosine = glm::dot(n, g.wsNormal(qx, qy));
             if (!(cosine > 0.0f)) continue;
-            const float normalWeight = integerPower(cosine, options.normalPower);
+            const float normalWeight = integerPower(cosine, kPower > 0 ? kPower : options.normalPower);
             // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
             const float s = 1.0f - d * d * invR2;
             const float w = s * s * planeWeight * normalWeight;
@@ -98,6 +101,18 @@ void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const Penumb
         }
     }
   });
+}
+
+void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
+                const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
+  switch (options.normalPower) {
+    case 16:  // the few-ray techniques' default
+      return filterPassWith<16>(g, input, options, in, outside, dx, dy, out);
+    case 8:
+      return filterPassWith<8>(g, input, options, in, outside, dx, dy, out);
+    default:
+      return filterPassWith<0>(g, input, options, in, outside, dx, dy, out);
+  }
 }
 
 }  // namespace
