@@ -33,6 +33,9 @@ inline float integerPower(float x, int n) {
 // >= 1 from `in`, which is read where `inActive` says a tap lies in an active tile and `outside`
 // elsewhere (the second pass reads the first pass's result inside the active tiles and the unfiltered
 // input around them).
+// Pixels whose set-up is computed together.
+constexpr int kChunk = 32;
+
 // kPower: options.normalPower when it is one of the exponents instantiated below (so that the normal
 // weight's squarings unroll: the same multiplies as the loop's), 0 otherwise.
 template <int kPower>
@@ -59,45 +62,67 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
       if (!active(x0, y0)) continue;
+      const int x1 = std::min(x0 + tileSize, width);
       for (int y = y0; y < std::min(y0 + tileSize, height); ++y)
-        for (int x = x0; x < std::min(x0 + tileSize, width); ++x) {
-          const float r = radius(x, y);
-          if (!(r >= 1.0f) || !g.hit(x, y)) {
-            out(x, y) = in(x, y);
-            continue;
+        for (int xChunk = x0; xChunk < x1; xChunk += kChunk) {
+          // The per-pixel set-up of up to kChunk pixels in one loop the compiler vectorizes (its
+          // divisions and its ceil lane by lane, the same operations as one pixel at a time). taps is
+          // int(r) / stride, taken as the floor of the float quotient: exact for integers below 2^24.
+          const int count = std::min(kChunk, x1 - xChunk);
+          alignas(64) float invToleranceOf[kChunk], invR2Of[kChunk], invStrideOf[kChunk];
+          alignas(64) int strideOf[kChunk], tapsOf[kChunk];
+          const float* radii = radius.row(y) + xChunk;
+          const float* depths = g.csDepth.row(y) + xChunk;
+          for (int i = 0; i < count; ++i) {
+            const float ri = radii[i];
+            const float r = ri >= 1.0f && ri <= 1e6f ? ri : 1.0f;  // a pixel left as it is: any value will do
+            invToleranceOf[i] = 1.0f / (options.planeTolerance * pixelFootprint(depths[i], input.tanHalfFovY, height));
+            const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
+            strideOf[i] = stride;
+            tapsOf[i] =
+                static_cast<int>(std::floor(static_cast<float>(static_cast<int>(r)) / static_cast<float>(stride)));
+            invR2Of[i] = 1.0f / (r * r);
+            invStrideOf[i] = 1.0f / static_cast<float>(stride);
           }
-          const int32_t id = g.objectId(x, y);
-          const Vec3 p = g.wsPosition(x, y);
-          const Vec3 n = g.wsNormal(x, y);
-          // Tolerated distance from p's tangent plane per pixel of screen distance.
-          const float invTolerance =
-              1.0f / (options.planeTolerance * pixelFootprint(g.csDepth(x, y), input.tanHalfFovY, height));
-          const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
-          const int taps = static_cast<int>(r) / stride;
-          const float invR2 = 1.0f / (r * r);
-          const float invStride = 1.0f / static_cast<float>(stride);
-          float sum = in(x, y), weightSum = 1.0f;
-          for (int k = -taps; k <= taps; ++k) {
-            if (k == 0) continue;
-            const int qx = x + k * stride * dx, qy = y + k * stride * dy;
-            if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
-            if (g.objectId(qx, qy) != id) continue;  // also drops pixels that see nothing
-            const float d = static_cast<float>(std::abs(k) * stride);
-            if (reach(qx, qy) < d) continue;
-            const float plane = std::abs(glm::dot(n, g.wsPosition(qx, qy) - p));
-            // 1 - plane / (tolerance d), with reciprocals: no division per tap.
-            const float planeWeight = 1.0f - plane * invTolerance * invStride * kInverse[std::abs(k)];
-            if (!(planeWeight > 0.0f)) continue;
-            const float cosine = glm::dot(n, g.wsNormal(qx, qy));
-            if (!(cosine > 0.0f)) continue;
-            const float normalWeight = integerPower(cosine, kPower > 0 ? kPower : options.normalPower);
-            // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
-            const float s = 1.0f - d * d * invR2;
-            const float w = s * s * planeWeight * normalWeight;
-            sum += w * (sameInput || active(qx, qy) ? in(qx, qy) : outside(qx, qy));
-            weightSum += w;
+          for (int i = 0; i < count; ++i) {
+            const int x = xChunk + i;
+            const float r = radius(x, y);
+            if (!(r >= 1.0f) || !g.hit(x, y)) {
+              out(x, y) = in(x, y);
+              continue;
+            }
+            const int32_t id = g.objectId(x, y);
+            const Vec3 p = g.wsPosition(x, y);
+            const Vec3 n = g.wsNormal(x, y);
+            // Tolerated distance from p's tangent plane per pixel of screen distance.
+            const float invTolerance = invToleranceOf[i];
+            const int stride = strideOf[i];
+            const int taps = tapsOf[i];
+            const float invR2 = invR2Of[i];
+            const float invStride = invStrideOf[i];
+            float sum = in(x, y), weightSum = 1.0f;
+            for (int k = -taps; k <= taps; ++k) {
+              if (k == 0) continue;
+              const int qx = x + k * stride * dx, qy = y + k * stride * dy;
+              if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+              if (g.objectId(qx, qy) != id) continue;  // also drops pixels that see nothing
+              const float d = static_cast<float>(std::abs(k) * stride);
+              if (reach(qx, qy) < d) continue;
+              const float plane = std::abs(glm::dot(n, g.wsPosition(qx, qy) - p));
+              // 1 - plane / (tolerance d), with reciprocals: no division per tap.
+              const float planeWeight = 1.0f - plane * invTolerance * invStride * kInverse[std::abs(k)];
+              if (!(planeWeight > 0.0f)) continue;
+              const float cosine = glm::dot(n, g.wsNormal(qx, qy));
+              if (!(cosine > 0.0f)) continue;
+              const float normalWeight = integerPower(cosine, kPower > 0 ? kPower : options.normalPower);
+              // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
+              const float s = 1.0f - d * d * invR2;
+              const float w = s * s * planeWeight * normalWeight;
+              sum += w * (sameInput || active(qx, qy) ? in(qx, qy) : outside(qx, qy));
+              weightSum += w;
+            }
+            out(x, y) = sum / weightSum;
           }
-          out(x, y) = sum / weightSum;
         }
     }
   });
