@@ -75,7 +75,9 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
           const float* depths = g.csDepth.row(y) + xChunk;
           for (int i = 0; i < count; ++i) {
             const float ri = radii[i];
-            const float r = ri >= 1.0f && ri <= 1e6f ? ri : 1.0f;  // a pixel left as it is: any value will do
+            // A radius is at most max_radius (256); one below 1 or not a number is a pixel left as it
+            // is, whose set-up is not read.
+            const float r = ri >= 1.0f && ri <= 1e6f ? ri : 1.0f;
             invToleranceOf[i] = 1.0f / (options.planeTolerance * pixelFootprint(depths[i], input.tanHalfFovY, height));
             const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
             strideOf[i] = stride;
