@@ -29,13 +29,13 @@ inline float integerPower(float x, int n) {
   return result;
 }
 
+// Pixels whose set-up is computed together.
+constexpr int kChunk = 32;
+
 // One separable pass along (dx, dy) over the active tiles: writes `out` at their pixels of radius
 // >= 1 from `in`, which is read where `inActive` says a tap lies in an active tile and `outside`
 // elsewhere (the second pass reads the first pass's result inside the active tiles and the unfiltered
 // input around them).
-// Pixels whose set-up is computed together.
-constexpr int kChunk = 32;
-
 // kPower: options.normalPower when it is one of the exponents instantiated below (so that the normal
 // weight's squarings unroll: the same multiplies as the loop's), 0 otherwise.
 template <int kPower>
