@@ -33,23 +33,37 @@ namespace {
 // Key of a texel that does not qualify: the bits of +infinity, above every finite distance's.
 constexpr int32_t kNoKey = std::bit_cast<int32_t>(kInfinity);
 
+// A texel's squared distance to P' when it meets the search's criterion, +infinity otherwise: for one
+// texel (F float, I int32_t) or for four at once (GCC vectors), the same operations either way. Its
+// centre sc, jitter (0 without), depth and object id are given. Written as float selects, which GCC
+// vectorizes in a loop over texels.
+template <bool kInner, bool kIdTest, class F, class I>
+inline F qualifyingDistance2(F sc, F jitterS, F jitterT, F depth, I id, float ps, float tc, float pt, float zRow,
+                             float dzds, int32_t objectId, float r2) {
+  const F inf = F{} + kInfinity;
+  const F dx = (sc + jitterS) - ps;
+  const F dy = (tc + jitterT) - pt;
+  const F d2 = dx * dx + dy * dy;
+  // Inner: the receiver plane's layer at this texel's centre; outer: the constant layer (dzds unused).
+  F candidate;
+  if constexpr (kInner)
+    candidate = depth >= zRow + dzds * (sc - ps) ? d2 : inf;
+  else
+    candidate = depth < zRow ? d2 : inf;
+  if constexpr (kIdTest) candidate = (kInner ? (id == objectId) : (id != objectId)) ? candidate : inf;
+  return d2 < r2 ? candidate : inf;
+}
+
 // One texel's candidacy as an integer key: the bit pattern of its squared distance when it meets
-// the criterion (non-negative floats order like their bits), kNoKey otherwise. Written as float
-// selects followed by one bit cast, which GCC vectorizes (a select between a bit-cast value and an
-// integer constant it does not), so the row loop below becomes compares, blends and an integer min.
+// the criterion (non-negative floats order like their bits), kNoKey otherwise. One bit cast after
+// the float selects (GCC vectorizes a select between floats, not one between a bit-cast value and an
+// integer constant), so the row loop below becomes compares, blends and an integer min.
 template <bool kInner, bool kIdTest, bool kJitter>
 inline int32_t texelKey(const float* depth, const int32_t* id, const float* js, const float* jt, int s, float ps,
                         float tc, float pt, float zRow, float dzds, int32_t objectId, float r2) {
-  const float sc = static_cast<float>(s) + 0.5f;
-  const float dx = (sc + (kJitter ? js[s] : 0.0f)) - ps;
-  const float dy = (tc + (kJitter ? jt[s] : 0.0f)) - pt;
-  const float d2 = dx * dx + dy * dy;
-  // Inner: the receiver plane's layer at this texel's centre; outer: the constant layer (dzds unused).
-  const float layer = kInner ? zRow + dzds * (sc - ps) : zRow;
-  float candidate = (kInner ? (depth[s] >= layer) : (depth[s] < layer)) ? d2 : kInfinity;
-  if constexpr (kIdTest) candidate = (kInner ? (id[s] == objectId) : (id[s] != objectId)) ? candidate : kInfinity;
-  candidate = d2 < r2 ? candidate : kInfinity;
-  return std::bit_cast<int32_t>(candidate);
+  return std::bit_cast<int32_t>(
+      qualifyingDistance2<kInner, kIdTest>(static_cast<float>(s) + 0.5f, kJitter ? js[s] : 0.0f, kJitter ? jt[s] : 0.0f,
+                                           depth[s], kIdTest ? id[s] : 0, ps, tc, pt, zRow, dzds, objectId, r2));
 }
 
 // The smallest key of texels [s0, s1] of one row: the vectorized inner loop of the search.
@@ -66,8 +80,8 @@ __attribute__((target_clones("avx2", "default"), noinline)) int32_t rowMinKey(
 }
 
 // The same smallest key for a short span (at most kShortSpan texels) of a row of n texels, inline: whole
-// groups of four texels from a start within the row that covers [s0, s1], each texel's key computed as
-// texelKey computes it (the same operations lane by lane) and the texels outside [s0, s1] masked to
+// groups of four texels from a start within the row that covers [s0, s1], each texel's key from
+// qualifyingDistance2 as texelKey's (the same operations lane by lane) and the texels outside [s0, s1] masked to
 // kNoKey. Every span takes the same few groups and no remainder loop, where the called loop ran most of
 // a short span in its scalar remainder.
 constexpr int kShortSpan = 16;
@@ -79,7 +93,6 @@ inline int32_t rowMinKeyShort(const float* depth, const int32_t* id, const float
   const int groups = (s1 - s0 + 4) / 4;
   const int start = std::min(s0, n - 4 * groups);  // >= 0: the caller checks n >= kShortSpan
   const Int4 lanes = {0, 1, 2, 3};
-  const Float4 inf = {kInfinity, kInfinity, kInfinity, kInfinity};
   Int4 best = {kNoKey, kNoKey, kNoKey, kNoKey};
   for (int g = 0; g < groups; ++g) {
     const int base = start + 4 * g;
@@ -92,19 +105,8 @@ inline int32_t rowMinKeyShort(const float* depth, const int32_t* id, const float
       __builtin_memcpy(&jitterS, js + base, sizeof jitterS);
       __builtin_memcpy(&jitterT, jt + base, sizeof jitterT);
     }
-    const Float4 sc = __builtin_convertvector(s, Float4) + 0.5f;
-    const Float4 dx = (sc + jitterS) - ps;
-    const Float4 dy = (tc + jitterT) - pt;
-    const Float4 d2 = dx * dx + dy * dy;
-    Float4 candidate;
-    if constexpr (kInner) {
-      const Float4 layer = zRow + dzds * (sc - ps);
-      candidate = d >= layer ? d2 : inf;
-    } else {
-      candidate = d < zRow ? d2 : inf;
-    }
-    if constexpr (kIdTest) candidate = (kInner ? (ids == objectId) : (ids != objectId)) ? candidate : inf;
-    candidate = d2 < r2 ? candidate : inf;
+    const Float4 candidate = qualifyingDistance2<kInner, kIdTest>(
+        __builtin_convertvector(s, Float4) + 0.5f, jitterS, jitterT, d, ids, ps, tc, pt, zRow, dzds, objectId, r2);
     Int4 key = reinterpret_cast<Int4>(candidate);
     key = (s >= s0) & (s <= s1) ? key : kNoKey;
     best = key < best ? key : best;
@@ -146,9 +148,7 @@ constexpr int kGrid = 24;
 // as offsets from tx0 (first > last: none): the tests in one loop into bytes, which the compiler
 // vectorizes, then the first and the last nonzero byte found by bit scans over three 64-bit words.
 template <bool kInner, bool kIdTest>
-std::pair<int, int> openTileSpan(const SearchMap& map, const SearchQuery& query, int tx0, int ty, int count, int none) {
-  const SearchMap m = map;
-  const SearchQuery q = query;
+std::pair<int, int> openTileSpan(const SearchMap& m, const SearchQuery& q, int tx0, int ty, int count, int none) {
   alignas(8) uint8_t open[kGrid] = {};
   for (int i = 0; i < count; ++i) open[i] = tileMayQualify<kInner, kIdTest>(m, q, tx0 + i, ty) ? 1 : 0;
   static_assert(kGrid == 3 * 8);
@@ -955,13 +955,13 @@ float BrabecTechnique::evaluate(const Pixel& p, Vec2* toTexel, bool* raised, Sea
   q.inner = inner;
   q.idTest = options_.idTest;
   q.radius = radius;
-  if (seeds) {
-    q.seedS = inner ? seeds->innerS : seeds->outerS;
-    q.seedT = inner ? seeds->innerT : seeds->outerT;
+  SearchSeeds::Texel* seed = seeds ? (inner ? &seeds->inner : &seeds->outer) : nullptr;
+  if (seed) {
+    q.seedS = seed->s;
+    q.seedT = seed->t;
   }
   const brabec::SearchHit hit = options_.scalarSearch ? brabec::searchScalar(m, q) : brabec::searchVectorized(m, q);
-  if (seeds && hit.found)
-    (inner ? seeds->innerS : seeds->outerS) = hit.s, (inner ? seeds->innerT : seeds->outerT) = hit.t;
+  if (seed && hit.found) *seed = {hit.s, hit.t};
   if (!hit.found) {
     if (!inner) return 1.0f;
     if (!options_.coverageBound) return 0.0f;
@@ -1158,6 +1158,8 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
       direction[2 * k + 1] = direction[2 * from + 1];
     };
     const std::vector<int> columns = groupBorders(width), rowBorders = groupBorders(height);
+    // A task's solves: they count its searches, and each search starts from the texel its task's last
+    // search of that kind found (`seeds`, the task's own), as the task's next pixels lie near its last.
     auto makeSolve = [&](int64_t& searchCount, SearchSeeds& seeds) {
       return [&, searchCountPtr = &searchCount, seedsPtr = &seeds](size_t k) {
         if (known[k]) return;
@@ -1176,7 +1178,7 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     // at once (its few rows stay in cache, where a column at a time reads a new line per pixel).
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rowBorders.size()), [&](const tbb::blocked_range<size_t>& range) {
       int64_t searchCount = 0;
-      SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+      SearchSeeds seeds;
       const auto solve = makeSolve(searchCount, seeds);
       for (size_t r = range.begin(); r < range.end(); ++r)
         for (const int x : columns) solve(static_cast<size_t>(rowBorders[r]) * width + x);
@@ -1185,7 +1187,7 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, rowBorders.size() - 1), [&](const tbb::blocked_range<size_t>& range) {
           int64_t searchCount = 0;
-          SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+          SearchSeeds seeds;
           const auto solve = makeSolve(searchCount, seeds);
           for (size_t g = range.begin(); g < range.end(); ++g)
             for (const int x : columns) {
@@ -1199,7 +1201,7 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     auto fillNothing = [](size_t, size_t) {};
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
       int64_t searchCount = 0;
-      SearchSeeds seeds;  // the task's last found texels: its next pixels' are most often near them
+      SearchSeeds seeds;
       const auto solve = makeSolve(searchCount, seeds);
       for (int y = rows.begin(); y < rows.end(); ++y) {
         auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };

@@ -307,7 +307,10 @@ class BrabecTechnique final : public ShadowTechnique {
   // `seeds` (optional): the texels the last outer and inner searches of this thread found, where the next
   // searches start (SearchQuery::seedS), updated by this one.
   struct SearchSeeds {
-    int outerS = -1, outerT = -1, innerS = -1, innerT = -1;
+    struct Texel {
+      int s = -1, t = -1;  //!< -1: none
+    };
+    Texel outer, inner;
   };
   float evaluate(const Pixel& pixel, Vec2* toTexel = nullptr, bool* raised = nullptr,
                  SearchSeeds* seeds = nullptr) const;
