@@ -58,6 +58,18 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
   };
   // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile.
   const bool sameInput = &in == &outside;
+  // The images' storage, read through raw pointers: the taps' loads index them with one linear offset
+  // (every image is the G-buffer's size), and the compiler keeps the pointers in registers, where
+  // through the images it reloaded each one at every tap.
+  const int32_t* const ids = g.objectId.data();
+  const Vec3* const positions = g.wsPosition.data();
+  const Vec3* const normals = g.wsNormal.data();
+  const float* const reaches = reach.data();
+  const float* const ins = in.data();
+  const float* const outsides = outside.data();
+  // Pixels along the pass: the tap offsets run over [0, extent) in the pass's coordinate.
+  const int extent = dx != 0 ? width : height;
+  const ptrdiff_t pitch = dx != 0 ? 1 : width;  // linear offset of one pixel along the pass
   tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
@@ -66,11 +78,13 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
       for (int y = y0; y < std::min(y0 + tileSize, height); ++y)
         for (int xChunk = x0; xChunk < x1; xChunk += kChunk) {
           // The per-pixel set-up of up to kChunk pixels in one loop the compiler vectorizes (its
-          // divisions and its ceil lane by lane, the same operations as one pixel at a time). taps is
-          // int(r) / stride, taken as the floor of the float quotient: exact for integers below 2^24.
+          // divisions, floors and ceil lane by lane, the same operations as one pixel at a time).
+          // taps is int(r) / stride, and the taps' range inside the image -floor(c / stride) ..
+          // floor((extent - 1 - c) / stride) for the pixel's coordinate c along the pass, each taken
+          // as the floor of the float quotient: exact for integers below 2^24.
           const int count = std::min(kChunk, x1 - xChunk);
           alignas(64) float invToleranceOf[kChunk], invR2Of[kChunk], invStrideOf[kChunk];
-          alignas(64) int strideOf[kChunk], tapsOf[kChunk];
+          alignas(64) int strideOf[kChunk], firstTapOf[kChunk], lastTapOf[kChunk];
           const float* radii = radius.row(y) + xChunk;
           const float* depths = g.csDepth.row(y) + xChunk;
           for (int i = 0; i < count; ++i) {
@@ -80,47 +94,50 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
             const float r = ri >= 1.0f && ri <= 1e6f ? ri : 1.0f;
             invToleranceOf[i] = 1.0f / (options.planeTolerance * pixelFootprint(depths[i], input.tanHalfFovY, height));
             const int stride = std::max(1, static_cast<int>(std::ceil(r / static_cast<float>(options.tapsPerSide))));
+            const float strideF = static_cast<float>(stride);
             strideOf[i] = stride;
-            tapsOf[i] =
-                static_cast<int>(std::floor(static_cast<float>(static_cast<int>(r)) / static_cast<float>(stride)));
+            const int taps = static_cast<int>(std::floor(static_cast<float>(static_cast<int>(r)) / strideF));
+            const int c = dx != 0 ? xChunk + i : y;
+            firstTapOf[i] = std::max(-taps, -static_cast<int>(std::floor(static_cast<float>(c) / strideF)));
+            lastTapOf[i] = std::min(taps, static_cast<int>(std::floor(static_cast<float>(extent - 1 - c) / strideF)));
             invR2Of[i] = 1.0f / (r * r);
-            invStrideOf[i] = 1.0f / static_cast<float>(stride);
+            invStrideOf[i] = 1.0f / strideF;
           }
           for (int i = 0; i < count; ++i) {
             const int x = xChunk + i;
+            const ptrdiff_t pixel = static_cast<ptrdiff_t>(y) * width + x;
             const float r = radius(x, y);
-            if (!(r >= 1.0f) || !g.hit(x, y)) {
-              out(x, y) = in(x, y);
+            const int32_t id = ids[pixel];
+            if (!(r >= 1.0f) || id == kNoObject) {
+              out(x, y) = ins[pixel];
               continue;
             }
-            const int32_t id = g.objectId(x, y);
-            const Vec3 p = g.wsPosition(x, y);
-            const Vec3 n = g.wsNormal(x, y);
+            const Vec3 p = positions[pixel];
+            const Vec3 n = normals[pixel];
             // Tolerated distance from p's tangent plane per pixel of screen distance.
             const float invTolerance = invToleranceOf[i];
             const int stride = strideOf[i];
-            const int taps = tapsOf[i];
             const float invR2 = invR2Of[i];
             const float invStride = invStrideOf[i];
-            float sum = in(x, y), weightSum = 1.0f;
-            for (int k = -taps; k <= taps; ++k) {
+            const ptrdiff_t step = stride * pitch;
+            float sum = ins[pixel], weightSum = 1.0f;
+            for (int k = firstTapOf[i]; k <= lastTapOf[i]; ++k) {
               if (k == 0) continue;
-              const int qx = x + k * stride * dx, qy = y + k * stride * dy;
-              if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
-              if (g.objectId(qx, qy) != id) continue;  // also drops pixels that see nothing
+              const ptrdiff_t q = pixel + k * step;
+              if (ids[q] != id) continue;  // also drops pixels that see nothing
               const float d = static_cast<float>(std::abs(k) * stride);
-              if (reach(qx, qy) < d) continue;
-              const float plane = std::abs(glm::dot(n, g.wsPosition(qx, qy) - p));
+              if (reaches[q] < d) continue;
+              const float plane = std::abs(glm::dot(n, positions[q] - p));
               // 1 - plane / (tolerance d), with reciprocals: no division per tap.
               const float planeWeight = 1.0f - plane * invTolerance * invStride * kInverse[std::abs(k)];
               if (!(planeWeight > 0.0f)) continue;
-              const float cosine = glm::dot(n, g.wsNormal(qx, qy));
+              const float cosine = glm::dot(n, normals[q]);
               if (!(cosine > 0.0f)) continue;
               const float normalWeight = integerPower(cosine, kPower > 0 ? kPower : options.normalPower);
               // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
               const float s = 1.0f - d * d * invR2;
               const float w = s * s * planeWeight * normalWeight;
-              sum += w * (sameInput || active(qx, qy) ? in(qx, qy) : outside(qx, qy));
+              sum += w * (sameInput || active(x + k * stride * dx, y + k * stride * dy) ? ins[q] : outsides[q]);
               weightSum += w;
             }
             out(x, y) = sum / weightSum;
