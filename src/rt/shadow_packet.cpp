@@ -237,7 +237,90 @@ PENUMBRA_LANE_CLONES void directionalOrigins(PENUMBRA_ORIGIN_PARAMETERS) {
 }
 #undef PENUMBRA_ORIGIN_PARAMETERS
 
+// The ray to the light's centre per lane (buildCenterRays): Light::directionToCenter and
+// distanceToCenter (one length serves both, as glm::length computes it), the origin offset to the
+// centre's side, then rt::shadowRay's re-aimed segment, its divisions as glm's vector-by-scalar
+// division makes them. Flags the lanes rt::shadowRay treats apart (a length that overflows, a zero one).
+template <bool kDirectional>
+inline __attribute__((always_inline)) void centerRayKernel(const LightConstants& k, const ShadowLanes& __restrict in,
+                                                           int count, float epsilon, const Out out,
+                                                           float* __restrict orgX, float* __restrict orgY,
+                                                           float* __restrict orgZ, float* __restrict facing) {
+  for (int i = 0; i < count; ++i) {
+    float ux = k.direction.x, uy = k.direction.y, uz = k.direction.z, distance = 0.0f;
+    if constexpr (!kDirectional) {
+      const float dx = k.center.x - in.px[i], dy = k.center.y - in.py[i], dz = k.center.z - in.pz[i];
+      distance = std::sqrt((dx * dx + dy * dy) + dz * dz);
+      const bool positive = distance > 0.0f;
+      ux = positive ? dx / distance : 0.0f;
+      uy = positive ? dy / distance : 0.0f;
+      uz = positive ? dz / distance : 1.0f;
+    }
+    const float f = (in.nx[i] * ux + in.ny[i] * uy) + in.nz[i] * uz;
+    facing[i] = f;
+    const float offset = (f >= 0.0f ? 1.0f : -1.0f) * epsilon;
+    const float ox = in.px[i] + offset * in.nx[i], oy = in.py[i] + offset * in.ny[i], oz = in.pz[i] + offset * in.nz[i];
+    orgX[i] = ox;
+    orgY[i] = oy;
+    orgZ[i] = oz;
+    if constexpr (kDirectional) {
+      out.dirX[i] = ux;
+      out.dirY[i] = uy;
+      out.dirZ[i] = uz;
+      out.tMax[i] = kInfinity;
+      out.fix[i] = 0;
+    } else {
+      const float ex = (in.px[i] + distance * ux) - ox, ey = (in.py[i] + distance * uy) - oy,
+                  ez = (in.pz[i] + distance * uz) - oz;
+      const float len = std::sqrt((ex * ex + ey * ey) + ez * ez);
+      out.dirX[i] = ex / len;
+      out.dirY[i] = ey / len;
+      out.dirZ[i] = ez / len;
+      out.tMax[i] = std::max(0.0f, len - epsilon);
+      out.fix[i] = static_cast<int32_t>(!(distance < kInfinity) | !(len < kInfinity) | !(len > 0.0f));
+    }
+  }
+}
+#define PENUMBRA_CENTER_PARAMETERS                                                                             \
+  const LightConstants &k, const ShadowLanes &__restrict in, int count, float epsilon, float *__restrict orgX, \
+      float *__restrict orgY, float *__restrict orgZ, float *__restrict facing, float *__restrict dirX,        \
+      float *__restrict dirY, float *__restrict dirZ, float *__restrict tMax, int32_t *__restrict fix
+PENUMBRA_LANE_CLONES void localCenterRays(PENUMBRA_CENTER_PARAMETERS) {
+  centerRayKernel<false>(k, in, count, epsilon, Out{dirX, dirY, dirZ, tMax, nullptr, fix}, orgX, orgY, orgZ, facing);
+}
+PENUMBRA_LANE_CLONES void directionalCenterRays(PENUMBRA_CENTER_PARAMETERS) {
+  centerRayKernel<true>(k, in, count, epsilon, Out{dirX, dirY, dirZ, tMax, nullptr, fix}, orgX, orgY, orgZ, facing);
+}
+#undef PENUMBRA_CENTER_PARAMETERS
+
 }  // namespace
+
+void buildCenterRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                     float* facing) {
+  alignas(64) int32_t fix[16];
+  LightConstants k;
+  const bool directional = light.isDirectional();
+  if (directional) {
+    k.direction = light.direction();
+    directionalCenterRays(k, lanes, count, epsilon, packet.orgX, packet.orgY, packet.orgZ, facing, packet.dirX,
+                          packet.dirY, packet.dirZ, packet.tMax, fix);
+  } else {
+    k.center = light.center();
+    localCenterRays(k, lanes, count, epsilon, packet.orgX, packet.orgY, packet.orgZ, facing, packet.dirX, packet.dirY,
+                    packet.dirZ, packet.tMax, fix);
+  }
+  for (int i = 0; i < count; ++i) {
+    packet.tMin[i] = 0.0f;
+    if (!fix[i]) continue;
+    const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]);
+    const Ray ray = shadowRay(wsP, Vec3(packet.orgX[i], packet.orgY[i], packet.orgZ[i]), light.directionToCenter(wsP),
+                              light.distanceToCenter(wsP), epsilon);
+    packet.dirX[i] = ray.direction.x;
+    packet.dirY[i] = ray.direction.y;
+    packet.dirZ[i] = ray.direction.z;
+    packet.tMax[i] = ray.tMax;
+  }
+}
 
 void sinCosQuarterPi(float a, float& s, float& c) { sinCosPoly(a, s, c); }
 

@@ -1,5 +1,6 @@
 // Shadow rays built sixteen at a time, straight into an Embree packet: the ray-generation half of
-// the reference's and the few-ray techniques' inner loops.
+// the reference's and the few-ray techniques' inner loops (rays to light samples), and of
+// raytraced-hard's and parker's (rays to the light's centre).
 //
 // Lane i is the ray rt::shadowRay builds from the shaded point P_i, with origin O_i (P_i offset off
 // its surface, rt::offsetOrigin), towards the light point Light::sample(P_i, u_i): the same points,
@@ -48,6 +49,14 @@ void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& la
 // them) and weight[i], the light's profile weight of lane i's sample. `epsilon` as rt::shadowRay.
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight);
+
+// Writes lanes [0, count) of `packet` with the ray from each lane's point to the light's centre
+// (origin, direction, tMin, tMax; the rest as the packet holds them), the ray raytraced-hard and parker
+// trace: rt::shadowRay(P, rt::offsetOrigin(P, Ng, side, epsilon), d, Light::distanceToCenter(P),
+// epsilon) with d = Light::directionToCenter(P), operation for operation, and facing[i] = Ng . d,
+// whose sign is the side. Reads the lanes' P and Ng only (not O or u).
+void buildCenterRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                     float* facing);
 
 // sin and cos of a in [-pi/4, pi/4] by the polynomials above (exposed for its test).
 void sinCosQuarterPi(float a, float& s, float& c);

@@ -1,8 +1,11 @@
 // Tests of the vector shadow-ray builder (src/rt/shadow_packet.h): every lane is the ray the scalar
 // path builds (rt::shadowRay towards Light::sample) for every light shape, to float rounding, the
-// degenerate lanes exactly; the lanes' origins are rt::offsetOrigin's to the bit; the polynomial sine and cosine are
+// degenerate lanes exactly; the lanes' origins are rt::offsetOrigin's to the bit, and the rays to the light's
+// centre rt::shadowRay's; the polynomial sine and cosine are
 // within a few ulp of libm's; packets built in place trace as the same rays traced one at a time.
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -164,6 +167,51 @@ TEST(ShadowPacket, DegenerateLanesTakeTheScalarPathExactly) {
       EXPECT_EQ(packet.tMax[i], 0.0f) << i;  // inside the sphere or on the rect's point: an empty segment
     }
     expectLaneMatches(*light, lanes, 2, packet, weight, epsilon);
+  }
+}
+
+// raytraced-hard's and parker's rays: rt::shadowRay from rt::offsetOrigin towards the light's centre,
+// to the bit, with the facing term whose sign picks the side; the lanes rt::shadowRay treats apart
+// (a point at the centre, coordinates whose squared distance overflows, a point not a number) too.
+TEST(ShadowPacket, CenterRaysAreTheScalarRaysToTheBit) {
+  const float epsilon = 1e-3f;
+  for (const auto& [name, light] : everyShape()) {
+    SCOPED_TRACE(name);
+    for (uint32_t trial = 0; trial < 32; ++trial) {
+      rt::ShadowLanes lanes;
+      const int count = 1 + static_cast<int>((trial * 7) % 16);
+      for (int i = 0; i < count; ++i) {
+        const uint32_t k = trial * 173 + static_cast<uint32_t>(i) * 13;
+        Vec3 p(6.0f * unit(k) - 3.0f, 5.0f * unit(k + 1) - 1.0f, 6.0f * unit(k + 2) - 3.0f);
+        if (!light.isDirectional() && trial % 4 == 1) {
+          if (i == 2) p = light.center();
+          if (i == 4) p = Vec3(3e19f, -2e19f, 1.0f);
+          if (i == 6) p = Vec3(std::nanf(""), 0.0f, 0.0f);
+        }
+        Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
+        if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
+        lanes.setSurface(i, p, n);
+      }
+      RayPacket16 packet;
+      float facing[16];
+      rt::buildCenterRays(light, lanes, count, epsilon, packet, facing);
+      for (int i = 0; i < count; ++i) {
+        SCOPED_TRACE(::testing::Message() << "trial " << trial << " lane " << i);
+        const Vec3 p(lanes.px[i], lanes.py[i], lanes.pz[i]), n(lanes.nx[i], lanes.ny[i], lanes.nz[i]);
+        const Vec3 toLight = light.directionToCenter(p);
+        const float f = glm::dot(n, toLight);
+        const Ray ray = rt::shadowRay(p, rt::offsetOrigin(p, n, f >= 0.0f ? 1.0f : -1.0f, epsilon), toLight,
+                                      light.distanceToCenter(p), epsilon);
+        // Bit for bit (memcmp-like: NaN lanes compare equal when their bits are the same).
+        const float got[9] = {packet.orgX[i], packet.orgY[i], packet.orgZ[i], packet.dirX[i], packet.dirY[i],
+                              packet.dirZ[i], packet.tMin[i], packet.tMax[i], facing[i]};
+        const float want[9] = {ray.origin.x,    ray.origin.y,    ray.origin.z,
+                               ray.direction.x, ray.direction.y, ray.direction.z,
+                               ray.tMin,        ray.tMax,        f};
+        for (int c = 0; c < 9; ++c)
+          EXPECT_EQ(std::bit_cast<uint32_t>(got[c]), std::bit_cast<uint32_t>(want[c])) << "component " << c;
+      }
+    }
   }
 }
 

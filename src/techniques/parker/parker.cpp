@@ -53,7 +53,7 @@
 #include "penumbra/registry.h"
 #include "penumbra/techniques/parker.h"
 #include "rt/ray_scene.h"
-#include "rt/shadow_ray.h"
+#include "rt/shadow_packet.h"
 #include "techniques/parker/outer_objects.h"
 
 namespace penumbra {
@@ -151,9 +151,11 @@ class ParkerTechnique final : public ShadowTechnique {
     static_assert(kTile * kTile == rt::OuterObjects::kGroup);
     const int tileRows = (height + kTile - 1) / kTile;
     tbb::parallel_for(tbb::blocked_range<int>(0, tileRows), [&](const tbb::blocked_range<int>& range) {
-      Ray packet[16], open[16];
+      rt::ShadowLanes lanes;
+      RayPacket16 packet;
+      Ray open[16];
       int xs[16], ys[16], openIndex[16];
-      bool occluded[16];
+      alignas(64) float facing[16];
       float toLight[16], s[16];
       rt::OuterObjects::Seeds seeds;  // the capsules of the last tile's minima, read first for the next
       int64_t rangeRays = 0;
@@ -165,39 +167,57 @@ class ParkerTechnique final : public ShadowTechnique {
           for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
               if (!gbuffer.hit(x, y)) continue;
-              const Vec3 wsP = gbuffer.wsPosition(x, y);
-              const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-              // One direction to the light's centre serves the facing test, the offset's side (the
-              // dot product of rt::lightSide) and the ray, so the ray is raytraced-hard's exactly.
-              const Vec3 wsToLight = light.directionToCenter(wsP);
-              const float facing = glm::dot(wsNg, wsToLight);
-              // A receiver on an analytic sphere's tessellation whose facet faces away from the light
-              // is shadowed by its own closed surface, as raytraced-hard's ray through the facet finds
-              // (near the terminator the true sphere would still face the light: the G-buffer, and the
-              // reference, see the facets).
-              if (facing < 0.0f && !analyticIds_.empty() &&
-                  std::binary_search(analyticIds_.begin(), analyticIds_.end(), gbuffer.objectId(x, y))) {
-                v(x, y) = 0.0f;
-                continue;
-              }
-              const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, facing >= 0.0f ? 1.0f : -1.0f, epsilon_);
-              const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
-              rt::storeRay(packet[count], ray);
+              lanes.setSurface(count, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y));
               xs[count] = x;
               ys[count++] = y;
             }
           if (count == 0) continue;
-          rays_->occluded16(packet, count, occluded);
+          // raytraced-hard's rays to the light's centre, sixteen at a time (rt::buildCenterRays), and
+          // the side each receiver faces.
+          rt::buildCenterRays(light, lanes, count, epsilon_, packet, facing);
+          if (!analyticIds_.empty()) {
+            // A receiver on an analytic sphere's tessellation whose facet faces away from the light
+            // is shadowed by its own closed surface, as raytraced-hard's ray through the facet finds
+            // (near the terminator the true sphere would still face the light: the G-buffer, and the
+            // reference, see the facets). Its lane leaves the packet.
+            int kept = 0;
+            for (int i = 0; i < count; ++i) {
+              if (facing[i] < 0.0f &&
+                  std::binary_search(analyticIds_.begin(), analyticIds_.end(), gbuffer.objectId(xs[i], ys[i]))) {
+                v(xs[i], ys[i]) = 0.0f;
+                continue;
+              }
+              packet.orgX[kept] = packet.orgX[i];
+              packet.orgY[kept] = packet.orgY[i];
+              packet.orgZ[kept] = packet.orgZ[i];
+              packet.dirX[kept] = packet.dirX[i];
+              packet.dirY[kept] = packet.dirY[i];
+              packet.dirZ[kept] = packet.dirZ[i];
+              packet.tMax[kept] = packet.tMax[i];
+              xs[kept] = xs[i];
+              ys[kept++] = ys[i];
+            }
+            count = kept;
+            if (count == 0) continue;
+          }
+          // Each open ray as it was handed to the occlusion query (which overwrites a blocked one's tMax).
+          for (int i = 0; i < count; ++i) {
+            open[i].origin = Vec3(packet.orgX[i], packet.orgY[i], packet.orgZ[i]);
+            open[i].direction = Vec3(packet.dirX[i], packet.dirY[i], packet.dirZ[i]);
+            open[i].tMin = 0.0f;
+            open[i].tMax = packet.tMax[i];
+          }
+          rays_->occluded16(packet, count);
           rangeRays += count;
           int openCount = 0;
           for (int i = 0; i < count; ++i) {
-            if (occluded[i]) {
+            if (packet.blocked(i)) {
               v(xs[i], ys[i]) = 0.0f;  // the inner object: umbra
               continue;
             }
-            open[openCount] = packet[i];
+            open[openCount] = open[i];
             // shadowRay stops epsilon short of the centre: the distance to the centre is tMax + epsilon.
-            toLight[openCount] = directional ? kInfinity : packet[i].tMax + epsilon_;
+            toLight[openCount] = directional ? kInfinity : open[i].tMax + epsilon_;
             openIndex[openCount++] = i;
           }
           // The outer objects of the rays that miss every inner object, as one group.

@@ -14,7 +14,7 @@
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "rt/ray_scene.h"
-#include "rt/shadow_ray.h"
+#include "rt/shadow_packet.h"
 
 namespace penumbra {
 namespace {
@@ -39,28 +39,27 @@ class RaytracedHardTechnique final : public ShadowTechnique {
     resetInParallel(v, width, height, 1.0f);
     const Light& light = *light_;
     tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& range) {
-      Ray packet[16];
+      rt::ShadowLanes lanes;
+      RayPacket16 packet;
+      alignas(64) float facing[16];
       int xs[16];
-      bool occluded[16];
       for (int y = range.begin(); y < range.end(); ++y) {
-        // Neighbouring pixels of a row aim at the same point: a coherent packet.
+        // Neighbouring pixels of a row aim at the same point: a coherent packet, whose rays are made
+        // sixteen at a time (rt::buildCenterRays: rt::shadowRay's, to the bit).
         int count = 0;
         auto flush = [&] {
-          rays_->occluded16(packet, count, occluded);
-          for (int i = 0; i < count; ++i) v(xs[i], y) = occluded[i] ? 0.0f : 1.0f;
+          rt::buildCenterRays(light, lanes, count, epsilon_, packet, facing);
+          rays_->occluded16(packet, count);
+          float* row = v.row(y);
+          for (int i = 0; i < count; ++i) row[xs[i]] = packet.blocked(i) ? 0.0f : 1.0f;
           count = 0;
         };
+        const int32_t* ids = gbuffer.objectId.row(y);
+        const Vec3* positions = gbuffer.wsPosition.row(y);
+        const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
         for (int x = 0; x < width; ++x) {
-          if (!gbuffer.hit(x, y)) continue;
-          const Vec3 wsP = gbuffer.wsPosition(x, y);
-          const Vec3 wsNg = gbuffer.wsGeometricNormal(x, y);
-          // One direction to the light's centre serves the offset's side (rt::lightSide's dot
-          // product, computed here once) and the ray.
-          const Vec3 wsToLight = light.directionToCenter(wsP);
-          const float side = glm::dot(wsNg, wsToLight) >= 0.0f ? 1.0f : -1.0f;
-          const Vec3 wsOrigin = rt::offsetOrigin(wsP, wsNg, side, epsilon_);
-          const Ray ray = rt::shadowRay(wsP, wsOrigin, wsToLight, light.distanceToCenter(wsP), epsilon_);
-          rt::storeRay(packet[count], ray);
+          if (ids[x] == kNoObject) continue;
+          lanes.setSurface(count, positions[x], normals[x]);
           xs[count++] = x;
           if (count == 16) flush();
         }
