@@ -1121,7 +1121,13 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
       for (int x = 0; x < width; ++x) hitCount += cls[row + static_cast<size_t>(x)] != Pixel::Miss;
       hits += hitCount;
     });
-    auto same = [&](size_t a, size_t b) { return cls[a] == cls[b] && key[a] == key[b]; };
+    // The lambdas below take the buffers as raw pointers, by value: through the vectors, captured by
+    // reference, every byte stored to `known` or `direction` (char types, which may alias anything)
+    // made the compiler reload each vector's data pointer before the next read.
+    const uint8_t* const clsOf = cls.data();
+    const int32_t* const keyOf = key.data();
+    uint8_t* const knownOf = known.data();
+    auto same = [clsOf, keyOf](size_t a, size_t b) { return clsOf[a] == clsOf[b] && keyOf[a] == keyOf[b]; };
     // known[k]: kKnown once pixel k is solved or interpolated, with kRaised when the coverage bound
     // raised its V (an interpolated pixel takes its nearer interpolant's).
     constexpr uint8_t kKnown = 1, kRaised = 2;
@@ -1129,31 +1135,31 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     // pixel; written before it is read (a pixel is known once solved or interpolated).
     scratchDirection_.resize(2 * count);
     int8_t* const direction = scratchDirection_.data();
-    auto storeDirection = [&](size_t k, const Vec2& d) {
+    auto storeDirection = [direction](size_t k, const Vec2& d) {
       direction[2 * k] = static_cast<int8_t>(std::lround(d.x * 127.0f));
       direction[2 * k + 1] = static_cast<int8_t>(std::lround(d.y * 127.0f));
     };
     // V at the end of the penumbra (r >= r_max, or no texel within the radius): the clamp's kink.
-    auto atEnd = [&](size_t k) {
-      return cls[k] == Pixel::Lit ? out[k] == 1.0f : cls[k] == Pixel::Blocked ? out[k] == 0.0f : true;
+    auto atEnd = [clsOf, out](size_t k) {
+      return clsOf[k] == Pixel::Lit ? out[k] == 1.0f : clsOf[k] == Pixel::Blocked ? out[k] == 0.0f : true;
     };
     const float maxStep = options_.interpolateMaxStep;
     const bool kinks = options_.interpolateKinks;
     // cos of the largest angle, in the snorm8 units of the dot product (127^2).
     const float minDot = std::cos(radians(options_.interpolateMaxAngle)) * 127.0f * 127.0f;
-    auto smooth = [&](size_t a, size_t b) {
+    auto smooth = [out, maxStep, kinks, knownOf, atEnd, direction, minDot](size_t a, size_t b) {
       if (std::abs(out[a] - out[b]) > maxStep) return false;
       if (!kinks) return true;
       // The coverage bound's kink: V' = max(V, 1 - f) switches from one to the other between them.
-      if ((known[a] ^ known[b]) & kRaised) return false;
+      if ((knownOf[a] ^ knownOf[b]) & kRaised) return false;
       const bool endA = atEnd(a), endB = atEnd(b);
       if (endA != endB) return false;
       if (endA) return true;
       const int dot = direction[2 * a] * direction[2 * b] + direction[2 * a + 1] * direction[2 * b + 1];
       return static_cast<float>(dot) >= minDot;
     };
-    auto fill = [&](size_t k, size_t from) {
-      known[k] = static_cast<uint8_t>(kKnown | (known[from] & kRaised));
+    auto fill = [knownOf, direction](size_t k, size_t from) {
+      knownOf[k] = static_cast<uint8_t>(kKnown | (knownOf[from] & kRaised));
       direction[2 * k] = direction[2 * from];
       direction[2 * k + 1] = direction[2 * from + 1];
     };
@@ -1161,14 +1167,15 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
     // A task's solves: they count its searches, and each search starts from the texel its task's last
     // search of that kind found (`seeds`, the task's own), as the task's next pixels lie near its last.
     auto makeSolve = [&](int64_t& searchCount, SearchSeeds& seeds) {
-      return [&, searchCountPtr = &searchCount, seedsPtr = &seeds](size_t k) {
-        if (known[k]) return;
+      return [this, &gbuffer, knownOf, out, width, storeDirection, searched, searchCountPtr = &searchCount,
+              seedsPtr = &seeds](size_t k) {
+        if (knownOf[k]) return;
         const Pixel p = classify(gbuffer, static_cast<int>(k % width), static_cast<int>(k / width));
         Vec2 toTexel;
         bool raised = false;
         out[k] = evaluate(p, &toTexel, &raised, seedsPtr);
         storeDirection(k, toTexel);
-        known[k] = static_cast<uint8_t>(kKnown | (raised ? kRaised : 0));
+        knownOf[k] = static_cast<uint8_t>(kKnown | (raised ? kRaised : 0));
         *searchCountPtr += searched(p);
       };
     };
@@ -1184,18 +1191,18 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
         for (const int x : columns) solve(static_cast<size_t>(rowBorders[r]) * width + x);
       searches += searchCount;
     });
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, rowBorders.size() - 1), [&](const tbb::blocked_range<size_t>& range) {
-          int64_t searchCount = 0;
-          SearchSeeds seeds;
-          const auto solve = makeSolve(searchCount, seeds);
-          for (size_t g = range.begin(); g < range.end(); ++g)
-            for (const int x : columns) {
-              auto at = [&](int y) { return static_cast<size_t>(y) * width + x; };
-              refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, known.data());
-            }
-          searches += searchCount;
-        });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rowBorders.size() - 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        int64_t searchCount = 0;
+                        SearchSeeds seeds;
+                        const auto solve = makeSolve(searchCount, seeds);
+                        for (size_t g = range.begin(); g < range.end(); ++g)
+                          for (const int x : columns) {
+                            auto at = [width, x](int y) { return static_cast<size_t>(y) * width + x; };
+                            refineGroup(rowBorders[g], rowBorders[g + 1], solve, smooth, same, fill, at, out, knownOf);
+                          }
+                        searches += searchCount;
+                      });
     // The last pass: a pixel it interpolates is never a group's border, so nothing reads its flags or
     // direction again, and they are not written.
     auto fillNothing = [](size_t, size_t) {};
@@ -1204,9 +1211,10 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
       SearchSeeds seeds;
       const auto solve = makeSolve(searchCount, seeds);
       for (int y = rows.begin(); y < rows.end(); ++y) {
-        auto at = [&](int x) { return static_cast<size_t>(y) * width + x; };
+        const size_t rowStart = static_cast<size_t>(y) * width;
+        auto at = [rowStart](int x) { return rowStart + x; };
         for (size_t g = 0; g + 1 < columns.size(); ++g)
-          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fillNothing, at, out, known.data());
+          refineGroup(columns[g], columns[g + 1], solve, smooth, same, fillNothing, at, out, knownOf);
       }
       searches += searchCount;
     });
