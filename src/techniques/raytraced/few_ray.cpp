@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/image_fill.h"
+#include "core/target_clones.h"
 #include "rt/shadow_packet.h"
 
 namespace penumbra::raytraced {
@@ -18,11 +19,24 @@ namespace {
 // A float in [0, 1) from the top 24 bits of a hash.
 inline float unitFloat(uint32_t h) { return static_cast<float>(h >> 8) * 0x1p-24f; }
 
-// u + offset modulo 1, kept below 1 where the sum rounds up to it.
+// u + offset modulo 1, kept below 1 where the sum rounds up to it. A select the compiler vectorizes
+// (few_ray.cpp is built without trapping math, CMakeLists.txt): as a branch, the random offsets
+// mispredicted it about every other lane.
 inline float rotate(float u, float offset) {
   constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
   const float r = u + offset;
   return std::min(r >= 1.0f ? r - 1.0f : r, kOneMinusEpsilon);
+}
+
+// Each pixel's Cranley-Patterson offset (few_ray.h) from the hash of (seed, pixel index), for
+// `count` pixels in one loop, compiled for AVX2 and AVX-512F too (core/target_clones.h): the 64-bit
+// multiplies of the hashes are what the loop spends, and every target gives the same bits.
+PENUMBRA_CLONES_AVX512 void pixelOffsets(uint64_t seed, int count, const uint64_t* __restrict pixel,
+                                         float* __restrict offsetX, float* __restrict offsetY) {
+  for (int i = 0; i < count; ++i) {
+    offsetX[i] = unitFloat(hashCombine(seed, 2 * pixel[i]));
+    offsetY[i] = unitFloat(hashCombine(seed, 2 * pixel[i] + 1));
+  }
 }
 
 }  // namespace
@@ -123,13 +137,17 @@ int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const 
   if (count == 0) return 0;
   rt::ShadowLanes lanes;
   alignas(64) float offsetX[16], offsetY[16];
+  // The lanes' sums through one raw pointer and their indices: through frame.at, each byte stored to
+  // a sum's `blocked` (a char type, which may alias anything) made the compiler reload the frame's
+  // storage and width.
+  RaySums* const sums = frame.sums.data();
+  alignas(64) uint64_t sumIndex[16];
   for (int i = 0; i < count; ++i) {
     const int x = xs[i], y = ys[i];
     lanes.setSurface(i, gbuffer.wsPosition(x, y), gbuffer.wsGeometricNormal(x, y));
-    const uint64_t pixel = static_cast<uint64_t>(y) * frame.width + x;
-    offsetX[i] = unitFloat(hashCombine(seed_, 2 * pixel));
-    offsetY[i] = unitFloat(hashCombine(seed_, 2 * pixel + 1));
+    sumIndex[i] = static_cast<uint64_t>(y) * frame.width + x;
   }
+  pixelOffsets(seed_, count, sumIndex, offsetX, offsetY);
   rt::offsetOrigins(light_, epsilon_, count, lanes);
   const bool directional = light_.isDirectional();
   RayHitPacket16 packet;
@@ -144,7 +162,7 @@ int64_t TileRayTracer::tracePixels(const GBuffer& gbuffer, const int* xs, const 
     std::copy(packet.ray.tMax, packet.ray.tMax + count, tLight);  // the hit overwrites tMax
     scene_.intersect16(packet, count);
     for (int i = 0; i < count; ++i) {
-      RaySums& p = frame.at(xs[i], ys[i]);
+      RaySums& p = sums[sumIndex[i]];
       p.weight += weights[i];
       if (packet.hit.geomId[i] == HitPacket16::kNoHit) {
         p.visible += weights[i];
