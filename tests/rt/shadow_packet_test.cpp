@@ -32,6 +32,15 @@ void setPoint(rt::ShadowLanes& lanes, int i, const Vec3& wsP, const Vec3& wsOrig
   lanes.oz[i] = wsOrigin.z;
 }
 
+// Lane i's point P and geometric normal Ng from hash k: P anywhere around the lights (or `at` where
+// given), Ng turned every way, lane 5's across the direction to the light.
+void setRandomSurface(rt::ShadowLanes& lanes, int i, uint32_t k, const Light& light, const Vec3* at) {
+  const Vec3 p = at ? *at : Vec3(6.0f * unit(k) - 3.0f, 5.0f * unit(k + 1) - 1.0f, 6.0f * unit(k + 2) - 3.0f);
+  Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
+  if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
+  lanes.setSurface(i, p, n);
+}
+
 std::vector<std::pair<const char*, Light>> everyShape() {
   return {{"sphere", Light::sphere(Vec3(0.3f, 4.0f, -0.2f), 0.7f)},
           {"large near sphere", Light::sphere(Vec3(0.0f, 1.9f, 0.5f), 1.2f)},
@@ -116,14 +125,10 @@ TEST(ShadowPacket, OffsetOriginsAreTheScalarOriginsToTheBit) {
       rt::ShadowLanes lanes;
       const int count = 1 + static_cast<int>((trial * 5) % 16);
       for (int i = 0; i < count; ++i) {
-        const uint32_t k = trial * 131 + static_cast<uint32_t>(i) * 11;
-        // Points anywhere, the light's centre itself among them (where the direction to it is +z), and
-        // normals turned every way, some across the direction to the light.
-        Vec3 p(6.0f * unit(k) - 3.0f, 5.0f * unit(k + 1) - 1.0f, 6.0f * unit(k + 2) - 3.0f);
-        if (i == 3 && !light.isDirectional()) p = light.center();
-        Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
-        if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
-        lanes.setSurface(i, p, n);
+        // The light's centre itself among the points (where the direction to it is +z).
+        const Vec3 centre = light.center();
+        setRandomSurface(lanes, i, trial * 131 + static_cast<uint32_t>(i) * 11, light,
+                         i == 3 && !light.isDirectional() ? &centre : nullptr);
       }
       rt::offsetOrigins(light, epsilon, count, lanes);
       for (int i = 0; i < count; ++i) {
@@ -181,16 +186,12 @@ TEST(ShadowPacket, CenterRaysAreTheScalarRaysToTheBit) {
       rt::ShadowLanes lanes;
       const int count = 1 + static_cast<int>((trial * 7) % 16);
       for (int i = 0; i < count; ++i) {
-        const uint32_t k = trial * 173 + static_cast<uint32_t>(i) * 13;
-        Vec3 p(6.0f * unit(k) - 3.0f, 5.0f * unit(k + 1) - 1.0f, 6.0f * unit(k + 2) - 3.0f);
-        if (!light.isDirectional() && trial % 4 == 1) {
-          if (i == 2) p = light.center();
-          if (i == 4) p = Vec3(3e19f, -2e19f, 1.0f);
-          if (i == 6) p = Vec3(std::nanf(""), 0.0f, 0.0f);
-        }
-        Vec3 n = glm::normalize(Vec3(unit(k + 3) - 0.5f, unit(k + 4) - 0.5f, unit(k + 5) - 0.5f));
-        if (i == 5) n = glm::normalize(glm::cross(light.directionToCenter(p), Vec3(0.3f, 0.1f, 0.9f)));
-        lanes.setSurface(i, p, n);
+        // In a quarter of the trials, lanes 2, 4 and 6 at the light's centre, far enough out that the
+        // squared distance overflows, and not a number.
+        const Vec3 special[3] = {light.center(), Vec3(3e19f, -2e19f, 1.0f), Vec3(std::nanf(""), 0.0f, 0.0f)};
+        const bool isSpecial = !light.isDirectional() && trial % 4 == 1 && (i == 2 || i == 4 || i == 6);
+        setRandomSurface(lanes, i, trial * 173 + static_cast<uint32_t>(i) * 13, light,
+                         isSpecial ? &special[i / 2 - 1] : nullptr);
       }
       RayPacket16 packet;
       float facing[16];
