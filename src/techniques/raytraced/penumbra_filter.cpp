@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cassert>
 #include <cmath>
 
 #include <tbb/blocked_range.h>
@@ -61,6 +62,8 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
   // The images' storage, read through raw pointers: the taps' loads index them with one linear offset
   // (every image is the G-buffer's size), and the compiler keeps the pointers in registers, where
   // through the images it reloaded each one at every tap.
+  assert(in.width() == width && in.height() == height && outside.width() == width && outside.height() == height);
+  assert(reach.width() == width && reach.height() == height && out.width() == width && out.height() == height);
   const int32_t* const ids = g.objectId.data();
   const Vec3* const positions = g.wsPosition.data();
   const Vec3* const normals = g.wsNormal.data();
