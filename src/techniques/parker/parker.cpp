@@ -200,13 +200,6 @@ class ParkerTechnique final : public ShadowTechnique {
             count = kept;
             if (count == 0) continue;
           }
-          // Each open ray as it was handed to the occlusion query (which overwrites a blocked one's tMax).
-          for (int i = 0; i < count; ++i) {
-            open[i].origin = Vec3(packet.orgX[i], packet.orgY[i], packet.orgZ[i]);
-            open[i].direction = Vec3(packet.dirX[i], packet.dirY[i], packet.dirZ[i]);
-            open[i].tMin = 0.0f;
-            open[i].tMax = packet.tMax[i];
-          }
           rays_->occluded16(packet, count);
           rangeRays += count;
           int openCount = 0;
@@ -215,9 +208,14 @@ class ParkerTechnique final : public ShadowTechnique {
               v(xs[i], ys[i]) = 0.0f;  // the inner object: umbra
               continue;
             }
-            open[openCount] = open[i];
+            // An open ray is in the packet as it was traced (the query overwrites a blocked ray's tMax only).
+            Ray& ray = open[openCount];
+            ray.origin = Vec3(packet.orgX[i], packet.orgY[i], packet.orgZ[i]);
+            ray.direction = Vec3(packet.dirX[i], packet.dirY[i], packet.dirZ[i]);
+            ray.tMin = 0.0f;
+            ray.tMax = packet.tMax[i];
             // shadowRay stops epsilon short of the centre: the distance to the centre is tMax + epsilon.
-            toLight[openCount] = directional ? kInfinity : open[i].tMax + epsilon_;
+            toLight[openCount] = directional ? kInfinity : ray.tMax + epsilon_;
             openIndex[openCount++] = i;
           }
           // The outer objects of the rays that miss every inner object, as one group.
