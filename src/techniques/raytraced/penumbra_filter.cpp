@@ -109,9 +109,8 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
           for (int i = 0; i < count; ++i) {
             const int x = xChunk + i;
             const ptrdiff_t pixel = static_cast<ptrdiff_t>(y) * width + x;
-            const float r = radius(x, y);
             const int32_t id = ids[pixel];
-            if (!(r >= 1.0f) || id == kNoObject) {
+            if (!(radii[i] >= 1.0f) || id == kNoObject) {
               out(x, y) = ins[pixel];
               continue;
             }
