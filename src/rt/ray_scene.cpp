@@ -126,6 +126,27 @@ struct PacketQuery {
   }
 };
 
+// A filtered query's context: Embree hands the filter a pointer to `context`, the first member, from
+// which filterHits finds the caller's HitFilter.
+struct FilteredQuery {
+  PacketQuery query;
+  const HitFilter* filter;
+};
+static_assert(offsetof(FilteredQuery, query) == 0 && offsetof(PacketQuery, context) == 0);
+
+// The context filter of filtered queries: rejects (valid = 0) each hit the caller's filter does not
+// accept. Embree passes the hit's distance as the ray's tfar.
+void filterHits(const RTCFilterFunctionNArguments* args) {
+  const HitFilter& filter = *reinterpret_cast<const FilteredQuery*>(args->context)->filter;
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] == 0) continue;
+    const Vec3 ng(RTCHitN_Ng_x(args->hit, n, i), RTCHitN_Ng_y(args->hit, n, i), RTCHitN_Ng_z(args->hit, n, i));
+    if (!filter.accept(filter.state, RTCRayN_id(args->ray, n, i), RTCRayN_tfar(args->ray, n, i), ng))
+      args->valid[i] = 0;
+  }
+}
+
 }  // namespace
 
 RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
@@ -138,7 +159,9 @@ RayScene::RayScene(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 
   im.scene = rtcNewScene(im.device);
   im.check("creating the scene");
-  rtcSetSceneFlags(im.scene, RTC_SCENE_FLAG_ROBUST);
+  // The context filter lets a query skip hits its caller passes over (HitFilter); a query without one
+  // pays a null test per hit.
+  rtcSetSceneFlags(im.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcSetSceneBuildQuality(im.scene, RTC_BUILD_QUALITY_HIGH);
 
   im.objectIds.reserve(scene.objects.size());
@@ -279,6 +302,18 @@ void RayScene::intersect16(RayHitPacket16& packet, int count) const {
     packet.hit.instId[i] = HitPacket16::kNoHit;
   }
   rtcIntersect16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRayHit16*>(&packet));
+}
+
+void RayScene::intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const {
+  if (count <= 0) return;
+  if (impl_->log) impl_->log->add(packet.ray, count, true);
+  FilteredQuery filtered{PacketQuery(count), &filter};
+  filtered.query.context.filter = &filterHits;
+  for (int i = 0; i < 16; ++i) {
+    packet.hit.geomId[i] = HitPacket16::kNoHit;
+    packet.hit.instId[i] = HitPacket16::kNoHit;
+  }
+  rtcIntersect16(filtered.query.valid, impl_->scene, &filtered.query.context, reinterpret_cast<RTCRayHit16*>(&packet));
 }
 
 std::optional<RayHit> RayScene::intersect(const Ray& ray) const {

@@ -115,6 +115,86 @@ TEST(RayScene, Occluded16MatchesSingleRays) {
   EXPECT_LT(hits, 1000);
 }
 
+// Five quads stacked along z over [-2, 2]^2, facing +z (towards a ray from above) or -z: object k + 1
+// at z = 0 (+z), 1 (-z), 2 (+z), 3 (-z), and object 5 at z = 3 (+z), coincident with object 4.
+Scene stackedQuads() {
+  const Vec3 x(2, 0, 0), y(0, 2, 0);
+  return makeScene(
+      {makeObject(1, quadMesh(Vec3(0, 0, 0), x, y), "z0 up"), makeObject(2, quadMesh(Vec3(0, 0, 1), y, x), "z1 down"),
+       makeObject(3, quadMesh(Vec3(0, 0, 2), x, y), "z2 up"), makeObject(4, quadMesh(Vec3(0, 0, 3), y, x), "z3 down"),
+       makeObject(5, quadMesh(Vec3(0, 0, 3), x, y), "z3 up")});
+}
+
+// What the filtered query's tests accept: hits whose face turns towards the ray (as plm's walk
+// does), or hits beyond a per-ray distance.
+struct FilterTestState {
+  float dirZ[16];
+  float minT[16];
+};
+bool facesTheRay(const void* state, uint32_t rayId, float, const Vec3& ng) {
+  return ng.z * -static_cast<const FilterTestState*>(state)->dirZ[rayId] > 0.0f;
+}
+bool beyondMinT(const void* state, uint32_t rayId, float t, const Vec3&) {
+  return t > static_cast<const FilterTestState*>(state)->minT[rayId];
+}
+
+TEST(RayScene, FilteredIntersect16ReturnsTheNearestAcceptedHit) {
+  const RayScene rays(stackedQuads());
+  const float planes[5] = {0.0f, 1.0f, 2.0f, 3.0f, 3.0f};
+  const bool up[5] = {true, false, true, false, true};
+  int checked = 0;
+  for (int count = 1; count <= 16; ++count) {
+    RayHitPacket16 packet;
+    FilterTestState state;
+    for (int lane = 0; lane < count; ++lane) {
+      auto u = [&](uint32_t k) {
+        return static_cast<float>(hash32(static_cast<uint32_t>(count * 64 + lane * 4) + k) >> 8) * (1.0f / 16777216.0f);
+      };
+      const Vec3 o(2.0f * u(0) - 1.0f, 2.0f * u(1) - 1.0f, 5.0f), d(0.2f * u(2) - 0.1f, 0.2f * u(3) - 0.1f, -1.0f);
+      packet.ray.orgX[lane] = o.x;
+      packet.ray.orgY[lane] = o.y;
+      packet.ray.orgZ[lane] = o.z;
+      packet.ray.dirX[lane] = d.x;
+      packet.ray.dirY[lane] = d.y;
+      packet.ray.dirZ[lane] = d.z;
+      packet.ray.tMin[lane] = 0.0f;
+      packet.ray.tMax[lane] = kInfinity;
+      packet.ray.id[lane] = static_cast<uint32_t>(lane);
+      state.dirZ[lane] = d.z;
+      state.minT[lane] = 6.0f * u(4);
+    }
+    // Facing the ray: the nearest is z = 3's upward face, never the coincident downward one, whichever
+    // the traversal meets first.
+    RayHitPacket16 facing = packet;
+    rays.intersect16(facing, count, HitFilter{&facesTheRay, &state});
+    for (int lane = 0; lane < count; ++lane) {
+      ASSERT_NE(facing.hit.geomId[lane], HitPacket16::kNoHit) << "lane " << lane;
+      EXPECT_EQ(facing.hit.geomId[lane], 4u) << "lane " << lane;  // object 5, the scene's fifth
+      EXPECT_NEAR(facing.ray.tMax[lane], 2.0f, 1e-5f);
+    }
+    // Beyond a distance: the nearest quad past it, whatever it faces (at z = 3 either of the two).
+    RayHitPacket16 beyond = packet;
+    rays.intersect16(beyond, count, HitFilter{&beyondMinT, &state});
+    for (int lane = 0; lane < count; ++lane) {
+      float expected = kInfinity;
+      for (int k = 0; k < 5; ++k) {
+        const float t = (5.0f - planes[k]) / -packet.ray.dirZ[lane];
+        if (t > state.minT[lane] + 1e-4f && t < expected) expected = t;
+      }
+      if (expected == kInfinity) {
+        EXPECT_EQ(beyond.hit.geomId[lane], HitPacket16::kNoHit) << "lane " << lane;
+        continue;
+      }
+      ASSERT_NE(beyond.hit.geomId[lane], HitPacket16::kNoHit) << "lane " << lane;
+      EXPECT_NEAR(beyond.ray.tMax[lane], expected, 1e-5f) << "lane " << lane;
+      const uint32_t g = beyond.hit.geomId[lane];
+      EXPECT_EQ(beyond.hit.ngZ[lane] > 0.0f, up[g]) << "lane " << lane;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 80);  // most lanes hit something past their distance
+}
+
 TEST(RayScene, AnAttachedLogKeepsEachPacketAsItWasHandedToEmbree) {
   const RayScene rays(twoQuads());
   // Lane 0 hits quad A (t = 3 along -z), lane 1 misses both quads; a third lane is not traced.

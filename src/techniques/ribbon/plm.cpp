@@ -73,6 +73,7 @@
 #include "penumbra/techniques/ribbon.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -617,12 +618,12 @@ namespace {
 
 // The lower limit's fit (findLowerLimits): rays per probed receiver (a 4 x 4 grid over the light's
 // parameter square, one packet), the share of Equation 1's prediction below which a receiver is
-// taken as shadowed by more than the ribbon's edge, and how many surfaces along a texel's ray are
-// looked at.
+// taken as shadowed by more than the ribbon's edge, and how many receivers along a texel's ray are
+// probed.
 constexpr int kProfileGrid = 4;
 constexpr int kProfileSamples = kProfileGrid * kProfileGrid;
 constexpr float kProfileFraction = 0.5f;
-constexpr int kMaxProfileHits = 16;
+constexpr int kMaxProbes = 16;
 // Fewer samples than Equation 1 predicts by at least this many (2/16 of the light): a prediction
 // below it cannot be told from no light by 16 samples, and is left alone.
 constexpr float kProfileMinDeficit = 2.0f;
@@ -894,12 +895,13 @@ class PlmTechnique final : public ShadowTechnique {
   // (stratified over the emitter, one packet), and b is put there at the first one that sees less
   // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
   // more of this one than its edge accounts for, shadows the receivers (see the file comment).
-  // The walk takes one closest hit at a time (rtcIntersect1). Sixteen walks in one rtcIntersect16 were
-  // 2 ms faster on crowded, but where two faces coincide (a box's bottom on the ground) the packet
-  // and single-ray traversals return different ones of the two, and a walk that met the face turned
-  // away stepped past the ground without probing it (397 texels lost b on crowded under a directional
-  // light). Which of two coincident faces a query returns is arbitrary; the packet walk changed V (851
-  // pixels at 700 x 450 there), so the walk stays as it was.
+  // Sixteen texels walk at a time (neighbours in the list: coherent rays), each query one Embree
+  // packet of those still walking, whose filter (profileReceiver) passes over the surfaces a walk
+  // does not probe, so that a query returns each ray's next receiver to probe in one traversal. A
+  // texel leaves the walk when its ray leaves the scene, after kMaxProbes probes, or when b is
+  // found. Which of two coincident faces (a box's bottom on the ground) a traversal meets first is
+  // arbitrary, and differs between packet and single-ray traversals; through the filter the face
+  // turned away is passed over at any order, so the receiver is probed whichever comes first.
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
@@ -910,55 +912,127 @@ class PlmTechnique final : public ShadowTechnique {
       pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
                         (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t k = range.begin(); k < range.end(); ++k) {
-        const int i = texels[k] % n, j = texels[k] / n;
-        PlmTexel& texel = limits_(i, j);
-        // Only receivers below the surface the map sees are probed: none where that is the deepest.
-        const float seenDepth = map_.lsDepth(i, j);
-        if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
-        const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
-        const float cDepth = space_.lsDepth(texel.c);
-        const float start = cDepth + map_.texelWorldSize(cDepth);
-        Ray ray;
-        ray.origin = map_.unproject(s, t, start);
-        ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(ray.origin - map_.wsOrigin);
-        std::optional<RayHit> hit;
-        for (int hop = 0; hop < kMaxProfileHits && (hit = rays.intersect(ray)); ++hop) {
-          ray.tMin = std::nextafter(hit->t, kInfinity);
-          if (!(glm::dot(hit->wsGeometricNormal, -ray.direction) > 0.0f)) continue;  // faces away: no receiver
-          const Vec3 wsHit = ray.origin + hit->t * ray.direction;
-          const float depth = map_.lsFromWs(wsHit).z;
-          const float lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
-          // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
-          if (!(depth > map_.lsDepth(i, j) + lift)) continue;
-          const float probeDepth = depth - lift;
-          if (!(probeDepth > 0.0f)) continue;
-          const float l =
-              std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
-          const float predicted = options_.illuminationTable ? table_(l) : l;
-          // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
-          if (!(predicted * kProfileSamples >= kProfileMinDeficit)) continue;
-          const Vec3 probe = wsHit - lift * ray.direction;
-          Ray toLight[kProfileSamples];
-          bool blocked[kProfileSamples];
-          for (int q = 0; q < kProfileSamples; ++q) {
-            const LightSample sample = light.sample(probe, pattern[q]);
-            toLight[q].origin = probe;
-            toLight[q].direction = sample.wsDirection;
-            toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+      for (size_t first = range.begin(); first < range.end(); first += 16) {
+        WalkGroup group{this, {}};
+        int walking = 0;
+        for (size_t k = first; k < std::min(first + 16, range.end()); ++k) {
+          const int i = texels[k] % n, j = texels[k] / n;
+          // Only receivers below the surface the map sees are probed: none where that is the deepest.
+          const float seenDepth = map_.lsDepth(i, j);
+          if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+          const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
+          const float cDepth = space_.lsDepth(limits_(i, j).c);
+          const float start = cDepth + map_.texelWorldSize(cDepth);
+          LowerLimitWalk& w = group.walks[walking++];
+          w.i = i;
+          w.j = j;
+          w.ray.origin = map_.unproject(s, t, start);
+          w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
+        }
+        const HitFilter filter{&acceptsProfileHit, &group};
+        while (walking > 0) {
+          RayHitPacket16 packet;
+          for (int lane = 0; lane < walking; ++lane) {
+            const Ray& ray = group.walks[lane].ray;
+            packet.ray.orgX[lane] = ray.origin.x;
+            packet.ray.orgY[lane] = ray.origin.y;
+            packet.ray.orgZ[lane] = ray.origin.z;
+            packet.ray.dirX[lane] = ray.direction.x;
+            packet.ray.dirY[lane] = ray.direction.y;
+            packet.ray.dirZ[lane] = ray.direction.z;
+            packet.ray.tMin[lane] = ray.tMin;
+            packet.ray.tMax[lane] = ray.tMax;
+            packet.ray.id[lane] = static_cast<uint32_t>(lane);  // the filter's index into group.walks
           }
-          rays.occluded16(toLight, kProfileSamples, blocked);
-          int seen = 0;
-          for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
-          const float expected = predicted * kProfileSamples;
-          if (static_cast<float>(seen) < kProfileFraction * expected &&
-              expected - static_cast<float>(seen) >= kProfileMinDeficit) {
-            texel.b = space_.zeta(probeDepth);
-            break;
+          rays.intersect16(packet, walking, filter);
+          int kept = 0;
+          for (int lane = 0; lane < walking; ++lane) {
+            LowerLimitWalk& w = group.walks[lane];
+            if (packet.hit.geomId[lane] == HitPacket16::kNoHit) continue;  // the ray left the scene
+            const float hitT = packet.ray.tMax[lane];
+            const std::optional<ProfileReceiver> receiver =
+                profileReceiver(w, hitT, Vec3(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]));
+            assert(receiver);                                         // the filter accepted the hit
+            if (probe(light, pattern, rays, w, *receiver)) continue;  // b found
+            w.ray.tMin = std::nextafter(hitT, kInfinity);
+            if (++w.probes < kMaxProbes) group.walks[kept++] = w;
           }
+          walking = kept;
         }
       }
     });
+  }
+
+  // One texel's walk down its light ray (findLowerLimits): its texel, how many receivers it probed,
+  // and the ray from just below c, past the last of them.
+  struct LowerLimitWalk {
+    int i = 0, j = 0, probes = 0;
+    Ray ray;
+  };
+  // The walks of one packet, as its filter sees them (a lane's ray id indexes walks).
+  struct WalkGroup {
+    const PlmTechnique* self;
+    LowerLimitWalk walks[16];
+  };
+  // A receiver on a walk's ray: the hit, the depth its visibility is probed at (lifted off the surface
+  // towards the light) and what Equation 1 predicts there.
+  struct ProfileReceiver {
+    Vec3 wsHit;
+    float lift, probeDepth, predicted;
+  };
+
+  // The hit at distance t on a walk's ray (ng: its unnormalized geometric normal) as a receiver to
+  // probe, or nothing where the walk passes over it: a surface turned away from the light, one the
+  // map sees, or one where Equation 1 predicts too little light to find less.
+  std::optional<ProfileReceiver> profileReceiver(const LowerLimitWalk& w, float t, const Vec3& ng) const {
+    const float len = glm::length(ng);  // normalized as RayScene::intersect does
+    const Vec3 normal = len > 0.0f ? ng / len : Vec3(0.0f);
+    if (!(glm::dot(normal, -w.ray.direction) > 0.0f)) return std::nullopt;  // faces away: no receiver
+    const PlmTexel& texel = limits_(w.i, w.j);
+    ProfileReceiver r;
+    r.wsHit = w.ray.origin + t * w.ray.direction;
+    const float depth = map_.lsFromWs(r.wsHit).z;
+    r.lift = 2.0f * map_.texelWorldSize(depth);  // off the surface, towards the light
+    // A receiver the map sees (lit from the light's centre) is not in an umbra: not probed.
+    if (!(depth > map_.lsDepth(w.i, w.j) + r.lift)) return std::nullopt;
+    r.probeDepth = depth - r.lift;
+    if (!(r.probeDepth > 0.0f)) return std::nullopt;
+    const float l =
+        std::clamp(0.5f + 0.5f * texel.pi / std::max(space_.zeta(r.probeDepth) - texel.c, 1e-30f), 0.0f, 1.0f);
+    r.predicted = options_.illuminationTable ? table_(l) : l;
+    // A prediction under kProfileMinDeficit samples cannot be missed by that many: not probed.
+    if (!(r.predicted * kProfileSamples >= kProfileMinDeficit)) return std::nullopt;
+    return r;
+  }
+
+  static bool acceptsProfileHit(const void* state, uint32_t rayId, float t, const Vec3& ng) {
+    const auto& group = *static_cast<const WalkGroup*>(state);
+    return group.self->profileReceiver(group.walks[rayId], t, ng).has_value();
+  }
+
+  // Probes a receiver with kProfileSamples rays to the light and, where it sees too little, puts b
+  // just above it (true: the walk ends).
+  bool probe(const Light& light, const Vec2* pattern, const RayScene& rays, const LowerLimitWalk& w,
+             const ProfileReceiver& receiver) {
+    const Vec3 probe = receiver.wsHit - receiver.lift * w.ray.direction;
+    Ray toLight[kProfileSamples];
+    bool blocked[kProfileSamples];
+    for (int q = 0; q < kProfileSamples; ++q) {
+      const LightSample sample = light.sample(probe, pattern[q]);
+      toLight[q].origin = probe;
+      toLight[q].direction = sample.wsDirection;
+      toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+    }
+    rays.occluded16(toLight, kProfileSamples, blocked);
+    int seen = 0;
+    for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
+    const float expected = receiver.predicted * kProfileSamples;
+    if (static_cast<float>(seen) < kProfileFraction * expected &&
+        expected - static_cast<float>(seen) >= kProfileMinDeficit) {
+      limits_(w.i, w.j).b = space_.zeta(receiver.probeDepth);
+      return true;
+    }
+    return false;
   }
 
   PlmOptions options_;
