@@ -83,7 +83,7 @@ struct ReceiverRowConstants {
 
 // num / den limited to [-kMaxDepthSlope, kMaxDepthSlope] (detail::limitedRatio), as a select.
 inline float limitedSelect(float num, float den) {
-  const float q = num / den;
+  const float q = den != 0.0f ? num / den : 0.0f;
   const float cap = (num < 0.0f) != (den < 0.0f) ? -kMaxDepthSlope : kMaxDepthSlope;
   return std::abs(num) <= kMaxDepthSlope * std::abs(den) ? q : cap;
 }

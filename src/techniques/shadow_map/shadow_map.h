@@ -87,7 +87,10 @@ struct ShadowReceiver {
 namespace detail {
 // num / den limited to [-kMaxDepthSlope, kMaxDepthSlope], also when den is 0.
 inline float limitedRatio(float num, float den) {
-  if (std::abs(num) <= kMaxDepthSlope * std::abs(den)) return num / den;
+  // 0 / 0 (a surface seen edge-on from the light, whose normal has no component along this map axis
+  // either): its depth does not change along the axis (the quotient, NaN, would make every compare
+  // with the receiver's plane false).
+  if (std::abs(num) <= kMaxDepthSlope * std::abs(den)) return den != 0.0f ? num / den : 0.0f;
   const float sign = (num < 0.0f) != (den < 0.0f) ? -1.0f : 1.0f;
   return sign * kMaxDepthSlope;
 }

@@ -95,6 +95,28 @@ TEST(ShadowMap, ReceiverPlaneMatchesATiltedPlaneExactlyInAnOrthoMap) {
   EXPECT_NEAR(pcfBox(m, flat, flat.s, flat.t, 15.0f), 0.5f, 0.1f);
 }
 
+// A receiver seen edge-on from the light whose normal lies along a map axis (a wall parallel to the
+// light's direction): its depth does not change along the other axis (slope 0, where 0 / 0 gave NaN
+// and made every compare with its plane false), and along its normal the slope is the limit.
+TEST(ShadowMap, AnEdgeOnReceiverHasFiniteSlopes) {
+  const LightMap m = orthoMap(64, 30.0f);  // a blocker at depth 30 everywhere, beyond the receiver
+  const DepthBias bias{};
+  for (const Vec3& normal : {Vec3(1, 0, 0), Vec3(0, -1, 0)}) {
+    const Vec3 p(0.3f, -0.2f, 10.0f);
+    const ShadowReceiver r = makeReceiver(m, p, normal, bias);
+    ASSERT_TRUE(r.inMap);
+    EXPECT_TRUE(std::isfinite(r.dzds) && std::isfinite(r.dzdt) && std::isfinite(r.bias));
+    EXPECT_EQ(normal.x != 0.0f ? r.dzdt : r.dzds, 0.0f);
+    EXPECT_EQ(std::abs(normal.x != 0.0f ? r.dzds : r.dzdt), kMaxDepthSlope);
+    ReceiverRow row;
+    makeReceiverRow(m, &p, &normal, 1, bias, row);
+    EXPECT_EQ(row[0].dzds, r.dzds);
+    EXPECT_EQ(row[0].dzdt, r.dzdt);
+    // The blocker lies behind the receiver at its own texel: lit.
+    EXPECT_EQ(hardShadow(m, r), 1.0f);
+  }
+}
+
 TEST(ShadowMap, ReceiverPlaneIsFirstOrderExactInAPerspectiveMap) {
   LightMap m;
   m.size = 64;
