@@ -88,6 +88,7 @@
 
 #include "core/image_fill.h"
 #include "core/light_profile.h"
+#include "core/target_clones.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
 #include "raster/rasterizer.h"
@@ -632,6 +633,68 @@ static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)")
 // Classes of the 2x2 footprint of a bilinear fetch (PlmTechnique::footprint2x2_).
 constexpr uint8_t kFootprintMixed = 0, kFootprintRibbonFree = 1, kFootprintOneRibbon = 2;
 
+// What fetchSetUp reads besides the pixels: the light's centre (or direction, for a directional
+// light: then fromPoint is 0, so that towardLight - fromPoint P is exact either way), the map's size.
+struct FetchConstants {
+  float towardX, towardY, towardZ, fromPoint;
+  int mapSize;
+};
+
+// The set-up of a run of pixels' fetches in plm's visibility pass, arithmetic alone: the receiver's
+// bias (none where it faces away from the light's centre), the bilinear weights and the four texel
+// indices of its fetch, and its biased depth in zeta. Restrict-qualified arrays and selects only, so
+// that the loop vectorizes (a conditional load of the bias kept it scalar).
+template <bool kOrtho>
+inline __attribute__((always_inline)) void fetchSetUpKernel(
+    const FetchConstants k, int count, const float* __restrict position, const float* __restrict normal,
+    const float* __restrict s, const float* __restrict t, const float* __restrict lsDepth,
+    const float* __restrict receiverBias, float* __restrict ws, float* __restrict wt, float* __restrict zc,
+    float* __restrict bias, int32_t* __restrict i0, int32_t* __restrict i1, int32_t* __restrict j0,
+    int32_t* __restrict j1) {
+  const float lastIndex = static_cast<float>(k.mapSize);
+  const int last = k.mapSize - 1;
+  for (int x = 0; x < count; ++x) {
+    // A surface that faces away from the light's centre is never the one the map holds at its texel
+    // (the map sees the surfaces that face the centre), so it cannot shadow itself through the
+    // compare: the bias would only lift it above the surface that covers it.
+    const float dx = k.towardX - k.fromPoint * position[3 * x], dy = k.towardY - k.fromPoint * position[3 * x + 1],
+                dz = k.towardZ - k.fromPoint * position[3 * x + 2];
+    const bool facesAway = normal[3 * x] * dx + normal[3 * x + 1] * dy + normal[3 * x + 2] * dz < 0.0f;  // glm::dot
+    const float b = receiverBias[x];
+    bias[x] = facesAway ? 0.0f : b;
+    // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels (the position is
+    // limited to [-1, size] first, which the clamps below make no difference to, so that a pixel
+    // outside the map, whose result is not used, converts no out-of-range float).
+    const float fs = s[x] - 0.5f, ft = t[x] - 0.5f;
+    const float is = std::floor(fs), it = std::floor(ft);
+    ws[x] = fs - is;
+    wt[x] = ft - it;
+    const int si = static_cast<int>(!(is >= -1.0f) ? -1.0f : std::min(is, lastIndex));
+    const int ti = static_cast<int>(!(it >= -1.0f) ? -1.0f : std::min(it, lastIndex));
+    i0[x] = std::clamp(si, 0, last);
+    i1[x] = std::clamp(si + 1, 0, last);
+    j0[x] = std::clamp(ti, 0, last);
+    j1[x] = std::clamp(ti + 1, 0, last);
+    const float biased = lsDepth[x] - (facesAway ? 0.0f : b);
+    // Space::zeta, without a branch; behind a local light, below every g.
+    zc[x] = kOrtho ? biased : (biased > 0.0f ? -1.0f / biased : -kInfinity);
+  }
+}
+
+#define PENUMBRA_FETCH_SET_UP_PARAMETERS                                                                      \
+  const FetchConstants k, int count, const float *__restrict position, const float *__restrict normal,        \
+      const float *__restrict s, const float *__restrict t, const float *__restrict lsDepth,                  \
+      const float *__restrict receiverBias, float *__restrict ws, float *__restrict wt, float *__restrict zc, \
+      float *__restrict bias, int32_t *__restrict i0, int32_t *__restrict i1, int32_t *__restrict j0,         \
+      int32_t *__restrict j1
+PENUMBRA_CLONES_AVX512 void fetchSetUpOrtho(PENUMBRA_FETCH_SET_UP_PARAMETERS) {
+  fetchSetUpKernel<true>(k, count, position, normal, s, t, lsDepth, receiverBias, ws, wt, zc, bias, i0, i1, j0, j1);
+}
+PENUMBRA_CLONES_AVX512 void fetchSetUpPerspective(PENUMBRA_FETCH_SET_UP_PARAMETERS) {
+  fetchSetUpKernel<false>(k, count, position, normal, s, t, lsDepth, receiverBias, ws, wt, zc, bias, i0, i1, j0, j1);
+}
+#undef PENUMBRA_FETCH_SET_UP_PARAMETERS
+
 // Beyond this spread of b over the four texels of a fetch, relative to the receiver's distance to
 // it, the texels' b are not interpolated (oneRibbon).
 constexpr float kTransitionSpread = 1.0f / 16.0f;
@@ -740,6 +803,7 @@ class PlmTechnique final : public ShadowTechnique {
     const plm::Space space = space_;
     const float* gTexels = g_.data();
     const uint8_t* footprints = footprint2x2_.data();
+    const FetchConstants constants{towardLight.x, towardLight.y, towardLight.z, directional ? 0.0f : 1.0f, n};
     v.resizeForOverwrite(width, gbuffer.height());  // every pixel written below, in parallel
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& row) {
       float* out = v.row(y);
@@ -747,43 +811,16 @@ class PlmTechnique final : public ShadowTechnique {
       static_assert(sizeof(Vec3) == 3 * sizeof(float));
       const auto* positions = reinterpret_cast<const float*>(gbuffer.wsPosition.row(y));
       const auto* normals = reinterpret_cast<const float*>(gbuffer.wsGeometricNormal.row(y));
-      const float fromPoint = directional ? 0.0f : 1.0f;  // towardLight - fromPoint * P: exact either way
-      // A run of pixels in two passes: the fetch's set-up, arithmetic alone (the compiler vectorizes
-      // it), then the fetch and Equation 2 per pixel, where most pixels take the ribbon-free compare.
+      // A run of pixels in two passes: the fetch's set-up, arithmetic alone (fetchSetUp, vectorized),
+      // then the fetch and Equation 2 per pixel, where most pixels take the ribbon-free compare.
       constexpr int kRun = 256;
       alignas(64) float ws[kRun], wt[kRun], zc[kRun], bias[kRun];
       alignas(64) int32_t i0[kRun], i1[kRun], j0[kRun], j1[kRun];
-      const float lastIndex = static_cast<float>(n);
       for (int first = 0; first < width; first += kRun) {
         const int count = std::min(kRun, width - first);
-        for (int k = 0; k < count; ++k) {
-          const int x = first + k;
-          // A surface that faces away from the light's centre is never the one the map holds at its
-          // texel (the map sees the surfaces that face the centre), so it cannot shadow itself
-          // through the compare: the bias would only lift it above the surface that covers it.
-          const float* p = positions + 3 * x;
-          const float* m = normals + 3 * x;
-          const float dx = towardLight.x - fromPoint * p[0], dy = towardLight.y - fromPoint * p[1],
-                      dz = towardLight.z - fromPoint * p[2];
-          const bool facesAway = m[0] * dx + m[1] * dy + m[2] * dz < 0.0f;  // glm::dot's order
-          bias[k] = facesAway ? 0.0f : row.bias[x];
-          // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels (the position is
-          // limited to [-1, size] first, which the clamps below make no difference to, so that a
-          // pixel outside the map, whose result is not used, converts no out-of-range float).
-          const float fs = row.s[x] - 0.5f, ft = row.t[x] - 0.5f;
-          const float is = std::floor(fs), it = std::floor(ft);
-          ws[k] = fs - is;
-          wt[k] = ft - it;
-          const int si = static_cast<int>(!(is >= -1.0f) ? -1.0f : std::min(is, lastIndex));
-          const int ti = static_cast<int>(!(it >= -1.0f) ? -1.0f : std::min(it, lastIndex));
-          i0[k] = std::clamp(si, 0, n - 1);
-          i1[k] = std::clamp(si + 1, 0, n - 1);
-          j0[k] = std::clamp(ti, 0, n - 1);
-          j1[k] = std::clamp(ti + 1, 0, n - 1);
-          const float biased = row.lsDepth[x] - bias[k];
-          const float zeta = space.orthographic ? biased : -1.0f / biased;  // Space::zeta, without a branch
-          zc[k] = space.orthographic || biased > 0.0f ? zeta : -kInfinity;
-        }
+        (space.orthographic ? fetchSetUpOrtho : fetchSetUpPerspective)(
+            constants, count, positions + 3 * first, normals + 3 * first, row.s.data() + first, row.t.data() + first,
+            row.lsDepth.data() + first, row.bias.data() + first, ws, wt, zc, bias, i0, i1, j0, j1);
         for (int k = 0; k < count; ++k) {
           const int x = first + k;
           if (ids[x] == kNoObject || !row.inMap[x]) {
@@ -895,13 +932,15 @@ class PlmTechnique final : public ShadowTechnique {
   // (stratified over the emitter, one packet), and b is put there at the first one that sees less
   // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
   // more of this one than its edge accounts for, shadows the receivers (see the file comment).
-  // Sixteen texels walk at a time (neighbours in the list: coherent rays), each query one Embree
-  // packet of those still walking, whose filter (profileReceiver) passes over the surfaces a walk
-  // does not probe, so that a query returns each ray's next receiver to probe in one traversal. A
-  // texel leaves the walk when its ray leaves the scene, after kMaxProbes probes, or when b is
-  // found. Which of two coincident faces (a box's bottom on the ground) a traversal meets first is
-  // arbitrary, and differs between packet and single-ray traversals; through the filter the face
-  // turned away is passed over at any order, so the receiver is probed whichever comes first.
+  // Each query's filter (profileReceiver) passes over the surfaces a walk does not probe, so that one
+  // traversal returns the ray's next receiver to probe; the walk ends when its ray leaves the scene,
+  // after kMaxProbes probes, or when b is found. Through the filter a face turned away is passed over
+  // in whatever order the traversal meets it, so where it coincides with a receiver (a box's bottom
+  // on the ground) the receiver is probed; stepping from hit to hit, the walk met whichever of the
+  // two the traversal returned and stepped past both. One ray at a time: Embree's packet traversal
+  // hands lanes to its single-ray kernel as a packet thins out, and the two kernels' hit distances
+  // may differ in the last bit, so a walk in a packet depended on its neighbours (engine: 3 pixels of
+  // V changed between runs of different thread timing).
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
@@ -912,52 +951,26 @@ class PlmTechnique final : public ShadowTechnique {
       pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
                         (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t first = range.begin(); first < range.end(); first += 16) {
-        WalkGroup group{this, {}};
-        int walking = 0;
-        for (size_t k = first; k < std::min(first + 16, range.end()); ++k) {
-          const int i = texels[k] % n, j = texels[k] / n;
-          // Only receivers below the surface the map sees are probed: none where that is the deepest.
-          const float seenDepth = map_.lsDepth(i, j);
-          if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
-          const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
-          const float cDepth = space_.lsDepth(limits_(i, j).c);
-          const float start = cDepth + map_.texelWorldSize(cDepth);
-          LowerLimitWalk& w = group.walks[walking++];
-          w.i = i;
-          w.j = j;
-          w.ray.origin = map_.unproject(s, t, start);
-          w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
-        }
-        const HitFilter filter{&acceptsProfileHit, &group};
-        while (walking > 0) {
-          RayHitPacket16 packet;
-          for (int lane = 0; lane < walking; ++lane) {
-            const Ray& ray = group.walks[lane].ray;
-            packet.ray.orgX[lane] = ray.origin.x;
-            packet.ray.orgY[lane] = ray.origin.y;
-            packet.ray.orgZ[lane] = ray.origin.z;
-            packet.ray.dirX[lane] = ray.direction.x;
-            packet.ray.dirY[lane] = ray.direction.y;
-            packet.ray.dirZ[lane] = ray.direction.z;
-            packet.ray.tMin[lane] = ray.tMin;
-            packet.ray.tMax[lane] = ray.tMax;
-            packet.ray.id[lane] = static_cast<uint32_t>(lane);  // the filter's index into group.walks
-          }
-          rays.intersect16(packet, walking, filter);
-          int kept = 0;
-          for (int lane = 0; lane < walking; ++lane) {
-            LowerLimitWalk& w = group.walks[lane];
-            if (packet.hit.geomId[lane] == HitPacket16::kNoHit) continue;  // the ray left the scene
-            const float hitT = packet.ray.tMax[lane];
-            const std::optional<ProfileReceiver> receiver =
-                profileReceiver(w, hitT, Vec3(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]));
-            assert(receiver);                                         // the filter accepted the hit
-            if (probe(light, pattern, rays, w, *receiver)) continue;  // b found
-            w.ray.tMin = std::nextafter(hitT, kInfinity);
-            if (++w.probes < kMaxProbes) group.walks[kept++] = w;
-          }
-          walking = kept;
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        LowerLimitWalk w;
+        w.i = texels[k] % n;
+        w.j = texels[k] / n;
+        // Only receivers below the surface the map sees are probed: none where that is the deepest.
+        const float seenDepth = map_.lsDepth(w.i, w.j);
+        if (!(space_.lsDepth(farthest_(w.i, w.j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+        const float s = static_cast<float>(w.i) + 0.5f, t = static_cast<float>(w.j) + 0.5f;
+        const float cDepth = space_.lsDepth(limits_(w.i, w.j).c);
+        const float start = cDepth + map_.texelWorldSize(cDepth);
+        w.ray.origin = map_.unproject(s, t, start);
+        w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
+        const WalkFilter walkFilter{this, &w};
+        const HitFilter filter{&acceptsProfileHit, &walkFilter};
+        std::optional<RayHit> hit;
+        for (; w.probes < kMaxProbes && (hit = rays.intersect(w.ray, filter)); ++w.probes) {
+          const std::optional<ProfileReceiver> receiver = profileReceiver(w, hit->t, hit->wsGeometricNormal);
+          assert(receiver);                                      // the filter accepted the hit
+          if (probe(light, pattern, rays, w, *receiver)) break;  // b found
+          w.ray.tMin = std::nextafter(hit->t, kInfinity);
         }
       }
     });
@@ -969,10 +982,10 @@ class PlmTechnique final : public ShadowTechnique {
     int i = 0, j = 0, probes = 0;
     Ray ray;
   };
-  // The walks of one packet, as its filter sees them (a lane's ray id indexes walks).
-  struct WalkGroup {
+  // What a walk's filter reads: the technique and the walk.
+  struct WalkFilter {
     const PlmTechnique* self;
-    LowerLimitWalk walks[16];
+    const LowerLimitWalk* walk;
   };
   // A receiver on a walk's ray: the hit, the depth its visibility is probed at (lifted off the surface
   // towards the light) and what Equation 1 predicts there.
@@ -981,12 +994,10 @@ class PlmTechnique final : public ShadowTechnique {
     float lift, probeDepth, predicted;
   };
 
-  // The hit at distance t on a walk's ray (ng: its unnormalized geometric normal) as a receiver to
-  // probe, or nothing where the walk passes over it: a surface turned away from the light, one the
-  // map sees, or one where Equation 1 predicts too little light to find less.
-  std::optional<ProfileReceiver> profileReceiver(const LowerLimitWalk& w, float t, const Vec3& ng) const {
-    const float len = glm::length(ng);  // normalized as RayScene::intersect does
-    const Vec3 normal = len > 0.0f ? ng / len : Vec3(0.0f);
+  // The hit at distance t on a walk's ray (normal: its unit geometric normal) as a receiver to probe, or nothing where
+  // the walk passes over it: a surface turned away from the light, one the map sees, or one where Equation 1 predicts
+  // too little light to find less.
+  std::optional<ProfileReceiver> profileReceiver(const LowerLimitWalk& w, float t, const Vec3& normal) const {
     if (!(glm::dot(normal, -w.ray.direction) > 0.0f)) return std::nullopt;  // faces away: no receiver
     const PlmTexel& texel = limits_(w.i, w.j);
     ProfileReceiver r;
@@ -1005,9 +1016,10 @@ class PlmTechnique final : public ShadowTechnique {
     return r;
   }
 
-  static bool acceptsProfileHit(const void* state, uint32_t rayId, float t, const Vec3& ng) {
-    const auto& group = *static_cast<const WalkGroup*>(state);
-    return group.self->profileReceiver(group.walks[rayId], t, ng).has_value();
+  static bool acceptsProfileHit(const void* state, float t, const Vec3& ng) {
+    const auto& filter = *static_cast<const WalkFilter*>(state);
+    const float len = glm::length(ng);  // normalized as RayScene::intersect does
+    return filter.self->profileReceiver(*filter.walk, t, len > 0.0f ? ng / len : Vec3(0.0f)).has_value();
   }
 
   // Probes a receiver with kProfileSamples rays to the light and, where it sees too little, puts b
