@@ -126,30 +126,24 @@ struct PacketQuery {
   }
 };
 
-// The context filter of filtered queries: rejects (valid = 0) each hit the caller's HitFilter does
-// not accept. Embree passes the hit's distance as the ray's tfar, and the context given to the query,
-// which is the first member of a FilteredContext.
-void filterHits(const RTCFilterFunctionNArguments* args);
-
-// A query's context with the caller's HitFilter beside it (none: accept is null).
-struct FilteredContext {
-  RTCIntersectContext context;
+// A filtered query's context: Embree hands the filter a pointer to `context`, the first member, from
+// which filterHits finds the caller's HitFilter.
+struct FilteredQuery {
+  PacketQuery query;
   const HitFilter* filter;
-
-  explicit FilteredContext(const HitFilter& hitFilter) : filter(&hitFilter) {
-    rtcInitIntersectContext(&context);
-    if (hitFilter.accept) context.filter = &filterHits;
-  }
 };
-static_assert(offsetof(FilteredContext, context) == 0);
+static_assert(offsetof(FilteredQuery, query) == 0 && offsetof(PacketQuery, context) == 0);
 
+// The context filter of filtered queries: rejects (valid = 0) each hit the caller's filter does not
+// accept. Embree passes the hit's distance as the ray's tfar.
 void filterHits(const RTCFilterFunctionNArguments* args) {
-  const HitFilter& filter = *reinterpret_cast<const FilteredContext*>(args->context)->filter;
+  const HitFilter& filter = *reinterpret_cast<const FilteredQuery*>(args->context)->filter;
   const unsigned n = args->N;
   for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] == 0) continue;
     const Vec3 ng(RTCHitN_Ng_x(args->hit, n, i), RTCHitN_Ng_y(args->hit, n, i), RTCHitN_Ng_z(args->hit, n, i));
-    if (!filter.accept(filter.state, RTCRayN_tfar(args->ray, n, i), ng)) args->valid[i] = 0;
+    if (!filter.accept(filter.state, RTCRayN_id(args->ray, n, i), RTCRayN_tfar(args->ray, n, i), ng))
+      args->valid[i] = 0;
   }
 }
 
@@ -310,16 +304,27 @@ void RayScene::intersect16(RayHitPacket16& packet, int count) const {
   rtcIntersect16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRayHit16*>(&packet));
 }
 
-std::optional<RayHit> RayScene::intersect(const Ray& ray) const { return intersect(ray, HitFilter{}); }
+void RayScene::intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const {
+  if (count <= 0) return;
+  if (impl_->log) impl_->log->add(packet.ray, count, true);
+  FilteredQuery filtered{PacketQuery(count), &filter};
+  filtered.query.context.filter = &filterHits;
+  for (int i = 0; i < 16; ++i) {
+    packet.hit.geomId[i] = HitPacket16::kNoHit;
+    packet.hit.instId[i] = HitPacket16::kNoHit;
+  }
+  rtcIntersect16(filtered.query.valid, impl_->scene, &filtered.query.context, reinterpret_cast<RTCRayHit16*>(&packet));
+}
 
-std::optional<RayHit> RayScene::intersect(const Ray& ray, const HitFilter& filter) const {
-  FilteredContext filtered(filter);
+std::optional<RayHit> RayScene::intersect(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
   RTCRayHit rh;
   fillRay(rh.ray, ray);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &filtered.context, &rh);
+  rtcIntersect1(impl_->scene, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   RayHit hit;
   hit.t = rh.ray.tfar;

@@ -72,13 +72,13 @@ class PacketLog {
   std::unique_ptr<Impl> impl_;
 };
 
-// A caller's test of the hits of a filtered closest-hit query (RayScene::intersect with a filter):
-// Embree asks it of every hit it finds on the ray, in no particular order and a hit possibly more than
-// once, and the query returns the nearest hit it accepted. `t` is the hit's distance, `ng` Embree's
-// geometric normal (v1 - v0) x (v2 - v0), unnormalized. It must be a function of its arguments and
-// `state` alone.
+// A caller's test of the hits of a filtered closest-hit query (RayScene::intersect16 with a filter):
+// Embree asks it of every hit it finds on a ray, in no particular order and a hit possibly more than
+// once, and the query returns the nearest hit it accepted. `rayId` is the lane's RayPacket16::id, `t`
+// the hit's distance, `ng` Embree's geometric normal (v1 - v0) x (v2 - v0), unnormalized. It must be
+// a function of its arguments and `state` alone, and safe to call from any thread.
 struct HitFilter {
-  bool (*accept)(const void* state, float t, const Vec3& ng) = nullptr;
+  bool (*accept)(const void* state, uint32_t rayId, float t, const Vec3& ng) = nullptr;
   const void* state = nullptr;
 };
 
@@ -101,11 +101,11 @@ class RayScene {
   // The closest hits of lanes [0, count) of a packet built in place (count <= 16): afterwards
   // packet.ray.tMax[i] is ray i's hit distance where packet.hit.geomId[i] != HitPacket16::kNoHit.
   void intersect16(RayHitPacket16& packet, int count) const;
+  // The same, returning for each ray the nearest hit that `filter` accepts (one traversal, where
+  // stepping from hit to hit restarts it at every hit the caller would pass over).
+  void intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const;
   // The closest hit within [tMin, tMax], or nothing. Thread-safe.
   std::optional<RayHit> intersect(const Ray& ray) const;
-  // The closest hit within [tMin, tMax] that `filter` accepts, or nothing: one traversal, where
-  // stepping from hit to hit restarts it at every hit the caller passes over. Thread-safe.
-  std::optional<RayHit> intersect(const Ray& ray, const HitFilter& filter) const;
 
   // Logs every packet query into `log` from now on (nullptr: stops). For measurements: attached, each
   // query copies its packet; detached, a query pays one load and branch. Not to be changed while

@@ -932,15 +932,13 @@ class PlmTechnique final : public ShadowTechnique {
   // (stratified over the emitter, one packet), and b is put there at the first one that sees less
   // than kProfileFraction of what Equation 1 predicts for it: below that depth another occluder, or
   // more of this one than its edge accounts for, shadows the receivers (see the file comment).
-  // Each query's filter (profileReceiver) passes over the surfaces a walk does not probe, so that one
-  // traversal returns the ray's next receiver to probe; the walk ends when its ray leaves the scene,
-  // after kMaxProbes probes, or when b is found. Through the filter a face turned away is passed over
-  // in whatever order the traversal meets it, so where it coincides with a receiver (a box's bottom
-  // on the ground) the receiver is probed; stepping from hit to hit, the walk met whichever of the
-  // two the traversal returned and stepped past both. One ray at a time: Embree's packet traversal
-  // hands lanes to its single-ray kernel as a packet thins out, and the two kernels' hit distances
-  // may differ in the last bit, so a walk in a packet depended on its neighbours (engine: 3 pixels of
-  // V changed between runs of different thread timing).
+  // Sixteen texels walk at a time (neighbours in the list: coherent rays), each query one Embree
+  // packet of those still walking, whose filter (profileReceiver) passes over the surfaces a walk
+  // does not probe, so that a query returns each ray's next receiver to probe in one traversal. A
+  // texel leaves the walk when its ray leaves the scene, after kMaxProbes probes, or when b is
+  // found. Which of two coincident faces (a box's bottom on the ground) a traversal meets first is
+  // arbitrary, and differs between packet and single-ray traversals; through the filter the face
+  // turned away is passed over at any order, so the receiver is probed whichever comes first.
   void findLowerLimits(const Scene& scene, const Light& light, const std::vector<int>& texels) {
     // The scene's BVH depends on the geometry alone: kept from the last prepare while every mesh's
     // positions and triangles are the same to the bit (a static scene under a moving light).
@@ -950,27 +948,57 @@ class PlmTechnique final : public ShadowTechnique {
     for (int q = 0; q < kProfileSamples; ++q)
       pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
                         (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t k = range.begin(); k < range.end(); ++k) {
-        LowerLimitWalk w;
-        w.i = texels[k] % n;
-        w.j = texels[k] / n;
-        // Only receivers below the surface the map sees are probed: none where that is the deepest.
-        const float seenDepth = map_.lsDepth(w.i, w.j);
-        if (!(space_.lsDepth(farthest_(w.i, w.j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
-        const float s = static_cast<float>(w.i) + 0.5f, t = static_cast<float>(w.j) + 0.5f;
-        const float cDepth = space_.lsDepth(limits_(w.i, w.j).c);
-        const float start = cDepth + map_.texelWorldSize(cDepth);
-        w.ray.origin = map_.unproject(s, t, start);
-        w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
-        const WalkFilter walkFilter{this, &w};
-        const HitFilter filter{&acceptsProfileHit, &walkFilter};
-        std::optional<RayHit> hit;
-        for (; w.probes < kMaxProbes && (hit = rays.intersect(w.ray, filter)); ++w.probes) {
-          const std::optional<ProfileReceiver> receiver = profileReceiver(w, hit->t, hit->wsGeometricNormal);
-          assert(receiver);                                      // the filter accepted the hit
-          if (probe(light, pattern, rays, w, *receiver)) break;  // b found
-          w.ray.tMin = std::nextafter(hit->t, kInfinity);
+    // The packets are fixed sixteens of the list, not cut from the threads' ranges: a texel's packet
+    // neighbours are the same at any thread count, so V does not depend on how Embree's packet
+    // traversal treats a lane (it may hand thinned-out packets to its single-ray kernel).
+    const size_t groups = (texels.size() + 15) / 16;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups, 4), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t first = 16 * range.begin(); first < std::min(16 * range.end(), texels.size()); first += 16) {
+        WalkGroup group{this, {}};
+        int walking = 0;
+        for (size_t k = first; k < std::min(first + 16, texels.size()); ++k) {
+          const int i = texels[k] % n, j = texels[k] / n;
+          // Only receivers below the surface the map sees are probed: none where that is the deepest.
+          const float seenDepth = map_.lsDepth(i, j);
+          if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+          const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
+          const float cDepth = space_.lsDepth(limits_(i, j).c);
+          const float start = cDepth + map_.texelWorldSize(cDepth);
+          LowerLimitWalk& w = group.walks[walking++];
+          w.i = i;
+          w.j = j;
+          w.ray.origin = map_.unproject(s, t, start);
+          w.ray.direction = map_.orthographic ? map_.lsFrame.z : glm::normalize(w.ray.origin - map_.wsOrigin);
+        }
+        const HitFilter filter{&acceptsProfileHit, &group};
+        while (walking > 0) {
+          RayHitPacket16 packet;
+          for (int lane = 0; lane < walking; ++lane) {
+            const Ray& ray = group.walks[lane].ray;
+            packet.ray.orgX[lane] = ray.origin.x;
+            packet.ray.orgY[lane] = ray.origin.y;
+            packet.ray.orgZ[lane] = ray.origin.z;
+            packet.ray.dirX[lane] = ray.direction.x;
+            packet.ray.dirY[lane] = ray.direction.y;
+            packet.ray.dirZ[lane] = ray.direction.z;
+            packet.ray.tMin[lane] = ray.tMin;
+            packet.ray.tMax[lane] = ray.tMax;
+            packet.ray.id[lane] = static_cast<uint32_t>(lane);  // the filter's index into group.walks
+          }
+          rays.intersect16(packet, walking, filter);
+          int kept = 0;
+          for (int lane = 0; lane < walking; ++lane) {
+            LowerLimitWalk& w = group.walks[lane];
+            if (packet.hit.geomId[lane] == HitPacket16::kNoHit) continue;  // the ray left the scene
+            const float hitT = packet.ray.tMax[lane];
+            const std::optional<ProfileReceiver> receiver =
+                profileReceiver(w, hitT, Vec3(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]));
+            assert(receiver);                                         // the filter accepted the hit
+            if (probe(light, pattern, rays, w, *receiver)) continue;  // b found
+            w.ray.tMin = std::nextafter(hitT, kInfinity);
+            if (++w.probes < kMaxProbes) group.walks[kept++] = w;
+          }
+          walking = kept;
         }
       }
     });
@@ -982,10 +1010,10 @@ class PlmTechnique final : public ShadowTechnique {
     int i = 0, j = 0, probes = 0;
     Ray ray;
   };
-  // What a walk's filter reads: the technique and the walk.
-  struct WalkFilter {
+  // The walks of one packet, as its filter sees them (a lane's ray id indexes walks).
+  struct WalkGroup {
     const PlmTechnique* self;
-    const LowerLimitWalk* walk;
+    LowerLimitWalk walks[16];
   };
   // A receiver on a walk's ray: the hit, the depth its visibility is probed at (lifted off the surface
   // towards the light) and what Equation 1 predicts there.
@@ -994,10 +1022,12 @@ class PlmTechnique final : public ShadowTechnique {
     float lift, probeDepth, predicted;
   };
 
-  // The hit at distance t on a walk's ray (normal: its unit geometric normal) as a receiver to probe, or nothing where
-  // the walk passes over it: a surface turned away from the light, one the map sees, or one where Equation 1 predicts
-  // too little light to find less.
-  std::optional<ProfileReceiver> profileReceiver(const LowerLimitWalk& w, float t, const Vec3& normal) const {
+  // The hit at distance t on a walk's ray (ng: its unnormalized geometric normal) as a receiver to
+  // probe, or nothing where the walk passes over it: a surface turned away from the light, one the
+  // map sees, or one where Equation 1 predicts too little light to find less.
+  std::optional<ProfileReceiver> profileReceiver(const LowerLimitWalk& w, float t, const Vec3& ng) const {
+    const float len = glm::length(ng);  // normalized as RayScene::intersect does
+    const Vec3 normal = len > 0.0f ? ng / len : Vec3(0.0f);
     if (!(glm::dot(normal, -w.ray.direction) > 0.0f)) return std::nullopt;  // faces away: no receiver
     const PlmTexel& texel = limits_(w.i, w.j);
     ProfileReceiver r;
@@ -1016,10 +1046,9 @@ class PlmTechnique final : public ShadowTechnique {
     return r;
   }
 
-  static bool acceptsProfileHit(const void* state, float t, const Vec3& ng) {
-    const auto& filter = *static_cast<const WalkFilter*>(state);
-    const float len = glm::length(ng);  // normalized as RayScene::intersect does
-    return filter.self->profileReceiver(*filter.walk, t, len > 0.0f ? ng / len : Vec3(0.0f)).has_value();
+  static bool acceptsProfileHit(const void* state, uint32_t rayId, float t, const Vec3& ng) {
+    const auto& group = *static_cast<const WalkGroup*>(state);
+    return group.self->profileReceiver(group.walks[rayId], t, ng).has_value();
   }
 
   // Probes a receiver with kProfileSamples rays to the light and, where it sees too little, puts b
