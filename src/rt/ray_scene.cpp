@@ -100,16 +100,7 @@ inline void fillRay(RTCRay& r, const Ray& ray) {
 // A packet of `count` <= 16 of our rays; the other lanes keep the packet's valid empty rays, and
 // the valid mask keeps Embree from tracing them.
 inline void toPacket(const Ray* rays, int count, RayPacket16& packet) {
-  for (int i = 0; i < count; ++i) {
-    packet.orgX[i] = rays[i].origin.x;
-    packet.orgY[i] = rays[i].origin.y;
-    packet.orgZ[i] = rays[i].origin.z;
-    packet.tMin[i] = rays[i].tMin;
-    packet.dirX[i] = rays[i].direction.x;
-    packet.dirY[i] = rays[i].direction.y;
-    packet.dirZ[i] = rays[i].direction.z;
-    packet.tMax[i] = rays[i].tMax;
-  }
+  for (int i = 0; i < count; ++i) packet.set(i, rays[i]);
 }
 
 // What a packet query passes besides the rays: a coherent context (the callers group rays that share
@@ -293,22 +284,11 @@ void RayScene::occluded16(RayPacket16& packet, int count) const {
   rtcOccluded16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRay16*>(&packet));
 }
 
-void RayScene::intersect16(RayHitPacket16& packet, int count) const {
-  if (count <= 0) return;
-  if (impl_->log) impl_->log->add(packet.ray, count, true);
-  PacketQuery query(count);
-  for (int i = 0; i < 16; ++i) {
-    packet.hit.geomId[i] = HitPacket16::kNoHit;
-    packet.hit.instId[i] = HitPacket16::kNoHit;
-  }
-  rtcIntersect16(query.valid, impl_->scene, &query.context, reinterpret_cast<RTCRayHit16*>(&packet));
-}
-
 void RayScene::intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const {
   if (count <= 0) return;
   if (impl_->log) impl_->log->add(packet.ray, count, true);
   FilteredQuery filtered{PacketQuery(count), &filter};
-  filtered.query.context.filter = &filterHits;
+  if (filter.accept) filtered.query.context.filter = &filterHits;
   for (int i = 0; i < 16; ++i) {
     packet.hit.geomId[i] = HitPacket16::kNoHit;
     packet.hit.instId[i] = HitPacket16::kNoHit;

@@ -33,6 +33,17 @@ struct alignas(64) RayPacket16 {
   uint32_t mask[16], id[16], flags[16];
 
   RayPacket16();  // every lane a valid empty ray: origin 0, direction +z, tMin = tMax = 0, time 0, mask all
+  // Lane `lane` becomes `ray` (origin, direction, tMin, tMax; the other fields are kept).
+  void set(int lane, const Ray& ray) {
+    orgX[lane] = ray.origin.x;
+    orgY[lane] = ray.origin.y;
+    orgZ[lane] = ray.origin.z;
+    tMin[lane] = ray.tMin;
+    dirX[lane] = ray.direction.x;
+    dirY[lane] = ray.direction.y;
+    dirZ[lane] = ray.direction.z;
+    tMax[lane] = ray.tMax;
+  }
   bool blocked(int lane) const { return tMax[lane] < 0.0f; }
 };
 
@@ -100,10 +111,9 @@ class RayScene {
   void occluded16(RayPacket16& packet, int count) const;
   // The closest hits of lanes [0, count) of a packet built in place (count <= 16): afterwards
   // packet.ray.tMax[i] is ray i's hit distance where packet.hit.geomId[i] != HitPacket16::kNoHit.
-  void intersect16(RayHitPacket16& packet, int count) const;
-  // The same, returning for each ray the nearest hit that `filter` accepts (one traversal, where
-  // stepping from hit to hit restarts it at every hit the caller would pass over).
-  void intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const;
+  // With a filter (accept not null), each ray's nearest hit that `filter` accepts: one traversal, where
+  // stepping from hit to hit restarts it at every hit the caller would pass over.
+  void intersect16(RayHitPacket16& packet, int count, const HitFilter& filter = {}) const;
   // The closest hit within [tMin, tMax], or nothing. Thread-safe.
   std::optional<RayHit> intersect(const Ray& ray) const;
 

@@ -660,8 +660,9 @@ inline __attribute__((always_inline)) void fetchSetUpKernel(
     const float dx = k.towardX - k.fromPoint * position[3 * x], dy = k.towardY - k.fromPoint * position[3 * x + 1],
                 dz = k.towardZ - k.fromPoint * position[3 * x + 2];
     const bool facesAway = normal[3 * x] * dx + normal[3 * x + 1] * dy + normal[3 * x + 2] * dz < 0.0f;  // glm::dot
-    const float b = receiverBias[x];
-    bias[x] = facesAway ? 0.0f : b;
+    const float loaded = receiverBias[x];  // at every pixel: a conditional load would not vectorize
+    const float b = facesAway ? 0.0f : loaded;
+    bias[x] = b;
     // One bilinear fetch of (c, g, b, p_i), clamped to the map's border texels (the position is
     // limited to [-1, size] first, which the clamps below make no difference to, so that a pixel
     // outside the map, whose result is not used, converts no out-of-range float).
@@ -675,7 +676,7 @@ inline __attribute__((always_inline)) void fetchSetUpKernel(
     i1[x] = std::clamp(si + 1, 0, last);
     j0[x] = std::clamp(ti, 0, last);
     j1[x] = std::clamp(ti + 1, 0, last);
-    const float biased = lsDepth[x] - (facesAway ? 0.0f : b);
+    const float biased = lsDepth[x] - b;
     // Space::zeta, without a branch; behind a local light, below every g.
     zc[x] = kOrtho ? biased : (biased > 0.0f ? -1.0f / biased : -kInfinity);
   }
@@ -949,8 +950,8 @@ class PlmTechnique final : public ShadowTechnique {
       pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
                         (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
     // The packets are fixed sixteens of the list, not cut from the threads' ranges: a texel's packet
-    // neighbours are the same at any thread count, so V does not depend on how Embree's packet
-    // traversal treats a lane (it may hand thinned-out packets to its single-ray kernel).
+    // neighbours are the same at any thread count, so V never rests on a lane's hit being the same
+    // whatever else its packet holds.
     const size_t groups = (texels.size() + 15) / 16;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, groups, 4), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t first = 16 * range.begin(); first < std::min(16 * range.end(), texels.size()); first += 16) {
@@ -974,15 +975,7 @@ class PlmTechnique final : public ShadowTechnique {
         while (walking > 0) {
           RayHitPacket16 packet;
           for (int lane = 0; lane < walking; ++lane) {
-            const Ray& ray = group.walks[lane].ray;
-            packet.ray.orgX[lane] = ray.origin.x;
-            packet.ray.orgY[lane] = ray.origin.y;
-            packet.ray.orgZ[lane] = ray.origin.z;
-            packet.ray.dirX[lane] = ray.direction.x;
-            packet.ray.dirY[lane] = ray.direction.y;
-            packet.ray.dirZ[lane] = ray.direction.z;
-            packet.ray.tMin[lane] = ray.tMin;
-            packet.ray.tMax[lane] = ray.tMax;
+            packet.ray.set(lane, group.walks[lane].ray);
             packet.ray.id[lane] = static_cast<uint32_t>(lane);  // the filter's index into group.walks
           }
           rays.intersect16(packet, walking, filter);
