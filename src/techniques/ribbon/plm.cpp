@@ -209,6 +209,10 @@ struct EdgeCache::Impl {
   // in fresh pages: per kept triangle whether it faces the light; per edge its Edge, if a silhouette.
   std::vector<uint8_t> front, isSilhouette;
   std::vector<Edge> candidates;
+  // Per welded vertex: how many silhouette ends meet there (up to 3), and the first two of them;
+  // zero again after each object, so that a call touches only the vertices that end an edge.
+  std::vector<uint8_t> endCount;
+  std::vector<uint32_t> endsAt;
 };
 
 EdgeCache::EdgeCache() : impl_(std::make_unique<Impl>()) {}
@@ -291,38 +295,43 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
         isSilhouette[k] = 1;
       }
     });
+    const size_t silhouettes = static_cast<size_t>(std::count(isSilhouette.begin(), isSilhouette.end(), 1));
+    edges.reserve(edges.size() + silhouettes);
+    ends.reserve(silhouettes);
     for (size_t k = 0; k < edgeCount; ++k)
       if (isSilhouette[k]) {
         edges.push_back(candidates[k]);
         ends.emplace_back(topology.a[k], topology.b[k]);
       }
     // Corners: where exactly two silhouette edges of the object meet, the corner is convex when the
-    // other edge leaves towards this edge's inner side.
-    // (vertex, 2 * edge + (0: a, 1: b)), grouped by vertex.
-    std::vector<std::pair<uint32_t, uint32_t>> atVertex;
-    atVertex.reserve(2 * ends.size());
-    for (uint32_t k = 0; k < ends.size(); ++k) {
-      atVertex.emplace_back(ends[k].first, 2 * k);
-      atVertex.emplace_back(ends[k].second, 2 * k + 1);
+    // other edge leaves towards this edge's inner side. Each end is 2 * edge + (0: a, 1: b).
+    std::vector<uint8_t>& endCount = edgeCache.impl_->endCount;
+    std::vector<uint32_t>& endsAt = edgeCache.impl_->endsAt;
+    if (endCount.size() < positions.size()) {
+      endCount.resize(positions.size(), 0);
+      endsAt.resize(2 * positions.size());
     }
-    std::sort(atVertex.begin(), atVertex.end());
-    for (size_t i = 0; i < atVertex.size();) {
-      size_t j = i + 1;
-      while (j < atVertex.size() && atVertex[j].first == atVertex[i].first) ++j;
-      const size_t group = i, groupSize = j - i;
-      i = j;
-      if (groupSize != 2) continue;
-      for (size_t self = 0; self < 2; ++self) {
-        const uint32_t mine = atVertex[group + self].second, other = atVertex[group + 1 - self].second;
-        Edge& e = edges[firstEdge + mine / 2];
-        const Edge& o = edges[firstEdge + other / 2];
-        const Vec2 corner = (mine & 1) ? e.b : e.a;
-        const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
-        const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
-        ((mine & 1) ? e.endSideB : e.endSideA) = side;
-        ((mine & 1) ? e.neighbourB : e.neighbourA) = static_cast<int32_t>(firstEdge + other / 2);
-      }
+    const auto vertexOf = [&](uint32_t end) { return (end & 1) ? ends[end / 2].second : ends[end / 2].first; };
+    const uint32_t endTotal = static_cast<uint32_t>(2 * ends.size());
+    for (uint32_t end = 0; end < endTotal; ++end) {
+      const uint32_t v = vertexOf(end);
+      const uint8_t count = endCount[v];
+      if (count < 2) endsAt[2 * v + count] = end;
+      if (count < 3) endCount[v] = static_cast<uint8_t>(count + 1);
     }
+    for (uint32_t mine = 0; mine < endTotal; ++mine) {
+      const uint32_t v = vertexOf(mine);
+      if (endCount[v] != 2) continue;
+      const uint32_t other = endsAt[2 * v] == mine ? endsAt[2 * v + 1] : endsAt[2 * v];
+      Edge& e = edges[firstEdge + mine / 2];
+      const Edge& o = edges[firstEdge + other / 2];
+      const Vec2 corner = (mine & 1) ? e.b : e.a;
+      const Vec2 away = (other & 1) ? o.a : o.b;  // the other edge's far end
+      const float side = glm::dot(away - corner, e.outward) < 0.0f ? 1.0f : -1.0f;
+      ((mine & 1) ? e.endSideB : e.endSideA) = side;
+      ((mine & 1) ? e.neighbourB : e.neighbourA) = static_cast<int32_t>(firstEdge + other / 2);
+    }
+    for (uint32_t end = 0; end < endTotal; ++end) endCount[vertexOf(end)] = 0;
   }
   return edges;
 }
@@ -354,17 +363,11 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
   };
   std::vector<Box> boxes(edges.size());
   std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
-  // An edge whose every candidate the hidden-shadow test drops (below) is not rasterized: where the
-  // topmost surface kHiddenProbeTexels beyond each point of the edge lies above the edge's nearest
-  // end (a contour behind the object's own front, most silhouettes of a dense model). Probed at
-  // quarter-texel steps along the edge, each with the 3 x 3 texels around it (every probe texel of
-  // the per-texel test lies within them), and against the edge's least depth, so that a skipped
-  // edge is one the per-texel test would have dropped everywhere.
-  const auto hidden = [&](const Edge& e) {
-    const Image<float>* top = filter.topDepth;
-    if (!top) return false;
-    const float cMin = std::min(e.zetaA, e.zetaB);
-    const float cBound = cMin - 1e-5f * std::abs(cMin);  // below every c of the edge, rounding included
+  // Whether `holds(x, y)` at every texel that the per-texel tests below may probe kHiddenProbeTexels
+  // beyond the edge (false where one lies outside the map): the edge is sampled at quarter-texel
+  // steps, each sample with the 3 x 3 texels around it, which hold every probe texel of the points
+  // between samples.
+  const auto everyProbeTexel = [&](const Edge& e, const auto& holds) {
     const Vec2 d = e.b - e.a;
     const int steps = std::max(1, static_cast<int>(std::ceil(4.0f * glm::length(d))));
     if (steps > 4 * mapSize) return false;
@@ -375,16 +378,38 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
       for (int dj = -1; dj <= 1; ++dj)
         for (int di = -1; di <= 1; ++di) {
           const int x = pi + di, y = pj + dj;
-          if (x < 0 || y < 0 || x >= mapSize || y >= mapSize) return false;
-          const float depth = (*top)(x, y);
-          if (!(std::isfinite(depth) && space.zeta(depth) < cBound)) return false;
+          if (x < 0 || y < 0 || x >= mapSize || y >= mapSize || !holds(x, y)) return false;
         }
     }
     return true;
   };
+  // An edge whose every candidate the hidden-shadow test drops (below) is not rasterized: where the
+  // topmost surface kHiddenProbeTexels beyond each point of the edge lies above the edge's nearest
+  // end (a contour behind the object's own front, most silhouettes of a dense model), against the
+  // edge's least depth, so that a skipped edge is one the per-texel test would have dropped everywhere.
+  const auto hidden = [&](const Edge& e) {
+    const Image<float>* top = filter.topDepth;
+    if (!top) return false;
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float cBound = cMin - 1e-5f * std::abs(cMin);  // below every c of the edge, rounding included
+    return everyProbeTexel(e, [&](int x, int y) {
+      const float depth = (*top)(x, y);
+      return std::isfinite(depth) && space.zeta(depth) < cBound;
+    });
+  };
+  // With only the inner side wanted and only footprint borders taken (kirsch), neither is an edge
+  // inside its object's footprint: where the map sees the edge's own object beyond each point of
+  // the edge, the footprint test drops every candidate of the edge.
+  const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
+  const auto insideFootprint = [&](const Edge& e) {
+    const Image<int32_t>* coverage = filter.coverage;
+    if (!coverage || !filter.footprintBorderOnly || wantOuter) return false;
+    return everyProbeTexel(e, [&](int x, int y) { return (*coverage)(x, y) == e.objectId; });
+  };
   std::vector<uint8_t> skip(edges.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t k = range.begin(); k < range.end(); ++k) skip[k] = hidden(edges[k]) ? 1 : 0;
+    for (size_t k = range.begin(); k < range.end(); ++k)
+      skip[k] = hidden(edges[k]) || insideFootprint(edges[k]) ? 1 : 0;
   });
   for (size_t k = 0; k < edges.size(); ++k) {
     if (skip[k]) continue;
@@ -403,7 +428,6 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
       for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti)
         bins[static_cast<size_t>(tj) * tiles + ti].push_back(static_cast<uint32_t>(k));
   }
-  const bool wantOuter = sides != RibbonSides::Inner, wantInner = sides != RibbonSides::Outer;
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
     // The tile's priorities and winners (texels are the tile's alone: no other task writes them),
     // copied out once when the tile is done, and one span's geometry.
@@ -456,10 +480,12 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           int si0 = std::max(i0, static_cast<int>(std::floor(spanLo - 0.5f)) - 1);
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = winners + (j - tj * kTile) * kTile;
-          // Two passes over the span: the geometry of every texel without branches (four texels to
-          // an SSE vector, the same operations in the same order as the scalar tail, so the same
-          // values bit for bit), then the candidates that beat the texel's current winner through
-          // the filters, which only drop candidates and read other images.
+          // Two passes over the span: the geometry of every texel and the filters that read the
+          // texel's own row of other images (the object the map sees, the far layer, the topmost
+          // surface), without branches (four texels to an SSE vector, the same operations in the
+          // same order as the scalar tail, so the same values bit for bit); then the candidates that
+          // beat the texel's current winner through the filters that read the texel 1.5 texels
+          // beyond the edge. Every filter only drops candidates.
           int count = si1 - si0 + 1;
           if (count <= 0) continue;
           {
@@ -509,6 +535,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           }
           float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
           const float aqy = y - e.a.y, by = y - e.b.y;
+          const float* farRow = farthest.row(j) + si0;
+          const int32_t* coverageRow = filter.coverage ? filter.coverage->row(j) + si0 : nullptr;
+          const float* topRow = filter.topDepth ? filter.topDepth->row(j) + si0 : nullptr;
           int m = 0;
 #if defined(__SSE4_1__)
           {
@@ -522,6 +551,10 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
             const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
             const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
+            const __m128 allOnes = _mm_castsi128_ps(_mm_set1_epi32(-1)), signBit = _mm_set1_ps(-0.0f);
+            const __m128 belowEdge = _mm_set1_ps(kBelowEdge), minusOne = _mm_set1_ps(-1.0f);
+            const __m128 orthographic = _mm_castsi128_ps(_mm_set1_epi32(space.orthographic ? -1 : 0));
+            const __m128i objectId = _mm_set1_epi32(e.objectId);
             for (; m + 4 <= count; m += 4) {
               const __m128 qx =
                   _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
@@ -544,8 +577,26 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               // outer ? wantOuter : wantInner (one of the two at least is wanted)
               const __m128 sideWanted =
                   _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
-              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
-                                             _mm_cmplt_ps(p, _mm_loadu_ps(prio + m)));
+              // The texel's own filters (the scalar tail's `kept`).
+              const __m128 ownObject =
+                  coverageRow ? _mm_castsi128_ps(_mm_cmpeq_epi32(
+                                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(coverageRow + m)), objectId))
+                              : allOnes;
+              const __m128 outerOrOwn = _mm_or_ps(outer, ownObject);
+              const __m128 somethingBelow = _mm_cmpgt_ps(
+                  _mm_loadu_ps(farRow + m), _mm_add_ps(c, _mm_mul_ps(belowEdge, _mm_andnot_ps(signBit, c))));
+              __m128 kept = _mm_and_ps(outerOrOwn, somethingBelow);
+              if (topRow) {
+                const __m128 top = _mm_loadu_ps(topRow + m);
+                const __m128 finite = _mm_cmplt_ps(_mm_andnot_ps(signBit, top), inf);
+                const __m128 topZeta = _mm_blendv_ps(_mm_div_ps(minusOne, top), top, orthographic);
+                const __m128 above = _mm_and_ps(finite, _mm_cmplt_ps(topZeta, c));
+                const __m128 outerOrOther = _mm_or_ps(outer, _mm_xor_ps(ownObject, allOnes));
+                kept = _mm_andnot_ps(_mm_and_ps(outerOrOther, above), kept);
+              }
+              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
+                                                        _mm_cmplt_ps(p, _mm_loadu_ps(prio + m))),
+                                             kept);
               _mm_storeu_ps(spanU + m, u);
               _mm_storeu_ps(spanC + m, c);
               _mm_storeu_ps(spanDistance + m, distance);
@@ -570,7 +621,14 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
             const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
             const float p = c + distance * space.ratePerTexel;
-            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m];
+            // The texel's own filters: on the inner side only where the map sees the edge's own
+            // object; only where a surface lies below the edge; not where the texel's topmost surface
+            // lies above the edge (on the outer side, or the inner side over another object).
+            const bool ownObject = !coverageRow || coverageRow[m] == e.objectId;
+            const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
+            const bool kept = (outer || ownObject) && farRow[m] > c + kBelowEdge * std::abs(c) &&
+                              !(topRow && (outer || !ownObject) && above(topRow[m]));
+            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m] && kept;
             spanU[m] = u;
             spanC[m] = c;
             spanDistance[m] = distance;
@@ -583,20 +641,16 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float u = spanU[m], c = spanC[m], distance = spanDistance[m], p = spanP[m];
             const bool outer = spanOuter[m] != 0;
             const Image<int32_t>* coverage = filter.coverage;
-            const bool ownObject = !coverage || (*coverage)(i, j) == e.objectId;
-            if (!outer && !ownObject) continue;
             // The texel kHiddenProbeTexels beyond the edge's nearest point; outside the map nothing is seen.
             const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;
             const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
             const bool probeInMap = pi >= 0 && pj >= 0 && pi < mapSize && pj < mapSize;
             if (!outer && coverage && filter.footprintBorderOnly && probeInMap && (*coverage)(pi, pj) == e.objectId)
               continue;
-            if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;  // nothing below the edge here
-            if (const Image<float>* top = filter.topDepth) {
+            if (const Image<float>* top = filter.topDepth; top && probeInMap) {
               // Depths as zeta; an empty texel (infinite depth) lies below everything.
-              const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
-              if ((outer || !ownObject) && above((*top)(i, j))) continue;
-              if (probeInMap && above((*top)(pi, pj))) continue;
+              const float depth = (*top)(pi, pj);
+              if (std::isfinite(depth) && space.zeta(depth) < c) continue;
             }
             prio[m] = p;
             row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, static_cast<int32_t>(k)};

@@ -47,8 +47,10 @@
 // Cost (docs/real-meshes.md, "Cost at 1024²"). The welding and edge matching depend on the geometry
 // alone and are kept between prepares (EdgeCache); an edge whose every candidate the hidden-shadow
 // test would drop is not rasterized at all (most silhouettes of a dense model lie behind its own
-// front); each row of a ribbon is trimmed to the texels whose current winner it may still beat (a
-// bound on its priority there); none of these changes a texel.
+// front), nor, where only footprint borders count, an edge inside its object's footprint; each row of
+// a ribbon is trimmed to the texels whose current winner it may still beat (a bound on its priority
+// there), and the filters that read the texel's own row run in the vectorized pass over the row;
+// none of these changes a texel.
 #pragma once
 
 #include <cstdint>

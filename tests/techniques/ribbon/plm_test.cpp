@@ -2,7 +2,8 @@
 // edge under a distant disk light up to depth quantization (Sec. 4), sub-texel placement of the 50 %
 // contour (Sec. 2), Appendix A's table for a limb-darkened sun — checked against the circular-segment
 // closed form; its error against the reference on the paper's triangle scene; local lights through
-// the perspective transform; and the light shapes it refuses.
+// the perspective transform; and the light shapes it refuses. The ribbons that plm, smoothies and
+// kirsch share (plm.h, rasterizeRibbons) against a brute-force rasterization of their definition.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -15,6 +16,10 @@
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
 #include "penumbra/registry.h"
+#include "penumbra/scene_io.h"
+#include "penumbra/techniques/shadow_map.h"
+#include "techniques/ribbon/plm.h"
+#include "techniques/shadow_map/shadow_map.h"
 #include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
@@ -143,6 +148,108 @@ TEST(Plm, RefusesSegmentLightsNamingTheShape) {
     EXPECT_NE(std::string(e.what()).find("segment"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("directional"), std::string::npos)
         << "names the supported shapes: " << e.what();
+  }
+}
+
+// The ribbons of plm.h by their definition alone: every edge, in list order, at every texel within
+// its width of it, through every filter, the least priority winning (ties to the first edge) — no
+// tiles, no edges skipped ahead of the texels, no trimmed rows, no vector pass. The same operations
+// in the same order as rasterizeRibbons' scalar path (both files are built without fused
+// multiply-add), so the two agree to the bit.
+Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, const plm::Space& space, int n,
+                                          plm::RibbonSides sides, float margin, const plm::RibbonFilter& filter,
+                                          const Image<float>& farthest) {
+  constexpr float kBelowEdge = 1e-5f;  // plm.cpp's: a surface counts as below an edge past this share of its depth
+  Image<plm::RibbonTexel> out(n, n, plm::kNoRibbon);
+  Image<float> best(n, n, kInfinity);
+  const bool wantOuter = sides != plm::RibbonSides::Inner, wantInner = sides != plm::RibbonSides::Outer;
+  const auto above = [&](float depth, float c) { return std::isfinite(depth) && space.zeta(depth) < c; };
+  for (size_t k = 0; k < edges.size(); ++k) {
+    const plm::Edge& e = edges[k];
+    const float cMin = std::min(e.zetaA, e.zetaB);
+    const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
+    const float h = std::min(width + margin + plm::kRibbonBorderTexels, 2.0f * static_cast<float>(n));
+    const Vec2 d = e.b - e.a;
+    const float invLength2 = 1.0f / glm::dot(d, d);
+    // Texel centres beyond h of the segment's box are beyond h of the segment.
+    const Vec2 lo = glm::min(e.a, e.b) - (h + 1.0f), hi = glm::max(e.a, e.b) + (h + 1.0f);
+    for (int j = std::max(0, static_cast<int>(lo.y)); j <= std::min(n - 1, static_cast<int>(hi.y)); ++j)
+      for (int i = std::max(0, static_cast<int>(lo.x)); i <= std::min(n - 1, static_cast<int>(hi.x)); ++i) {
+        const float qx = static_cast<float>(i) + 0.5f, y = static_cast<float>(j) + 0.5f;
+        const float aqx = qx - e.a.x, aqy = y - e.a.y;
+        const float along = (aqx * d.x + aqy * d.y) * invLength2;
+        const float u = std::min(std::max(along, 0.0f), 1.0f);
+        const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
+        const float ox = beforeA ? aqx : (beyondB ? qx - e.b.x : aqx - u * d.x);
+        const float oy = beforeA ? aqy : (beyondB ? y - e.b.y : aqy - u * d.y);
+        const float distance = std::sqrt(ox * ox + oy * oy);
+        const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
+        const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
+        const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
+        const float p = c + distance * space.ratePerTexel;
+        if (distance > h || !(outer ? wantOuter : wantInner) || !(p < best(i, j))) continue;
+        const bool ownObject = !filter.coverage || (*filter.coverage)(i, j) == e.objectId;
+        if (!outer && !ownObject) continue;
+        const Vec2 probe = e.a + u * d + plm::kHiddenProbeTexels * e.outward;
+        const int pi = static_cast<int>(std::floor(probe.x)), pj = static_cast<int>(std::floor(probe.y));
+        const bool probeInMap = pi >= 0 && pj >= 0 && pi < n && pj < n;
+        if (!outer && filter.coverage && filter.footprintBorderOnly && probeInMap &&
+            (*filter.coverage)(pi, pj) == e.objectId)
+          continue;
+        if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;
+        if (filter.topDepth && (outer || !ownObject) && above((*filter.topDepth)(i, j), c)) continue;
+        if (filter.topDepth && probeInMap && above((*filter.topDepth)(pi, pj), c)) continue;
+        best(i, j) = p;
+        out(i, j) = plm::RibbonTexel{c, outer ? distance : -distance, static_cast<int32_t>(k)};
+      }
+  }
+  return out;
+}
+
+TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilter) {
+  // A perspective map over tori and boxes (sphere light), a real closed mesh (rect light), and an
+  // orthographic one (directional light); map sizes that end in a partial 32-texel tile.
+  for (const auto& [name, size] : {std::pair{"crowded", 200}, std::pair{"wuson", 176}, std::pair{"triangle", 72}}) {
+    const Scene scene = loadScene(name);
+    const Light& sceneLight = scene.lights[0];
+    LightMap map;
+    createShadowMap(scene, sceneLight, LightMapOptions{size, LightMapFit::Tight}, map,
+                    LightMapLayers::NearestAndFarthest);
+    const Light light = lightAtMapOrigin(sceneLight, map);
+    const plm::Space space = plm::makeSpace(map, light, "test");
+    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map, space);
+    Image<float> farthest;
+    plm::farthestSurface(map, space, farthest);
+    struct Filter {
+      const char* technique;
+      plm::RibbonSides sides;
+      plm::RibbonFilter filter;
+    };
+    const Filter filters[] = {
+        {"plm", plm::RibbonSides::Both, {&map.objectId, &map.lsDepth, false}},
+        {"smoothies", plm::RibbonSides::Outer, {nullptr, &map.lsDepth, false}},
+        {"kirsch", plm::RibbonSides::Inner, {&map.objectId, &map.lsDepth, true}},
+    };
+    for (const Filter& f : filters) {
+      SCOPED_TRACE(std::string(name) + ", " + f.technique + "'s filter");
+      constexpr float kMargin = 2.0f;
+      Image<plm::RibbonTexel> ribbons;
+      plm::rasterizeRibbons(edges, space, size, f.sides, kMargin, f.filter, farthest, ribbons);
+      const Image<plm::RibbonTexel> expected =
+          bruteForceRibbons(edges, space, size, f.sides, kMargin, f.filter, farthest);
+      int covered = 0, mismatched = 0;
+      for (int j = 0; j < size; ++j)
+        for (int i = 0; i < size; ++i) {
+          const plm::RibbonTexel &got = ribbons(i, j), &want = expected(i, j);
+          covered += want.covered() ? 1 : 0;
+          const bool same = got.edge == want.edge && (!want.covered() || (got.c == want.c && got.w == want.w));
+          if (!same && ++mismatched <= 3)
+            ADD_FAILURE() << "texel (" << i << ", " << j << "): edge " << got.edge << " c " << got.c << " w " << got.w
+                          << ", expected edge " << want.edge << " c " << want.c << " w " << want.w;
+        }
+      EXPECT_EQ(mismatched, 0);
+      EXPECT_GT(covered, 50) << edges.size() << " silhouette edges: the scene must exercise the ribbons";
+    }
   }
 }
 
