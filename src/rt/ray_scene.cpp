@@ -286,7 +286,7 @@ void RayScene::occluded16(RayPacket16& packet, int count) const {
 
 void RayScene::intersect16(RayHitPacket16& packet, int count, const HitFilter& filter) const {
   if (count <= 0) return;
-  if (impl_->log) impl_->log->add(packet.ray, count, true);
+  if (impl_->log && !filter.accept) impl_->log->add(packet.ray, count, true);  // see PacketLog
   FilteredQuery filtered{PacketQuery(count), &filter};
   if (filter.accept) filtered.query.context.filter = &filterHits;
   for (int i = 0; i < 16; ++i) {

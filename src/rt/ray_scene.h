@@ -69,7 +69,8 @@ struct LoggedPacket {
 
 // The packets a RayScene traces while the log is attached (RayScene::attachLog), from any thread:
 // what a benchmark replays through Embree alone to compare a technique's ray throughput with Embree's
-// on the very same rays (bench/few_ray_bench.cpp). Single-ray queries are not logged.
+// on the very same rays (bench/few_ray_bench.cpp). Single-ray queries are not logged, nor filtered
+// ones (intersect16 with a HitFilter): replayed without the caller's filter they would be another query.
 class PacketLog {
  public:
   PacketLog();

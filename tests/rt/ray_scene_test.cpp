@@ -195,7 +195,7 @@ TEST(RayScene, FilteredIntersect16ReturnsTheNearestAcceptedHit) {
   EXPECT_GT(checked, 80);  // most lanes hit something past their distance
 }
 
-TEST(RayScene, AnAttachedLogKeepsEachPacketAsItWasHandedToEmbree) {
+TEST(RayScene, AnAttachedLogKeepsEachUnfilteredPacketAsItWasHandedToEmbree) {
   const RayScene rays(twoQuads());
   // Lane 0 hits quad A (t = 3 along -z), lane 1 misses both quads; a third lane is not traced.
   RayHitPacket16 packet;
@@ -210,6 +210,11 @@ TEST(RayScene, AnAttachedLogKeepsEachPacketAsItWasHandedToEmbree) {
   RayPacket16 occlusion = packet.ray;
   rays.occluded16(occlusion, 2);
   rays.intersect16(packet, 2);
+  RayHitPacket16 filtered = packet;  // a filtered query: not logged, a replay would not have its filter
+  for (int lane = 0; lane < 2; ++lane) filtered.ray.tMax[lane] = 10.0f;
+  const HitFilter acceptAll{[](const void*, uint32_t, float, const Vec3&) { return true; }, nullptr};
+  rays.intersect16(filtered, 2, acceptAll);
+  EXPECT_FLOAT_EQ(filtered.ray.tMax[0], 3.0f);
   rays.attachLog(nullptr);
   rays.occluded16(occlusion, 2);  // detached: not logged
   EXPECT_TRUE(occlusion.blocked(0));
