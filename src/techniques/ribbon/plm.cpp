@@ -138,14 +138,6 @@ Space makeSpace(const LightMap& map, const Light& light, const char* technique) 
   return space;
 }
 
-namespace {
-
-// A surface counts as below an edge when deeper by this fraction of the edge's zeta (float rounding of
-// the two rasterizations of one surface stays well inside it).
-constexpr float kBelowEdge = 1e-5f;
-
-}  // namespace
-
 // One mesh's silhouette candidates, which depend on its geometry alone, taken from its edge
 // adjacency (techniques/mesh_edges.h): the triangles kept (no two welded corners alike, a
 // non-degenerate normal) with their normal and centroid, and each edge's uses by those triangles in
@@ -575,8 +567,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
               const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
               const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
               // outer ? wantOuter : wantInner (one of the two at least is wanted)
-              const __m128 sideWanted =
-                  _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, _mm_castsi128_ps(_mm_set1_epi32(-1)))));
+              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, allOnes)));
               // The texel's own filters (the scalar tail's `kept`).
               const __m128 ownObject =
                   coverageRow ? _mm_castsi128_ps(_mm_cmpeq_epi32(
@@ -591,8 +582,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
                 const __m128 finite = _mm_cmplt_ps(_mm_andnot_ps(signBit, top), inf);
                 const __m128 topZeta = _mm_blendv_ps(_mm_div_ps(minusOne, top), top, orthographic);
                 const __m128 above = _mm_and_ps(finite, _mm_cmplt_ps(topZeta, c));
-                const __m128 outerOrOther = _mm_or_ps(outer, _mm_xor_ps(ownObject, allOnes));
-                kept = _mm_andnot_ps(_mm_and_ps(outerOrOther, above), kept);
+                kept = _mm_andnot_ps(_mm_and_ps(outer, above), kept);
               }
               const __m128 take = _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
                                                         _mm_cmplt_ps(p, _mm_loadu_ps(prio + m))),
@@ -623,11 +613,12 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float p = c + distance * space.ratePerTexel;
             // The texel's own filters: on the inner side only where the map sees the edge's own
             // object; only where a surface lies below the edge; not where the texel's topmost surface
-            // lies above the edge (on the outer side, or the inner side over another object).
+            // lies above the edge (tested on the outer side only: an inner candidate left here is
+            // over its own object, which does not hide its shadow).
             const bool ownObject = !coverageRow || coverageRow[m] == e.objectId;
             const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
             const bool kept = (outer || ownObject) && farRow[m] > c + kBelowEdge * std::abs(c) &&
-                              !(topRow && (outer || !ownObject) && above(topRow[m]));
+                              !(topRow && outer && above(topRow[m]));
             const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m] && kept;
             spanU[m] = u;
             spanC[m] = c;

@@ -165,6 +165,11 @@ struct RibbonFilter {
 
 inline constexpr float kHiddenProbeTexels = 1.5f;
 
+// A surface of the far layer counts as below an edge (a ribbon candidate's test) when deeper by this
+// fraction of the edge's zeta: float rounding of the two rasterizations of one surface stays well
+// inside it.
+inline constexpr float kBelowEdge = 1e-5f;
+
 // Into `out`, which keeps its storage where it is large enough.
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,

@@ -159,7 +159,6 @@ TEST(Plm, RefusesSegmentLightsNamingTheShape) {
 Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, const plm::Space& space, int n,
                                           plm::RibbonSides sides, float margin, const plm::RibbonFilter& filter,
                                           const Image<float>& farthest) {
-  constexpr float kBelowEdge = 1e-5f;  // plm.cpp's: a surface counts as below an edge past this share of its depth
   Image<plm::RibbonTexel> out(n, n, plm::kNoRibbon);
   Image<float> best(n, n, kInfinity);
   const bool wantOuter = sides != plm::RibbonSides::Inner, wantInner = sides != plm::RibbonSides::Outer;
@@ -196,7 +195,7 @@ Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, c
         if (!outer && filter.coverage && filter.footprintBorderOnly && probeInMap &&
             (*filter.coverage)(pi, pj) == e.objectId)
           continue;
-        if (!(farthest(i, j) > c + kBelowEdge * std::abs(c))) continue;
+        if (!(farthest(i, j) > c + plm::kBelowEdge * std::abs(c))) continue;
         if (filter.topDepth && (outer || !ownObject) && above((*filter.topDepth)(i, j), c)) continue;
         if (filter.topDepth && probeInMap && above((*filter.topDepth)(pi, pj), c)) continue;
         best(i, j) = p;
