@@ -206,10 +206,46 @@ struct Scratch {
   // Integration: cell centres, pieces per row, per-row winding events and marks, the result.
   std::vector<float> cx, cy;
   std::vector<uint32_t> rowStart, rowFill, rowPieces;
+  std::vector<std::pair<uint32_t, uint32_t>> pieceRows;  //!< the rows [first, second) each piece spans
   std::vector<std::pair<uint32_t, int>> events;
   std::vector<int> diff;
   std::vector<uint8_t> hidden;
+  std::vector<float> sortedCuts;  //!< sortCuts' scratch
+  std::vector<uint32_t> cutCounts;
 };
+
+// std::lower_bound of x in the sorted, non-empty v, without branches on the comparisons.
+uint32_t firstNotBelow(const std::vector<float>& v, float x) {
+  const float* base = v.data();
+  size_t count = v.size();
+  while (count > 1) {
+    const size_t half = count / 2;
+    base = base[half] < x ? base + half : base;
+    count -= half;
+  }
+  return static_cast<uint32_t>(base - v.data()) + (*base < x ? 1u : 0u);
+}
+
+// Sorts cuts in [0, 1] into increasing order, the sequence std::sort gives, in O(n) for the spread-out
+// cuts of a pixel's curves: a counting sort by bucket floor(c n) (monotone in c, so buckets keep
+// the order), then an insertion sort, which moves each cut only within its bucket.
+void sortCuts(std::vector<float>& cuts, std::vector<float>& sorted, std::vector<uint32_t>& counts) {
+  const size_t n = cuts.size();
+  const float scale = static_cast<float>(n);
+  auto bucket = [&](float c) { return std::min(n - 1, static_cast<size_t>(c * scale)); };
+  counts.assign(n + 1, 0);
+  for (const float c : cuts) ++counts[bucket(c) + 1];
+  for (size_t b = 1; b <= n; ++b) counts[b] += counts[b - 1];
+  sorted.resize(n);
+  for (const float c : cuts) sorted[counts[bucket(c)]++] = c;
+  for (size_t i = 1; i < n; ++i) {
+    const float c = sorted[i];
+    size_t j = i;
+    for (; j > 0 && sorted[j - 1] > c; --j) sorted[j] = sorted[j - 1];
+    sorted[j] = c;
+  }
+  cuts.swap(sorted);
+}
 
 // Everything about one face of the light: its light space, silhouettes and edge shadows.
 struct Side {
@@ -770,23 +806,19 @@ class SsvTechnique final : public ShadowTechnique {
     s.hidden.assign(nx * ny, 0);
     // Pieces per row, in piece order (counting sort): rows with min(a.y, b.y) <= cy < max(a.y, b.y).
     s.rowStart.assign(ny + 1, 0);
-    auto rowsOf = [&](const Piece& piece, size_t& r0, size_t& r1) {
+    s.pieceRows.resize(s.pieces.size());
+    for (size_t i = 0; i < s.pieces.size(); ++i) {
+      const Piece& piece = s.pieces[i];
       const float lo = std::min(piece.a.y, piece.b.y), hi = std::max(piece.a.y, piece.b.y);
-      r0 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), lo) - s.cy.begin());
-      r1 = static_cast<size_t>(std::lower_bound(s.cy.begin(), s.cy.end(), hi) - s.cy.begin());
-    };
-    size_t r0, r1;
-    for (const Piece& piece : s.pieces) {
-      rowsOf(piece, r0, r1);
-      for (size_t r = r0; r < r1; ++r) ++s.rowStart[r + 1];
+      const uint32_t r0 = firstNotBelow(s.cy, lo), r1 = firstNotBelow(s.cy, hi);
+      s.pieceRows[i] = {r0, r1};
+      for (uint32_t r = r0; r < r1; ++r) ++s.rowStart[r + 1];
     }
     for (size_t r = 1; r <= ny; ++r) s.rowStart[r] += s.rowStart[r - 1];
     s.rowPieces.resize(s.rowStart[ny]);
     s.rowFill.assign(s.rowStart.begin(), s.rowStart.end() - 1);
-    for (uint32_t i = 0; i < s.pieces.size(); ++i) {
-      rowsOf(s.pieces[i], r0, r1);
-      for (size_t r = r0; r < r1; ++r) s.rowPieces[s.rowFill[r]++] = i;
-    }
+    for (uint32_t i = 0; i < s.pieces.size(); ++i)
+      for (uint32_t r = s.pieceRows[i].first; r < s.pieceRows[i].second; ++r) s.rowPieces[s.rowFill[r]++] = i;
     s.diff.resize(nx + 1);
     for (size_t iy = 0; iy < ny; ++iy) {
       const float y = s.cy[iy];
@@ -815,19 +847,20 @@ class SsvTechnique final : public ShadowTechnique {
         if (any && piece.group != group) flush();
         group = piece.group;
         any = true;
-        const int w = crossing(piece.a, piece.b, Vec2(s.cx[0], y)) != 0 ? 1 : 0;
-        // Bisection for the first column whose point the piece does not cross.
-        size_t lo = 0, hi = nx;
-        if (w) {
-          lo = 1;
-          while (lo < hi) {
-            const size_t mid = (lo + hi) / 2;
-            if (crossing(piece.a, piece.b, Vec2(s.cx[mid], y)) != 0)
-              lo = mid + 1;
-            else
-              hi = mid;
+        auto crosses = [&](size_t column) { return crossing(piece.a, piece.b, Vec2(s.cx[column], y)) != 0; };
+        if (crosses(0)) {
+          // Bisection for the first column whose point the piece does not cross, in [1, nx]
+          // (branch-free: which half holds it is a coin toss for the branch predictor).
+          size_t base = 1, count = nx - 1;
+          if (count > 0) {
+            while (count > 1) {
+              const size_t half = count / 2;
+              base = crosses(base + half - 1) ? base + half : base;
+              count -= half;
+            }
+            base += crosses(base) ? 1 : 0;
           }
-          s.events.push_back({static_cast<uint32_t>(lo), piece.a.y <= y ? 1 : -1});
+          s.events.push_back({static_cast<uint32_t>(base), piece.a.y <= y ? 1 : -1});
         }
       }
       if (any) flush();
@@ -901,14 +934,18 @@ class SsvTechnique final : public ShadowTechnique {
       // curves, one test per cell, weighted by its area.
       s.xs.assign({0.0f, 1.0f});
       s.ys.assign({0.0f, 1.0f});
-      for (const Piece& piece : s.pieces)
-        for (const Vec2& q : {piece.a, piece.b}) {
-          if (q.x > 0.0f && q.x < 1.0f) s.xs.push_back(q.x);
-          if (q.y > 0.0f && q.y < 1.0f) s.ys.push_back(q.y);
-        }
+      auto addCuts = [&](const Vec2& q) {
+        if (q.x > 0.0f && q.x < 1.0f) s.xs.push_back(q.x);
+        if (q.y > 0.0f && q.y < 1.0f) s.ys.push_back(q.y);
+      };
+      // A piece's end that the next piece starts from is that piece's (an equal cut merges away).
+      for (size_t k = 0; k < s.pieces.size(); ++k) {
+        addCuts(s.pieces[k].a);
+        if (k + 1 == s.pieces.size() || s.pieces[k + 1].a != s.pieces[k].b) addCuts(s.pieces[k].b);
+      }
       const float tolerance = options_.mergeTolerance;
-      auto merge = [tolerance](std::vector<float>& cuts) {
-        std::sort(cuts.begin(), cuts.end());
+      auto merge = [tolerance, &s](std::vector<float>& cuts) {
+        sortCuts(cuts, s.sortedCuts, s.cutCounts);
         size_t n = 1;
         for (size_t i = 1; i < cuts.size(); ++i)
           if (cuts[i] - cuts[n - 1] > tolerance) cuts[n++] = cuts[i];

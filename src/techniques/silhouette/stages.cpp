@@ -88,6 +88,81 @@ int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d) 
 }
 
 namespace {
+float cross2(const Vec2& a, const Vec2& b) { return a.x * b.y - a.y * b.x; }
+}  // namespace
+
+bool LightSectors::build(const std::vector<Vec2>& polygon) {
+  *this = LightSectors{};
+  const size_t n = polygon.size();
+  if (n < 3) return false;
+  for (size_t k = 0; k < n; ++k)
+    if (!(cross2(polygon[k], polygon[(k + 1) % n]) > 0.0f)) return false;  // the origin on or outside edge k
+  // Start the outline where the +x axis leaves it (the edge that crosses it upwards), there exactly on
+  // the axis, so that sweeps start at 0 on it.
+  std::vector<Vec2> outline;
+  for (size_t k = 0; k < n && outline.empty(); ++k) {
+    const Vec2 &v = polygon[k], &next = polygon[(k + 1) % n];
+    if (!(v.y <= 0.0f && next.y > 0.0f)) continue;
+    const Vec2 onAxis(v.x + (next.x - v.x) * (-v.y / (next.y - v.y)), 0.0f);
+    if (!(onAxis.x > 0.0f)) return false;
+    outline.push_back(onAxis);
+    for (size_t j = 1; j <= n; ++j) {
+      const Vec2& w = polygon[(k + j) % n];
+      if (j < n || w != onAxis) outline.push_back(w);  // v itself when it lies off the axis
+    }
+  }
+  if (outline.size() < 3 || outline.size() > 32) return false;  // an outcode has 32 bits
+  const size_t m = outline.size();
+  prefix_.assign(m + 1, 0.0f);
+  for (size_t k = 0; k < m; ++k) {
+    const Vec2 &v = outline[k], &next = outline[(k + 1) % m];
+    const float cone = 0.5f * cross2(v, next);
+    if (!(cone > 0.0f)) return false;
+    coneArea_.push_back(cone);
+    prefix_[k + 1] = prefix_[k] + cone;
+    const Vec2 e = next - v;
+    outward_.emplace_back(e.y, -e.x);  // right of a counter-clockwise edge
+    offset_.push_back(glm::dot(outward_.back(), v));
+  }
+  vertices_ = std::move(outline);
+  area_ = prefix_[m];
+  return true;
+}
+
+bool LightSectors::outside(const Vec2& a, const Vec2& b, uint32_t ca, uint32_t cb) const {
+  if (ca == ~0u || cb == ~0u) return false;  // not finite: left to clipping
+  if (ca & cb) return true;
+  if ((ca | cb) == 0) return false;
+  const Vec2 normal(b.y - a.y, a.x - b.x);
+  bool anyAbove = false, anyBelow = false;
+  for (const Vec2& v : vertices_) {
+    const float side = glm::dot(normal, v - a);
+    anyAbove = anyAbove || !(side < 0.0f);
+    anyBelow = anyBelow || !(side > 0.0f);
+  }
+  return anyAbove != anyBelow;
+}
+
+bool LightSectors::sweep(const Vec2& q, float& swept) const {
+  if (q.y == 0.0f && q.x > 0.0f) {
+    swept = area_;
+    return true;
+  }
+  const size_t n = vertices_.size();
+  for (size_t k = 0; k < n; ++k) {
+    const Vec2 &v = vertices_[k], &next = vertices_[(k + 1) % n];
+    if (!(cross2(v, q) >= 0.0f && cross2(q, next) > 0.0f)) continue;
+    // The cones before k and the triangle (0, v, x), x where q's direction meets the edge
+    // v -> next: x = s q with s = cross(v, e) / cross(q, e).
+    const Vec2 e = next - v;
+    const float s = cross2(v, e) / cross2(q, e);
+    swept = prefix_[k] + std::clamp(0.5f * s * cross2(v, q), 0.0f, coneArea_[k]);
+    return true;
+  }
+  return false;
+}
+
+namespace {
 // The cell of u in a grid of res x res cells over lower + [0, res / scale]: -1 outside.
 int cellOf(const Vec2& lower, const Vec2& scale, int res, const Vec2& u) {
   const Vec2 g = (u - lower) * scale;

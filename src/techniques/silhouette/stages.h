@@ -17,6 +17,7 @@
 // of the cell (none if z_c <= min z_e): conservative, exact in the limit of a small light.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -105,6 +106,55 @@ inline Vec2 projectFrom(const Vec3& p, const Vec3& q) {
 // Clips the convex polygon in[0, count) to the half-plane dot(n, x) <= d (Sutherland-Hodgman) into
 // `out` (room for count + 1 points); returns the number of points left.
 int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d);
+
+// The light polygon's area by direction from its centre (the origin of light space), for penumbra
+// wedges' fan areas (wedges.cpp). Where a segment a-b lies outside the polygon, the polygon's part
+// inside the triangle (0, a, b) is its angular sector from a's direction to b's (a convex polygon
+// around the origin ends, along every direction, before such a segment): sweep(b) - sweep(a), plus
+// the polygon's area where the segment crosses the +x axis counter-clockwise (minus it where it
+// crosses clockwise; the crossings the winding number counts, `crossingOfPositiveX`). Along a
+// chain of such segments these sum to the chain's ends' sweeps and its crossings, without clipping.
+// Where both ends of a segment lie inside the polygon, the triangle lies inside; only a segment that
+// crosses the polygon's outline is left to clipping.
+class LightSectors {
+ public:
+  // From the counter-clockwise polygon (at most 31 vertices); false (and nothing applies) unless the
+  // origin lies strictly inside it.
+  bool build(const std::vector<Vec2>& polygon);
+  bool valid() const { return !vertices_.empty(); }
+  float area() const { return area_; }
+  // The edges of the polygon whose outer side q lies on (bit k: beyond edge k -> k + 1's line), every
+  // bit where q is not finite. 0: q lies inside or on the boundary. Made once per projected vertex.
+  uint32_t outcode(const Vec2& q) const {
+    if (!(std::isfinite(q.x) && std::isfinite(q.y))) return ~0u;
+    uint32_t code = 0;
+    for (size_t k = 0; k < vertices_.size(); ++k) code |= glm::dot(outward_[k], q) > offset_[k] ? 1u << k : 0u;
+    return code;
+  }
+  // Whether the segment a-b (finite; outcodes ca, cb) lies outside the polygon: beyond one edge's line
+  // at both ends, or with the whole polygon on one side of its own line (the axes of the
+  // separating-axis test of two convex shapes). With both outcodes 0 it lies inside: the triangle
+  // (0, a, b) lies inside the polygon and its fan area is its own, cross(a, b) / 2.
+  bool outside(const Vec2& a, const Vec2& b, uint32_t ca, uint32_t cb) const;
+  // The polygon's area swept counter-clockwise from the +x axis to q's direction, in (0, area]: the
+  // +x axis itself is swept whole, which matches crossingOfPositiveX's "a.y <= 0 is below". False
+  // where q has no direction (zero).
+  bool sweep(const Vec2& q, float& swept) const;
+
+ private:
+  std::vector<Vec2> vertices_, outward_;  //!< from the +x axis's point on the outline; outward_[k]: edge k -> k + 1
+  std::vector<float> offset_;             //!< dot(outward_[k], vertices_[k])
+  std::vector<float> coneArea_, prefix_;  //!< cone k: vertex k's direction to vertex k+1's; prefix_[k]: those before k
+  float area_ = 0.0f;
+};
+
+// The signed crossing of segment a-b with the +x axis from the origin (the winding number's rule,
+// Sunday 2001): +1 upward with the origin on its left, -1 downward with it on its right.
+inline int crossingOfPositiveX(const Vec2& a, const Vec2& b) {
+  const float side = a.x * b.y - a.y * b.x;
+  if (a.y <= 0.0f) return (b.y > 0.0f && side > 0.0f) ? 1 : 0;
+  return (b.y <= 0.0f && side < 0.0f) ? -1 : 0;
+}
 
 // A uniform grid over a rectangle of u-space whose cells list the items whose boxes overlap them,
 // in item order.

@@ -95,6 +95,68 @@ float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& 
   return (cross > 0.0f ? 0.5f : -0.5f) * twice;
 }
 
+// A ring's projected edges from p: minus the sum of their fan areas (rings run counter-clockwise seen
+// from the centre, clockwise in (x, y)) in `covered`, and the ring's winding around the centre.
+// Every fan area by clipping.
+void fansByClipping(const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring, size_t n, float& covered,
+                    int& winding) {
+  covered = 0.0f;
+  winding = 0;
+  const Vec2 first = projectFrom(p, ring[0]);
+  Vec2 a = first;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 b = i + 1 < n ? projectFrom(p, ring[i + 1]) : first;
+    covered -= clippedFanArea(light, a, b);
+    winding += crossingOfPositiveX(a, b);
+    a = b;
+  }
+}
+
+// The same, with most fan areas read off the light's sectors (LightSectors): an edge inside the light
+// gives its own triangle; a chain of consecutive edges outside it gives its ends' sweeps and its
+// crossings of the +x axis; only edges crossing the light's outline are clipped. False where a chain
+// ends at a point without a direction (then fansByClipping applies).
+bool fansBySectors(const LightSectors& sectors, const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring,
+                   size_t n, float& covered, int& winding) {
+  covered = 0.0f;
+  winding = 0;
+  const Vec2 first = projectFrom(p, ring[0]);
+  const uint32_t firstCode = sectors.outcode(first);
+  Vec2 a = first;
+  uint32_t ca = firstCode;
+  bool chain = false;  // a chain of edges outside the light is open: its first point's sweep, its crossings
+  float chainStart = 0.0f;
+  int chainCrossings = 0;
+  auto endChain = [&](const Vec2& q) {
+    float end;
+    if (!sectors.sweep(q, end)) return false;
+    covered -= end - chainStart + sectors.area() * static_cast<float>(chainCrossings);
+    chain = false;
+    return true;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const bool last = i + 1 == n;
+    const Vec2 b = last ? first : projectFrom(p, ring[i + 1]);
+    const uint32_t cb = last ? firstCode : sectors.outcode(b);
+    const int crossing = crossingOfPositiveX(a, b);
+    winding += crossing;
+    if (sectors.outside(a, b, ca, cb)) {
+      if (!chain) {
+        if (!sectors.sweep(a, chainStart)) return false;
+        chain = true;
+        chainCrossings = 0;
+      }
+      chainCrossings += crossing;
+    } else {
+      if (chain && !endChain(a)) return false;
+      covered -= (ca | cb) == 0 ? 0.5f * (a.x * b.y - a.y * b.x) : clippedFanArea(light, a, b);
+    }
+    a = b;
+    ca = cb;
+  }
+  return !chain || endChain(first);
+}
+
 struct WedgeRing {
   uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
   int32_t objectId = 0;
@@ -103,11 +165,13 @@ struct WedgeRing {
   bool sheet = false;
   Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
   float zMin = kInfinity;                      //!< its smallest depth there
+  float zMax = kInfinity;  //!< its vertices' largest depth, +infinity when one lies behind zNear (clipped always)
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
 struct Side {
   LightPlane plane;
+  LightSectors sectors;  //!< the fan area of an edge whose projection passes outside the light
   std::vector<Vec3> vertices;
   std::vector<WedgeRing> rings;
   UGrid grid;
@@ -128,6 +192,7 @@ class WedgesTechnique final : public ShadowTechnique {
     for (int back = 0; back < 2; ++back) {
       sides_[back] = Side{};
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
+      sides_[back].sectors.build(sides_[back].plane.vertices);
     }
     occluders_ = makeOccluders(scene);
     rays_ = nullptr;
@@ -224,6 +289,12 @@ class WedgesTechnique final : public ShadowTechnique {
               ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
             }
           }
+          ring.zMax = -kInfinity;
+          for (uint32_t i = 0; i < ring.count; ++i) {
+            const float z = side.vertices[ring.first + i].z;
+            ring.zMax = z >= zNear_ ? std::max(ring.zMax, z) : kInfinity;
+            if (ring.zMax == kInfinity) break;
+          }
           if (front) edges_ += ringEdges.size();
           if (ring.zMin == kInfinity) {  // entirely behind this face of the light
             side.vertices.resize(ring.first);
@@ -257,40 +328,35 @@ class WedgesTechnique final : public ShadowTechnique {
       // the plane just in front of p, whose projection runs far outside the light, as the part of
       // the loop "at infinity" seen from p would; clipping edge by edge would leave the loop open
       // and its winding undefined.
-      clipped.assign(side.vertices.begin() + r.first, side.vertices.begin() + r.first + r.count);
+      // A ring wholly within the depths is used as it is.
+      const Vec3* ring = side.vertices.data() + r.first;
+      size_t n = r.count;
       bool cut = false;
-      for (const float bound : {zNear_, zMax}) {
-        const bool low = bound == zNear_;
-        tmp.clear();
-        const size_t n = clipped.size();
-        for (size_t i = 0; i < n; ++i) {
-          const Vec3 &a = clipped[i], &b = clipped[(i + 1) % n];
-          const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
-          if (inA) tmp.push_back(a);
-          if (inA != inB) {
-            const Vec3 c = a + (b - a) * ((bound - a.z) / (b.z - a.z));
-            tmp.push_back(Vec3(c.x, c.y, bound));
-            cut = true;
+      if (!(r.zMax <= zMax)) {
+        clipped.assign(ring, ring + n);
+        for (const float bound : {zNear_, zMax}) {
+          const bool low = bound == zNear_;
+          tmp.clear();
+          for (size_t i = 0; i < clipped.size(); ++i) {
+            const Vec3 &a = clipped[i], &b = clipped[(i + 1) % clipped.size()];
+            const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
+            if (inA) tmp.push_back(a);
+            if (inA != inB) {
+              const Vec3 c = a + (b - a) * ((bound - a.z) / (b.z - a.z));
+              tmp.push_back(Vec3(c.x, c.y, bound));
+              cut = true;
+            }
           }
+          clipped.swap(tmp);
         }
-        clipped.swap(tmp);
+        ring = clipped.data();
+        n = clipped.size();
       }
-      const size_t n = clipped.size();
       if (n < 3) continue;
       float covered = 0.0f;
       int winding = 0;  // around the light's centre, the origin of the light plane
-      Vec2 a = projectFrom(p, clipped[0]);
-      const Vec2 first = a;
-      for (size_t i = 0; i < n; ++i) {
-        const Vec2 b = i + 1 < n ? projectFrom(p, clipped[i + 1]) : first;
-        // Rings run counter-clockwise seen from the centre, clockwise in (x, y): negate.
-        covered -= clippedFanArea(side.plane.vertices, a, b);
-        if (a.y <= 0.0f)
-          winding += (b.y > 0.0f && a.x * b.y - a.y * b.x > 0.0f) ? 1 : 0;
-        else
-          winding -= (b.y <= 0.0f && a.x * b.y - a.y * b.x < 0.0f) ? 1 : 0;
-        a = b;
-      }
+      if (!(side.sectors.valid() && fansBySectors(side.sectors, side.plane.vertices, p, ring, n, covered, winding)))
+        fansByClipping(side.plane.vertices, p, ring, n, covered, winding);
       // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
       if (cut) covered += side.plane.area * (static_cast<float>(winding) + (blocker() == r.objectId ? 1.0f : 0.0f));
       if (r.occluder != current) {

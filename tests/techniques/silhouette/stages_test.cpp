@@ -1,0 +1,160 @@
+// Tests of the silhouette family's shared stages (src/techniques/silhouette/stages.cpp), LightSectors:
+// the light polygon's area by direction, which penumbra wedges (wedges.cpp) read their fan areas
+// from. Against the definition, the light's area inside the triangle (0, a, b) clipped with
+// clipHalfPlane, on random segments around lights of several shapes (a square, a thin rect, a
+// triangle, an off-centre heptagon): a segment outside the light gives sweep(b) - sweep(a) plus the
+// area at each crossing of the +x axis, one inside gives its own triangle; and a closed ring around
+// the light, every edge outside it, sums to the light's area times its winding (the chain rule over
+// a whole ring). A polygon that does not hold the origin strictly inside is refused.
+#include "techniques/silhouette/stages.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace penumbra {
+namespace {
+
+using silhouette::clipHalfPlane;
+using silhouette::crossingOfPositiveX;
+using silhouette::LightSectors;
+
+// The light's area inside the triangle (0, a, b), signed by the triangle's orientation: the polygon
+// clipped to the triangle's three half-planes.
+double fanAreaByClipping(const std::vector<Vec2>& light, const Vec2& a0, const Vec2& b0) {
+  const float cross = a0.x * b0.y - a0.y * b0.x;
+  if (cross == 0.0f) return 0.0;
+  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
+  std::array<Vec2, 64> bufA{}, bufB{};
+  std::copy(light.begin(), light.end(), bufA.begin());
+  int n = static_cast<int>(light.size());
+  const Vec2 corners[3] = {Vec2(0.0f), a, b};
+  Vec2* in = bufA.data();
+  Vec2* out = bufB.data();
+  for (int e = 0; e < 3 && n > 0; ++e) {
+    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
+    const Vec2 outward(t.y - s.y, s.x - t.x);
+    n = clipHalfPlane(in, n, out, outward, glm::dot(outward, s));
+    std::swap(in, out);
+  }
+  double twice = 0.0;
+  for (int i = 0; i < n; ++i) twice += double(in[i].x) * in[(i + 1) % n].y - double(in[i].y) * in[(i + 1) % n].x;
+  return (cross > 0.0f ? 0.5 : -0.5) * twice;
+}
+
+std::vector<std::vector<Vec2>> lights() {
+  std::vector<Vec2> heptagon;
+  for (int k = 0; k < 7; ++k) {
+    const float angle = 2.0f * kPi * static_cast<float>(k) / 7.0f + 0.3f;
+    heptagon.push_back(Vec2(0.35f, -0.2f) + Vec2(std::cos(angle), std::sin(angle)));  // the origin off its centre
+  }
+  return {{{-1, -1}, {1, -1}, {1, 1}, {-1, 1}},
+          {{-2.0f, -0.05f}, {2.0f, -0.05f}, {2.0f, 0.05f}, {-2.0f, 0.05f}},
+          {{-1.0f, -0.6f}, {1.2f, -0.4f}, {0.1f, 1.3f}},
+          heptagon};
+}
+
+double polygonArea(const std::vector<Vec2>& p) {
+  double twice = 0.0;
+  for (size_t i = 0; i < p.size(); ++i)
+    twice += double(p[i].x) * p[(i + 1) % p.size()].y - double(p[i].y) * p[(i + 1) % p.size()].x;
+  return 0.5 * twice;
+}
+
+TEST(LightSectors, FanAreasOfSegmentsOutsideAndInsideTheLightMatchClipping) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> coordinate(-3.0f, 3.0f);
+  for (const std::vector<Vec2>& light : lights()) {
+    LightSectors sectors;
+    ASSERT_TRUE(sectors.build(light));
+    const double area = polygonArea(light);
+    EXPECT_NEAR(sectors.area(), area, 1e-5 * area);
+    int outside = 0, inside = 0;
+    std::uniform_real_distribution<float> weight(0.0f, 1.0f);
+    // A random point of the light (a convex combination of its vertices).
+    auto inLight = [&]() {
+      Vec2 sum(0.0f);
+      float total = 0.0f;
+      for (const Vec2& v : light) {
+        const float w = weight(rng);
+        sum += w * v;
+        total += w;
+      }
+      return sum / total;
+    };
+    for (int i = 0; i < 20000; ++i) {
+      // Every fourth segment inside the light, the others anywhere around it.
+      const bool within = i % 4 == 0;
+      const Vec2 a = within ? inLight() : Vec2(coordinate(rng), coordinate(rng));
+      const Vec2 b = within ? inLight() : Vec2(coordinate(rng), coordinate(rng));
+      const uint32_t ca = sectors.outcode(a), cb = sectors.outcode(b);
+      const double expected = fanAreaByClipping(light, a, b);
+      if ((ca | cb) == 0) {
+        ++inside;
+        EXPECT_NEAR(0.5 * (double(a.x) * b.y - double(a.y) * b.x), expected, 1e-5 * area);
+      } else if (sectors.outside(a, b, ca, cb)) {
+        ++outside;
+        float sweepA = 0.0f, sweepB = 0.0f;
+        ASSERT_TRUE(sectors.sweep(a, sweepA) && sectors.sweep(b, sweepB));
+        const double chain = double(sweepB) - sweepA + area * crossingOfPositiveX(a, b);
+        EXPECT_NEAR(chain, expected, 2e-5 * area) << "a " << a.x << "," << a.y << " b " << b.x << "," << b.y;
+      }
+    }
+    // Ends exactly on the +x axis, where the sweep and the crossing rule must agree (the axis is
+    // swept whole, as "a.y <= 0 is below" counts it).
+    for (const auto& [a, b] : std::vector<std::pair<Vec2, Vec2>>{
+             {{3.0f, 0.0f}, {2.5f, 1.0f}}, {{2.5f, -1.0f}, {3.0f, 0.0f}}, {{3.0f, 0.0f}, {2.5f, -1.0f}},
+             {{2.5f, 1.0f}, {3.0f, 0.0f}}, {{3.0f, -0.5f}, {3.0f, 0.5f}}, {{3.0f, 0.5f}, {3.0f, -0.5f}}}) {
+      ASSERT_TRUE(sectors.outside(a, b, sectors.outcode(a), sectors.outcode(b)));
+      float sweepA = 0.0f, sweepB = 0.0f;
+      ASSERT_TRUE(sectors.sweep(a, sweepA) && sectors.sweep(b, sweepB));
+      EXPECT_NEAR(double(sweepB) - sweepA + area * crossingOfPositiveX(a, b), fanAreaByClipping(light, a, b),
+                  2e-5 * area);
+    }
+    // Both cases occur often, or the test would say little.
+    EXPECT_GT(outside, 2000);
+    EXPECT_GT(inside, 4000);
+  }
+}
+
+TEST(LightSectors, ARingAroundTheLightSumsToItsAreaTimesItsWinding) {
+  for (const std::vector<Vec2>& light : lights()) {
+    LightSectors sectors;
+    ASSERT_TRUE(sectors.build(light));
+    for (const int turns : {1, -1, 2}) {
+      // A ring of 60 points on a circle of radius 4 around the origin, `turns` times around: every
+      // edge lies outside the light, so the whole ring is one chain from its first point back to it.
+      const int n = 60;
+      std::vector<Vec2> ring;
+      for (int k = 0; k < n; ++k) {
+        const float angle = 2.0f * kPi * static_cast<float>(turns * k) / static_cast<float>(n) + 0.1f;
+        ring.push_back(4.0f * Vec2(std::cos(angle), std::sin(angle)));
+      }
+      int crossings = 0;
+      double byClipping = 0.0;
+      for (int k = 0; k < n; ++k) {
+        const Vec2 &a = ring[k], &b = ring[(k + 1) % n];
+        ASSERT_TRUE(sectors.outside(a, b, sectors.outcode(a), sectors.outcode(b)));
+        crossings += crossingOfPositiveX(a, b);
+        byClipping += fanAreaByClipping(light, a, b);
+      }
+      EXPECT_EQ(crossings, turns);
+      EXPECT_NEAR(byClipping, sectors.area() * turns, 1e-4 * std::abs(turns) * sectors.area());
+    }
+  }
+}
+
+TEST(LightSectors, RefusesAPolygonThatDoesNotHoldTheOriginInside) {
+  LightSectors sectors;
+  EXPECT_FALSE(sectors.build({{0.5f, -1.0f}, {2.0f, -1.0f}, {2.0f, 1.0f}, {0.5f, 1.0f}}));  // beside it
+  EXPECT_FALSE(sectors.valid());
+  EXPECT_FALSE(sectors.build({{0.0f, -1.0f}, {2.0f, -1.0f}, {2.0f, 1.0f}, {0.0f, 1.0f}}));  // on its edge
+  EXPECT_TRUE(sectors.build({{-1.0f, -1.0f}, {2.0f, -1.0f}, {2.0f, 1.0f}, {-1.0f, 1.0f}}));
+}
+
+}  // namespace
+}  // namespace penumbra
