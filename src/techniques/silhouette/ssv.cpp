@@ -83,7 +83,8 @@
 //  - Binning: a light-space grid over directions from the light's centre (stages.h, which says why)
 //    lists per cell the rings with an edge whose region of influence reaches a receiver of the
 //    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
-//    it; a pixel combines the rings listed in its cell.
+//    it; a pixel combines the rings listed in its cell, less those it finds beyond the reach of
+//    every edge shadow of an uncut ring with its own direction and depth (beyondInfluence).
 //  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
 //    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
 //    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
@@ -602,15 +603,16 @@ class SsvTechnique final : public ShadowTechnique {
     bool cut = false;
     for (const float bound : {zNear_, zMax}) {
       const bool low = bound == zNear_;
-      bool allIn = true;
-      for (const Vec3& q : s.loop) allIn = allIn && (low ? q.z >= bound : q.z <= bound);
+      // Whether every vertex lies within the bound, from the ring's own depths: the first clip keeps
+      // the deepest vertex (deeper than zMax > zNear) and adds points at zNear only.
+      const bool allIn = low ? !r.crossesLightPlane : r.zMax <= bound;
       if (allIn) continue;
       cut = true;
       s.tmp.clear();
       s.tmpEdge.clear();
       const size_t n = s.loop.size();
       for (size_t i = 0; i < n; ++i) {
-        const Vec3 &a = s.loop[i], &b = s.loop[(i + 1) % n];
+        const Vec3 &a = s.loop[i], &b = s.loop[i + 1 < n ? i + 1 : 0];
         const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
         if (inA) {
           s.tmp.push_back(a);
@@ -700,13 +702,13 @@ class SsvTechnique final : public ShadowTechnique {
     s.curve.clear();
     if (gap == k) {
       // Every edge shadow contains p: one closed curve of approximants.
-      for (size_t i = 0; i < k; ++i) join(s.approximants[i], s.approximants[(i + 1) % k]);
+      for (size_t i = 0; i < k; ++i) join(s.approximants[i], s.approximants[i + 1 < k ? i + 1 : 0]);
     } else {
       // Once around the ring from a gap: the projected edges outside the square as they are, each
       // chain of contributing edges as its approximants, entered and left on the approximant at
       // the position (along it) of the projected edge's outer end, clamped to the square.
-      for (size_t step = 1; step <= k; ++step) {
-        const size_t i = (gap + step) % k;
+      for (size_t step = 1, i = gap; step <= k; ++step) {
+        i = i + 1 < k ? i + 1 : 0;  // (gap + step) mod k
         const Approximant& e = s.approximants[i];
         if (!e.contributes) {
           s.curve.push_back(e.start);
@@ -714,14 +716,14 @@ class SsvTechnique final : public ShadowTechnique {
           continue;
         }
         const int other = 1 - e.axis;
-        if (!s.approximants[(i + k - 1) % k].contributes) {
+        if (!s.approximants[i > 0 ? i - 1 : k - 1].contributes) {
           s.curve.push_back(e.start);
           Vec2 entry;
           entry[e.axis] = e.cut;
           entry[other] = std::clamp(e.start[other], 0.0f, 1.0f);
           s.curve.push_back(entry);
         }
-        const Approximant& next = s.approximants[(i + 1) % k];
+        const Approximant& next = s.approximants[i + 1 < k ? i + 1 : 0];
         if (next.contributes) {
           join(e, next);
         } else {
@@ -787,7 +789,7 @@ class SsvTechnique final : public ShadowTechnique {
     // The pieces that can cross a ray from a point of the square towards +x.
     const size_t c = s.curve.size();
     for (size_t i = 0; i < c; ++i) {
-      const Vec2 &u = s.curve[i], &v = s.curve[(i + 1) % c];
+      const Vec2 &u = s.curve[i], &v = s.curve[i + 1 < c ? i + 1 : 0];
       if (u.y == v.y || std::max(u.x, v.x) <= 0.0f || std::max(u.y, v.y) <= 0.0f || std::min(u.y, v.y) >= 1.0f)
         continue;
       s.pieces.push_back({u, v, r.group});
@@ -908,6 +910,9 @@ class SsvTechnique final : public ShadowTechnique {
       for (; i < s.rings.size() && side.rings[s.rings[i]].group == group; ++i) {
         const Ring& r = side.rings[s.rings[i]];
         if ((r.sheet && r.objectId == objectId) || !(r.zMin < p.z)) continue;
+        // An uncut ring none of whose edge shadows can contain p, with p's direction outside its
+        // box, adds nothing (appendCurve's umbra test would give 0).
+        if (!r.crossesLightPlane && r.zMax <= zMax && beyondInfluence(side, r, u, p.z)) continue;
         centreWinding += appendCurve(side, s.rings[i], p, s);
       }
       if (g.sheet && g.objectId == objectId) continue;
@@ -980,6 +985,18 @@ class SsvTechnique final : public ShadowTechnique {
       visible = double(count) / (n * n);
     }
     return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
+  }
+
+  // Whether no edge shadow of ring r can contain p (u = p's direction, z its depth): a point e of the
+  // ring projects from p into the light square only where u_e - u = q (1 / z_e - 1 / z) for q in
+  // the square (similar triangles), so u lies in the ring's box grown by the square times
+  // (1 / zMin - 1 / z), made a thousandth wider against rounding. Outside it u also lies outside
+  // the ring's box.
+  static bool beyondInfluence(const Side& side, const Ring& r, const Vec2& u, float z) {
+    const float k = 1.001f * (1.0f / r.zMin - 1.0f / z);
+    const Vec2 lower = r.uLower - side.plane.upper * k, upper = r.uUpper - side.plane.lower * k;
+    const Vec2 margin = 1e-6f * (glm::abs(lower) + glm::abs(upper));
+    return u.x < lower.x - margin.x || u.y < lower.y - margin.y || u.x > upper.x + margin.x || u.y > upper.y + margin.y;
   }
 
   // The fraction of the light's area on the visible side of the line dot(x, m) = offset (the exact

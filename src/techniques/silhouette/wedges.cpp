@@ -7,13 +7,15 @@
 // face the centre, mesh_topology.h), and split into rings. For a receiver p every silhouette edge is
 // projected from p onto the light's plane and its coverage of the light is measured: the area of
 // the light inside the triangle (centre, a', b') spanned by the light's centre and the projected
-// edge, signed by its orientation, computed exactly by clipping the light polygon (exact for rect
-// lights and for any convex polygon). Summed over a closed ring this is the light's area inside the
-// projected silhouette, counted with its winding: the hard shadow of the centre (the winding at the
-// centre) plus the wedge corrections of every edge whose projection crosses the light (the
-// triangles' parts beyond the projected edge), which is how the paper splits it. Contributions of
-// all rings and objects are simply added (the "overlap approximation", Fig. 2-12), and the
-// occluded fraction is clamped to [0, 1]: V = 1 - clamp(sum / area).
+// edge, signed by its orientation, exact for any convex polygon. It is read off the light's
+// sectors where it can be (LightSectors, stages.h): an edge projected inside the light covers its
+// own triangle, and a chain of edges projected outside it covers the light's sector between the
+// chain's ends (plus the whole light at each turn around the centre); only an edge that crosses
+// the light's outline has the polygon clipped to its triangle. Summed over a closed ring this is the light's area
+// inside the projected silhouette, counted with its winding: the hard shadow of the centre (the winding at the centre)
+// plus the wedge corrections of every edge whose projection crosses the light (the triangles' parts beyond the
+// projected edge), which is how the paper splits it. Contributions of all rings and objects are simply added (the
+// "overlap approximation", Fig. 2-12), and the occluded fraction is clamped to [0, 1]: V = 1 - clamp(sum / area).
 //
 // The two approximations the thesis criticizes are therefore present on purpose: the
 // single-silhouette artifact (the silhouette seen from the centre is used for every point of the

@@ -106,9 +106,12 @@ TEST(LightSectors, FanAreasOfSegmentsOutsideAndInsideTheLightMatchClipping) {
     }
     // Ends exactly on the +x axis, where the sweep and the crossing rule must agree (the axis is
     // swept whole, as "a.y <= 0 is below" counts it).
-    for (const auto& [a, b] : std::vector<std::pair<Vec2, Vec2>>{
-             {{3.0f, 0.0f}, {2.5f, 1.0f}}, {{2.5f, -1.0f}, {3.0f, 0.0f}}, {{3.0f, 0.0f}, {2.5f, -1.0f}},
-             {{2.5f, 1.0f}, {3.0f, 0.0f}}, {{3.0f, -0.5f}, {3.0f, 0.5f}}, {{3.0f, 0.5f}, {3.0f, -0.5f}}}) {
+    for (const auto& [a, b] : std::vector<std::pair<Vec2, Vec2>>{{{3.0f, 0.0f}, {2.5f, 1.0f}},
+                                                                 {{2.5f, -1.0f}, {3.0f, 0.0f}},
+                                                                 {{3.0f, 0.0f}, {2.5f, -1.0f}},
+                                                                 {{2.5f, 1.0f}, {3.0f, 0.0f}},
+                                                                 {{3.0f, -0.5f}, {3.0f, 0.5f}},
+                                                                 {{3.0f, 0.5f}, {3.0f, -0.5f}}}) {
       ASSERT_TRUE(sectors.outside(a, b, sectors.outcode(a), sectors.outcode(b)));
       float sweepA = 0.0f, sweepB = 0.0f;
       ASSERT_TRUE(sectors.sweep(a, sweepA) && sectors.sweep(b, sweepB));
