@@ -84,7 +84,7 @@
 //    lists per cell the rings with an edge whose region of influence reaches a receiver of the
 //    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
 //    it; a pixel combines the rings listed in its cell, less those it finds beyond the reach of
-//    every edge shadow of an uncut ring with its own direction and depth (beyondInfluence).
+//    every edge shadow of an uncut ring with its own direction and depth (beyondEdgeShadows).
 //  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
 //    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
 //    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
@@ -912,7 +912,8 @@ class SsvTechnique final : public ShadowTechnique {
         if ((r.sheet && r.objectId == objectId) || !(r.zMin < p.z)) continue;
         // An uncut ring none of whose edge shadows can contain p, with p's direction outside its
         // box, adds nothing (appendCurve's umbra test would give 0).
-        if (!r.crossesLightPlane && r.zMax <= zMax && beyondInfluence(side, r, u, p.z)) continue;
+        if (!r.crossesLightPlane && r.zMax <= zMax && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z))
+          continue;
         centreWinding += appendCurve(side, s.rings[i], p, s);
       }
       if (g.sheet && g.objectId == objectId) continue;
@@ -985,18 +986,6 @@ class SsvTechnique final : public ShadowTechnique {
       visible = double(count) / (n * n);
     }
     return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
-  }
-
-  // Whether no edge shadow of ring r can contain p (u = p's direction, z its depth): a point e of the
-  // ring projects from p into the light square only where u_e - u = q (1 / z_e - 1 / z) for q in
-  // the square (similar triangles), so u lies in the ring's box grown by the square times
-  // (1 / zMin - 1 / z), made a thousandth wider against rounding. Outside it u also lies outside
-  // the ring's box.
-  static bool beyondInfluence(const Side& side, const Ring& r, const Vec2& u, float z) {
-    const float k = 1.001f * (1.0f / r.zMin - 1.0f / z);
-    const Vec2 lower = r.uLower - side.plane.upper * k, upper = r.uUpper - side.plane.lower * k;
-    const Vec2 margin = 1e-6f * (glm::abs(lower) + glm::abs(upper));
-    return u.x < lower.x - margin.x || u.y < lower.y - margin.y || u.x > upper.x + margin.x || u.y > upper.y + margin.y;
   }
 
   // The fraction of the light's area on the visible side of the line dot(x, m) = offset (the exact

@@ -103,6 +103,20 @@ inline Vec2 projectFrom(const Vec3& p, const Vec3& q) {
   return Vec2(p.x + (q.x - p.x) * s, p.y + (q.y - p.y) * s);
 }
 
+// Whether a receiver with direction u (from the light's centre) and depth z lies outside every edge
+// shadow of an occluder part whose points' directions lie in [uLower, uUpper] at depths of at least
+// zMin < z: a point e of it projects from the receiver into the light's bounding rectangle only
+// where u_e - u = q (1 / z_e - 1 / z) for q in the rectangle (similar triangles), so u lies in the
+// box grown by the rectangle times (1 / zMin - 1 / z); made a thousandth wider against rounding.
+// Outside it u also lies outside the box: the part hides nothing of the light from the receiver.
+inline bool beyondEdgeShadows(const LightPlane& plane, const Vec2& uLower, const Vec2& uUpper, float zMin,
+                              const Vec2& u, float z) {
+  const float k = 1.001f * (1.0f / zMin - 1.0f / z);
+  const Vec2 lower = uLower - plane.upper * k, upper = uUpper - plane.lower * k;
+  const Vec2 margin = 1e-6f * (glm::abs(lower) + glm::abs(upper));
+  return u.x < lower.x - margin.x || u.y < lower.y - margin.y || u.x > upper.x + margin.x || u.y > upper.y + margin.y;
+}
+
 // Clips the convex polygon in[0, count) to the half-plane dot(n, x) <= d (Sutherland-Hodgman) into
 // `out` (room for count + 1 points); returns the number of points left.
 int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d);

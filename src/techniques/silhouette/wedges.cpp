@@ -312,7 +312,8 @@ class WedgesTechnique final : public ShadowTechnique {
   float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, std::vector<Vec3>& clipped,
                      std::vector<Vec3>& tmp, Blocker& blocker) const {
     if (!side.binned || !(p.z > zNear_)) return 1.0f;
-    const auto [begin, end] = side.grid.cell(Vec2(p.x / p.z, p.y / p.z));
+    const Vec2 u(p.x / p.z, p.y / p.z);
+    const auto [begin, end] = side.grid.cell(u);
     const float zMax = p.z * (1.0f - 1e-4f);
     float total = 0.0f;
     // Per occluder: its solids' coverage plus the larger of its shells' front and back sides'.
@@ -325,6 +326,9 @@ class WedgesTechnique final : public ShadowTechnique {
     for (const uint32_t* it = begin; it != end; ++it) {
       const WedgeRing& r = side.rings[*it];
       if (r.sheet && r.objectId == objectId) continue;
+      // A ring within the depths none of whose edges' wedges reach p covers nothing of the light:
+      // all its edges project outside the light, winding around the centre zero times.
+      if (r.zMax <= zMax && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z)) continue;
       // The ring as a closed polygon clipped to zNear <= z <= zMax (Sutherland-Hodgman): where the
       // silhouette passes beyond p's depth (p on or beside the occluder), the cut is closed along
       // the plane just in front of p, whose projection runs far outside the light, as the part of
