@@ -273,14 +273,14 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[1] = Side{};
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
-    occluders_ = makeOccluders(scene);
+    occluders_ = &occluderCache_.get(scene);  // made again only when the geometry changed
     rays_ = nullptr;
     rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
     epsilon_ = shadowRayEpsilon(bounds);
     zNear_ = 1e-4f * std::max(bounds.radius(), 1e-6f);
     facets_ = 0;
-    for (const Occluder& o : occluders_) facets_ += o.topology.surfaceTriangles;
+    for (const Occluder& o : *occluders_) facets_ += o.topology.surfaceTriangles;
     // The other face of the light is built when a receiver lies behind the light's plane.
     buildSide(sides_[0]);
     backBuilt_ = false;
@@ -364,7 +364,7 @@ class SsvTechnique final : public ShadowTechnique {
 
   void buildSide(Side& side) const {
     side.squareScale = Vec2(1.0f) / glm::max(side.plane.upper - side.plane.lower, Vec2(1e-30f));
-    for (const Occluder& o : occluders_) buildRings(side, o, toLightSpace(o, side.plane));
+    for (const Occluder& o : *occluders_) buildRings(side, o, toLightSpace(o, side.plane));
   }
 
   void buildRings(Side& side, const Occluder& o, const LightSpaceGeometry& ls) const {
@@ -1003,7 +1003,8 @@ class SsvTechnique final : public ShadowTechnique {
   }
 
   SsvOptions options_;
-  std::vector<Occluder> occluders_;
+  OccluderCache occluderCache_;
+  const std::vector<Occluder>* occluders_ = nullptr;  //!< occluderCache_'s
   bool backBuilt_ = false;
   RaySceneCache raysCache_;
   const RayScene* rays_ = nullptr;  //!< the light's centre seen from receivers beside an occluder

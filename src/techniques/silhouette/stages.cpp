@@ -66,6 +66,18 @@ std::vector<Occluder> makeOccluders(const Scene& scene) {
   return occluders;
 }
 
+const std::vector<Occluder>& OccluderCache::get(const Scene& scene) {
+  std::vector<Key> keys;
+  keys.reserve(scene.objects.size());
+  for (const Object& object : scene.objects) keys.push_back({object.id, object.name, meshFingerprint(object.mesh)});
+  if (!made_ || keys != keys_) {
+    occluders_ = makeOccluders(scene);
+    keys_ = std::move(keys);
+    made_ = true;
+  }
+  return occluders_;
+}
+
 LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane) {
   LightSpaceGeometry g;
   g.positions.reserve(o.topology.positions.size());

@@ -23,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/mesh_fingerprint.h"
 #include "penumbra/gbuffer.h"
 #include "penumbra/light.h"
 #include "penumbra/scene.h"
@@ -79,6 +80,25 @@ struct LightSpaceGeometry {
 // The scene's objects as occluders in world space: closed oriented surfaces (mesh_topology.h: a solid
 // as given or repaired, any other mesh as a doubled shell; Rouf Section 1.3 asks for solids).
 std::vector<Occluder> makeOccluders(const Scene& scene);
+// The scene's occluders (makeOccluders), kept while every object's id, name and geometry (its mesh's
+// fingerprint, core/mesh_fingerprint.h) stay the same: a light or camera moving over a static scene
+// does not weld, pair and orient its meshes again every frame.
+class OccluderCache {
+ public:
+  const std::vector<Occluder>& get(const Scene& scene);
+
+ private:
+  struct Key {
+    int32_t id = 0;
+    std::string name;
+    MeshFingerprint geometry;
+    bool operator==(const Key&) const = default;
+  };
+  std::vector<Key> keys_;  //!< per object of the scene the occluders were made from
+  std::vector<Occluder> occluders_;
+  bool made_ = false;
+};
+
 // The occluder's positions and normals in the light space of `plane`.
 LightSpaceGeometry toLightSpace(const Occluder& o, const LightPlane& plane);
 

@@ -167,7 +167,8 @@ struct WedgeRing {
   bool sheet = false;
   Vec2 uLower{kInfinity}, uUpper{-kInfinity};  //!< u-space box of the ring's part in front of the light
   float zMin = kInfinity;                      //!< its smallest depth there
-  float zMax = kInfinity;  //!< its vertices' largest depth, +infinity when one lies behind zNear (clipped always)
+  float zMax = -kInfinity;                     //!< its vertices' largest depth
+  bool crossesNear = false;                    //!< some vertex lies nearer than zNear (behind this face of the light)
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
@@ -196,7 +197,7 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
       sides_[back].sectors.build(sides_[back].plane.vertices);
     }
-    occluders_ = makeOccluders(scene);
+    occluders_ = &occluderCache_.get(scene);  // made again only when the geometry changed
     rays_ = nullptr;
     rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
@@ -260,7 +261,7 @@ class WedgesTechnique final : public ShadowTechnique {
  private:
   void buildSide(Side& side) {
     const bool front = &side == &sides_[0];
-    for (const Occluder& o : occluders_) {
+    for (const Occluder& o : *occluders_) {
       const LightSpaceGeometry ls = toLightSpace(o, side.plane);
       const MeshTopology& m = o.topology;
       // Facets facing the light's centre (the origin of light space): the single silhouette.
@@ -276,7 +277,7 @@ class WedgesTechnique final : public ShadowTechnique {
         for (const auto& ringEdges : silhouetteRings(m, boundaryEdges(m, set))) {
           WedgeRing ring;
           ring.objectId = o.objectId;
-          ring.occluder = static_cast<uint32_t>(&o - occluders_.data());
+          ring.occluder = static_cast<uint32_t>(&o - occluders_->data());
           ring.layer = layer;
           ring.sheet = o.sheet;
           ring.first = static_cast<uint32_t>(side.vertices.size());
@@ -291,11 +292,10 @@ class WedgesTechnique final : public ShadowTechnique {
               ring.uUpper = glm::max(ring.uUpper, Vec2(q.x / q.z, q.y / q.z));
             }
           }
-          ring.zMax = -kInfinity;
           for (uint32_t i = 0; i < ring.count; ++i) {
             const float z = side.vertices[ring.first + i].z;
-            ring.zMax = z >= zNear_ ? std::max(ring.zMax, z) : kInfinity;
-            if (ring.zMax == kInfinity) break;
+            ring.zMax = std::max(ring.zMax, z);
+            ring.crossesNear = ring.crossesNear || !(z >= zNear_);
           }
           if (front) edges_ += ringEdges.size();
           if (ring.zMin == kInfinity) {  // entirely behind this face of the light
@@ -328,7 +328,8 @@ class WedgesTechnique final : public ShadowTechnique {
       if (r.sheet && r.objectId == objectId) continue;
       // A ring within the depths none of whose edges' wedges reach p covers nothing of the light:
       // all its edges project outside the light, winding around the centre zero times.
-      if (r.zMax <= zMax && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z)) continue;
+      if (!r.crossesNear && r.zMax <= zMax && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z))
+        continue;
       // The ring as a closed polygon clipped to zNear <= z <= zMax (Sutherland-Hodgman): where the
       // silhouette passes beyond p's depth (p on or beside the occluder), the cut is closed along
       // the plane just in front of p, whose projection runs far outside the light, as the part of
@@ -338,13 +339,17 @@ class WedgesTechnique final : public ShadowTechnique {
       const Vec3* ring = side.vertices.data() + r.first;
       size_t n = r.count;
       bool cut = false;
-      if (!(r.zMax <= zMax)) {
+      if (r.crossesNear || !(r.zMax <= zMax)) {
         clipped.assign(ring, ring + n);
         for (const float bound : {zNear_, zMax}) {
           const bool low = bound == zNear_;
+          // A pass with every vertex within its bound leaves the ring as it is (the first keeps the
+          // deepest vertex, deeper than zMax > zNear, and adds points at zNear only).
+          if (low ? !r.crossesNear : r.zMax <= bound) continue;
           tmp.clear();
-          for (size_t i = 0; i < clipped.size(); ++i) {
-            const Vec3 &a = clipped[i], &b = clipped[(i + 1) % clipped.size()];
+          const size_t count = clipped.size();
+          for (size_t i = 0; i < count; ++i) {
+            const Vec3 &a = clipped[i], &b = clipped[i + 1 < count ? i + 1 : 0];
             const bool inA = low ? a.z >= bound : a.z <= bound, inB = low ? b.z >= bound : b.z <= bound;
             if (inA) tmp.push_back(a);
             if (inA != inB) {
@@ -376,7 +381,8 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
   int grid_;
-  std::vector<Occluder> occluders_;
+  OccluderCache occluderCache_;
+  const std::vector<Occluder>* occluders_ = nullptr;  //!< occluderCache_'s
   bool backBuilt_ = false;
   RaySceneCache raysCache_;
   const RayScene* rays_ = nullptr;  //!< the hard shadow of the light's centre

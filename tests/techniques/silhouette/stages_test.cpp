@@ -6,15 +6,25 @@
 // area at each crossing of the +x axis, one inside gives its own triangle; and a closed ring around
 // the light, every edge outside it, sums to the light's area times its winding (the chain rule over
 // a whole ring). A polygon that does not hold the origin strictly inside is refused.
+//
+// OccluderCache: kept for a copy of the scene under a moved light, made again when an object's mesh
+// moves; ssv and wedges carried across such a change give the V of a fresh instance.
 #include "techniques/silhouette/stages.h"
 
 #include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <array>
 #include <cmath>
 #include <random>
 #include <utility>
 #include <vector>
+
+#include "penumbra/primitives.h"
+#include "penumbra/raster.h"
+#include "penumbra/registry.h"
+#include "penumbra/scene_io.h"
 
 namespace penumbra {
 namespace {
@@ -157,6 +167,54 @@ TEST(LightSectors, RefusesAPolygonThatDoesNotHoldTheOriginInside) {
   EXPECT_FALSE(sectors.valid());
   EXPECT_FALSE(sectors.build({{0.0f, -1.0f}, {2.0f, -1.0f}, {2.0f, 1.0f}, {0.0f, 1.0f}}));  // on its edge
   EXPECT_TRUE(sectors.build({{-1.0f, -1.0f}, {2.0f, -1.0f}, {2.0f, 1.0f}, {-1.0f, 1.0f}}));
+}
+
+TEST(OccluderCache, KeepsTheOccludersWhileTheGeometryStaysAndMakesThemAgainWhenAMeshMoves) {
+  Scene scene = loadScene("concave");
+  silhouette::OccluderCache cache;
+  const std::vector<silhouette::Occluder>* first = &cache.get(scene);
+  ASSERT_FALSE(first->empty());
+  const Vec3 corner = first->front().topology.positions.front();
+
+  Scene lightMoved = scene;  // a copy, its light elsewhere: the same occluders, not made again
+  lightMoved.lights.at(0) = Light::rect(Vec3(0.3f, 4.0f, 0.0f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.5f));
+  EXPECT_EQ(&cache.get(lightMoved), first);
+  EXPECT_EQ(first->front().topology.positions.front(), corner);
+
+  Scene meshMoved = scene;
+  transformMesh(meshMoved.objects.front().mesh, glm::translate(Mat4(1.0f), Vec3(0.0f, 0.25f, 0.0f)));
+  const std::vector<silhouette::Occluder>& moved = cache.get(meshMoved);
+  const std::vector<silhouette::Occluder> fresh = silhouette::makeOccluders(meshMoved);
+  ASSERT_EQ(moved.size(), fresh.size());
+  for (size_t i = 0; i < moved.size(); ++i) {
+    EXPECT_EQ(moved[i].objectId, fresh[i].objectId);
+    EXPECT_EQ(moved[i].topology.positions, fresh[i].topology.positions);
+    EXPECT_EQ(moved[i].topology.triangles, fresh[i].topology.triangles);
+  }
+  EXPECT_NE(moved.front().topology.positions.front(), corner);
+}
+
+TEST(OccluderCache, SsvAndWedgesCarriedAcrossAMovedMeshGiveAFreshInstancesV) {
+  Scene scene = loadScene("concave");
+  Scene moved = scene;
+  for (Object& object : moved.objects)
+    if (object.name != "ground") transformMesh(object.mesh, glm::translate(Mat4(1.0f), Vec3(0.2f, 0.15f, 0.0f)));
+  const GBuffer gbuffer = renderGBuffer(moved, 96, 96);
+  for (const char* name : {"ssv", "wedges"}) {
+    auto carried = createTechnique(name);
+    Image<float> v, fresh;
+    carried->prepare(scene, scene.lights.at(0));
+    carried->visibility(gbuffer, v);
+    carried->prepare(moved, moved.lights.at(0));
+    carried->visibility(gbuffer, v);
+    auto made = createTechnique(name);
+    made->prepare(moved, moved.lights.at(0));
+    made->visibility(gbuffer, fresh);
+    ASSERT_EQ(v.size(), fresh.size());
+    size_t differing = 0;
+    for (size_t i = 0; i < v.size(); ++i) differing += v[i] != fresh[i] ? 1 : 0;
+    EXPECT_EQ(differing, 0u) << name;
+  }
 }
 
 }  // namespace
