@@ -850,7 +850,11 @@ class SsvTechnique final : public ShadowTechnique {
         group = piece.group;
         any = true;
         auto crosses = [&](size_t column) { return crossing(piece.a, piece.b, Vec2(s.cx[column], y)) != 0; };
-        if (crosses(0)) {
+        // A piece right of every column (a projected edge beyond the square's right side) is crossed by
+        // every column's ray when it is by the last one's (the crossed columns are a prefix).
+        if (std::min(piece.a.x, piece.b.x) > s.cx[nx - 1] && crosses(nx - 1)) {
+          s.events.push_back({static_cast<uint32_t>(nx), piece.a.y <= y ? 1 : -1});
+        } else if (crosses(0)) {
           // Bisection for the first column whose point the piece does not cross, in [1, nx]
           // (branch-free: which half holds it is a coin toss for the branch predictor).
           size_t base = 1, count = nx - 1;
