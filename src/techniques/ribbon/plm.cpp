@@ -675,6 +675,10 @@ constexpr int kMaxProbes = 16;
 constexpr float kProfileMinDeficit = 2.0f;
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
+// PlmTechnique::ribbonAt_'s bits: a ribbon holds the texel (limits_ is written there); its c lies below
+// zetaNone.
+constexpr uint8_t kRibbonHere = 1, kRibbonBelowNone = 2;
+
 // Classes of the 2x2 footprint of a bilinear fetch (PlmTechnique::footprint2x2_).
 constexpr uint8_t kFootprintMixed = 0, kFootprintRibbonFree = 1, kFootprintOneRibbon = 2;
 
@@ -796,21 +800,21 @@ class PlmTechnique final : public ShadowTechnique {
         const plm::RibbonTexel* ribbonRow = ribbons.row(j);
         PlmTexel* out = limits_.row(j);
         uint8_t* ribbonAt = ribbonAt_.row(j);
+        // A texel without a ribbon is not written: texelAt makes it from g.
         for (int i = 0; i < n; ++i) {
-          PlmTexel texel{space.zetaNone, gRow[i], space.zetaNone, 0.0f, -1};
           const plm::RibbonTexel& r = ribbonRow[i];
-          if (r.covered()) {
-            texel.c = r.c;
-            texel.pi = r.w * space.ratePerTexel;
-            texel.edge = r.edge;
-            if (r.w > 0.0f) {  // raise g (step 2; see the file comment)
-              texel.g = std::min(texel.g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space.ratePerTexel);
-              gRow[i] = texel.g;
-            }
-            covered.push_back(j * n + i);
+          if (!r.covered()) {
+            ribbonAt[i] = 0;
+            continue;
           }
+          PlmTexel texel{r.c, gRow[i], space.zetaNone, r.w * space.ratePerTexel, r.edge};
+          if (r.w > 0.0f) {  // raise g (step 2; see the file comment)
+            texel.g = std::min(texel.g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space.ratePerTexel);
+            gRow[i] = texel.g;
+          }
+          covered.push_back(j * n + i);
           out[i] = texel;
-          ribbonAt[i] = texel.c < space.zetaNone ? 1 : 0;
+          ribbonAt[i] = kRibbonHere | (texel.c < space.zetaNone ? kRibbonBelowNone : 0);
         }
       }
     });
@@ -830,12 +834,13 @@ class PlmTechnique final : public ShadowTechnique {
         for (int i = 0; i < n; ++i) {
           const int i1 = std::min(i + 1, n - 1);
           // No texel's c below zetaNone: the ribbon-free class, without reading the texels.
-          if ((ribbonAt0[i] | ribbonAt0[i1] | ribbonAt1[i] | ribbonAt1[i1]) == 0) {
+          if (((ribbonAt0[i] | ribbonAt0[i1] | ribbonAt1[i] | ribbonAt1[i1]) & kRibbonBelowNone) == 0) {
             footprint[i] = kFootprintRibbonFree;
             continue;
           }
-          const PlmTexel &t00 = limits_(i, j), &t10 = limits_(i1, j), &t01 = limits_(i, j1), &t11 = limits_(i1, j1);
-          footprint[i] = continuousRibbon(t00, t10, t01, t11) ? kFootprintOneRibbon : kFootprintMixed;
+          footprint[i] = continuousRibbon(texelAt(i, j), texelAt(i1, j), texelAt(i, j1), texelAt(i1, j1))
+                             ? kFootprintOneRibbon
+                             : kFootprintMixed;
         }
       }
     });
@@ -892,6 +897,13 @@ class PlmTechnique final : public ShadowTechnique {
     });
   }
 
+  // Texel (i, j) of the limits: as prepare() wrote it where a ribbon holds it, else no ribbon (c and b
+  // at zetaNone, p_i 0) over the light map's g.
+  PlmTexel texelAt(int i, int j) const {
+    if (ribbonAt_(i, j) & kRibbonHere) return limits_(i, j);
+    return {space_.zetaNone, g_(i, j), space_.zetaNone, 0.0f, -1};
+  }
+
   // The bilinear interpolation of a fetch's four texels (weights ws along s, wt along t).
   static float lerp2(float ws, float wt, float a00, float a10, float a01, float a11) {
     const float top = a00 + ws * (a10 - a00), bottom = a01 + ws * (a11 - a01);
@@ -902,7 +914,7 @@ class PlmTechnique final : public ShadowTechnique {
   // texel across an occluder transition. g and zc as visibilityImpl computed them.
   float ribbonPixel(const ShadowReceiver& r, int32_t receiver, uint8_t footprint, int i0, int i1, int j0, int j1,
                     float ws, float wt, float g, float zc) const {
-    const PlmTexel &t00 = limits_(i0, j0), &t10 = limits_(i1, j0), &t01 = limits_(i0, j1), &t11 = limits_(i1, j1);
+    const PlmTexel t00 = texelAt(i0, j0), t10 = texelAt(i1, j0), t01 = texelAt(i0, j1), t11 = texelAt(i1, j1);
     if (std::min(std::min(t00.c, t10.c), std::min(t01.c, t11.c)) >= space_.zetaNone) return zc < g ? 1.0f : 0.0f;
     const float z = space_.zeta(r.lsDepth);
     if (!(footprint == kFootprintOneRibbon && bContinuous(t00, t10, t01, t11, z))) {
@@ -1118,12 +1130,12 @@ class PlmTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
-  std::optional<Light> light_;  //!< the light the last prepare()'s map looks from (lightAtMapOrigin)
-  Image<PlmTexel> limits_;
+  std::optional<Light> light_;                  //!< the light the last prepare()'s map looks from (lightAtMapOrigin)
+  Image<PlmTexel> limits_;                      //!< written where a ribbon holds the texel only (texelAt)
   std::vector<std::vector<int>> coveredInRow_;  //!< prepare's scratch: each row's ribbon texels
   Image<float> g_;                              //!< limits_' g alone, for the lit fast path
   Image<uint8_t> footprint2x2_;                 //!< kFootprint* of the 2x2 texels whose top-left this is
-  Image<uint8_t> ribbonAt_;                     //!< 1 where a ribbon holds the texel (c below zetaNone)
+  Image<uint8_t> ribbonAt_;                     //!< kRibbonHere | kRibbonBelowNone where a ribbon holds the texel
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
   Image<float> farthest_;
