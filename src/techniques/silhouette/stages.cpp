@@ -3,6 +3,7 @@
 #include "techniques/silhouette/stages.h"
 
 #include <algorithm>
+#include <array>
 #include <optional>
 
 #include "penumbra/error.h"
@@ -74,6 +75,7 @@ const std::vector<Occluder>& OccluderCache::get(const Scene& scene) {
     occluders_ = makeOccluders(scene);
     keys_ = std::move(keys);
     made_ = true;
+    ++builds_;
   }
   return occluders_;
 }
@@ -106,11 +108,18 @@ float cross2(const Vec2& a, const Vec2& b) { return a.x * b.y - a.y * b.x; }
 bool LightSectors::build(const std::vector<Vec2>& polygon) {
   *this = LightSectors{};
   const size_t n = polygon.size();
-  if (n < 3) return false;
+  if (n < 3 || n > 32) return false;  // an outcode has 32 bits
   for (size_t k = 0; k < n; ++k)
     if (!(cross2(polygon[k], polygon[(k + 1) % n]) > 0.0f)) return false;  // the origin on or outside edge k
-  // Start the outline where the +x axis leaves it (the edge that crosses it upwards), there exactly on
-  // the axis, so that sweeps start at 0 on it.
+  // The outcodes' lines are the polygon's own edges (an edge split below would give its short part a
+  // normal made of rounding).
+  for (size_t k = 0; k < n; ++k) {
+    const Vec2 e = polygon[(k + 1) % n] - polygon[k];
+    outward_.emplace_back(e.y, -e.x);  // right of a counter-clockwise edge
+    offset_.push_back(glm::dot(outward_.back(), polygon[k]));
+  }
+  // The cones start where the +x axis leaves the polygon (the edge that crosses it upwards), there
+  // exactly on the axis, so that sweeps start at 0 on it.
   std::vector<Vec2> outline;
   for (size_t k = 0; k < n && outline.empty(); ++k) {
     const Vec2 &v = polygon[k], &next = polygon[(k + 1) % n];
@@ -123,20 +132,17 @@ bool LightSectors::build(const std::vector<Vec2>& polygon) {
       if (j < n || w != onAxis) outline.push_back(w);  // v itself when it lies off the axis
     }
   }
-  if (outline.size() < 3 || outline.size() > 32) return false;  // an outcode has 32 bits
   const size_t m = outline.size();
+  if (m < 3) return false;
   prefix_.assign(m + 1, 0.0f);
   for (size_t k = 0; k < m; ++k) {
-    const Vec2 &v = outline[k], &next = outline[(k + 1) % m];
-    const float cone = 0.5f * cross2(v, next);
+    const float cone = 0.5f * cross2(outline[k], outline[(k + 1) % m]);
     if (!(cone > 0.0f)) return false;
     coneArea_.push_back(cone);
     prefix_[k + 1] = prefix_[k] + cone;
-    const Vec2 e = next - v;
-    outward_.emplace_back(e.y, -e.x);  // right of a counter-clockwise edge
-    offset_.push_back(glm::dot(outward_.back(), v));
   }
-  vertices_ = std::move(outline);
+  polygon_ = polygon;
+  outline_ = std::move(outline);
   area_ = prefix_[m];
   return true;
 }
@@ -147,7 +153,7 @@ bool LightSectors::outside(const Vec2& a, const Vec2& b, uint32_t ca, uint32_t c
   if ((ca | cb) == 0) return false;
   const Vec2 normal(b.y - a.y, a.x - b.x);
   bool anyAbove = false, anyBelow = false;
-  for (const Vec2& v : vertices_) {
+  for (const Vec2& v : polygon_) {
     const float side = glm::dot(normal, v - a);
     anyAbove = anyAbove || !(side < 0.0f);
     anyBelow = anyBelow || !(side > 0.0f);
@@ -160,9 +166,9 @@ bool LightSectors::sweep(const Vec2& q, float& swept) const {
     swept = area_;
     return true;
   }
-  const size_t n = vertices_.size();
+  const size_t n = outline_.size();
   for (size_t k = 0; k < n; ++k) {
-    const Vec2 &v = vertices_[k], &next = vertices_[(k + 1) % n];
+    const Vec2 &v = outline_[k], &next = outline_[(k + 1) % n];
     if (!(cross2(v, q) >= 0.0f && cross2(q, next) > 0.0f)) continue;
     // The cones before k and the triangle (0, v, x), x where q's direction meets the edge
     // v -> next: x = s q with s = cross(v, e) / cross(q, e).
@@ -172,6 +178,86 @@ bool LightSectors::sweep(const Vec2& q, float& swept) const {
     return true;
   }
   return false;
+}
+
+float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
+  const float cross = a0.x * b0.y - a0.y * b0.x;
+  if (cross == 0.0f) return 0.0f;
+  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
+  std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
+  int n = static_cast<int>(poly.size());
+  std::copy(poly.begin(), poly.end(), bufA.begin());
+  // Inside of the counter-clockwise triangle (0, a, b): left of 0->a, a->b, b->0.
+  const Vec2 corners[3] = {Vec2(0.0f), a, b};
+  Vec2* in = bufA.data();
+  Vec2* out = bufB.data();
+  for (int e = 0; e < 3 && n > 0; ++e) {
+    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
+    const Vec2 nOut(t.y - s.y, s.x - t.x);  // right normal: outside
+    n = clipHalfPlane(in, n, out, nOut, glm::dot(nOut, s));
+    std::swap(in, out);
+  }
+  float twice = 0.0f;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 &p = in[i], &q = in[(i + 1) % n];
+    twice += p.x * q.y - p.y * q.x;
+  }
+  return (cross > 0.0f ? 0.5f : -0.5f) * twice;
+}
+
+void ringFansByClipping(const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring, size_t n, float& covered,
+                        int& winding) {
+  covered = 0.0f;
+  winding = 0;
+  const Vec2 first = projectFrom(p, ring[0]);
+  Vec2 a = first;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2 b = i + 1 < n ? projectFrom(p, ring[i + 1]) : first;
+    covered -= clippedFanArea(light, a, b);
+    winding += crossingOfPositiveX(a, b);
+    a = b;
+  }
+}
+
+bool ringFansBySectors(const LightSectors& sectors, const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring,
+                       size_t n, float& covered, int& winding) {
+  covered = 0.0f;
+  winding = 0;
+  const Vec2 first = projectFrom(p, ring[0]);
+  const uint32_t firstCode = sectors.outcode(first);
+  Vec2 a = first;
+  uint32_t ca = firstCode;
+  bool chain = false;  // a chain of edges outside the light is open: its first point's sweep, its crossings
+  float chainStart = 0.0f;
+  int chainCrossings = 0;
+  auto endChain = [&](const Vec2& q) {
+    float end;
+    if (!sectors.sweep(q, end)) return false;
+    covered -= end - chainStart + sectors.area() * static_cast<float>(chainCrossings);
+    chain = false;
+    return true;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const bool last = i + 1 == n;
+    const Vec2 b = last ? first : projectFrom(p, ring[i + 1]);
+    const uint32_t cb = last ? firstCode : sectors.outcode(b);
+    const int crossing = crossingOfPositiveX(a, b);
+    winding += crossing;
+    if (sectors.outside(a, b, ca, cb)) {
+      if (!chain) {
+        if (!sectors.sweep(a, chainStart)) return false;
+        chain = true;
+        chainCrossings = 0;
+      }
+      chainCrossings += crossing;
+    } else {
+      if (chain && !endChain(a)) return false;
+      covered -= (ca | cb) == 0 ? 0.5f * (a.x * b.y - a.y * b.x) : clippedFanArea(light, a, b);
+    }
+    a = b;
+    ca = cb;
+  }
+  return !chain || endChain(first);
 }
 
 namespace {

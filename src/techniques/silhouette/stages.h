@@ -86,6 +86,7 @@ std::vector<Occluder> makeOccluders(const Scene& scene);
 class OccluderCache {
  public:
   const std::vector<Occluder>& get(const Scene& scene);
+  size_t builds() const { return builds_; }  //!< how many times the occluders were made
 
  private:
   struct Key {
@@ -97,6 +98,7 @@ class OccluderCache {
   std::vector<Key> keys_;  //!< per object of the scene the occluders were made from
   std::vector<Occluder> occluders_;
   bool made_ = false;
+  size_t builds_ = 0;
 };
 
 // The occluder's positions and normals in the light space of `plane`.
@@ -152,17 +154,17 @@ int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d);
 // crosses the polygon's outline is left to clipping.
 class LightSectors {
  public:
-  // From the counter-clockwise polygon (at most 31 vertices); false (and nothing applies) unless the
+  // From the counter-clockwise polygon (at most 32 vertices); false (and nothing applies) unless the
   // origin lies strictly inside it.
   bool build(const std::vector<Vec2>& polygon);
-  bool valid() const { return !vertices_.empty(); }
+  bool valid() const { return !polygon_.empty(); }
   float area() const { return area_; }
   // The edges of the polygon whose outer side q lies on (bit k: beyond edge k -> k + 1's line), every
   // bit where q is not finite. 0: q lies inside or on the boundary. Made once per projected vertex.
   uint32_t outcode(const Vec2& q) const {
     if (!(std::isfinite(q.x) && std::isfinite(q.y))) return ~0u;
     uint32_t code = 0;
-    for (size_t k = 0; k < vertices_.size(); ++k) code |= glm::dot(outward_[k], q) > offset_[k] ? 1u << k : 0u;
+    for (size_t k = 0; k < polygon_.size(); ++k) code |= glm::dot(outward_[k], q) > offset_[k] ? 1u << k : 0u;
     return code;
   }
   // Whether the segment a-b (finite; outcodes ca, cb) lies outside the polygon: beyond one edge's line
@@ -176,9 +178,11 @@ class LightSectors {
   bool sweep(const Vec2& q, float& swept) const;
 
  private:
-  std::vector<Vec2> vertices_, outward_;  //!< from the +x axis's point on the outline; outward_[k]: edge k -> k + 1
-  std::vector<float> offset_;             //!< dot(outward_[k], vertices_[k])
-  std::vector<float> coneArea_, prefix_;  //!< cone k: vertex k's direction to vertex k+1's; prefix_[k]: those before k
+  std::vector<Vec2> polygon_, outward_;  //!< outward_[k]: the outward normal of edge k -> k + 1
+  std::vector<float> offset_;            //!< dot(outward_[k], polygon_[k])
+  std::vector<Vec2> outline_;            //!< the polygon from the point where the +x axis leaves it
+  std::vector<float> coneArea_,
+      prefix_;  //!< cone k: outline_[k]'s direction to outline_[k+1]'s; prefix_[k]: those before k
   float area_ = 0.0f;
 };
 
@@ -189,6 +193,22 @@ inline int crossingOfPositiveX(const Vec2& a, const Vec2& b) {
   if (a.y <= 0.0f) return (b.y > 0.0f && side > 0.0f) ? 1 : 0;
   return (b.y <= 0.0f && side < 0.0f) ? -1 : 0;
 }
+
+// Penumbra wedges' coverage of the light (wedges.cpp). The fan area of a projected edge a-b: the
+// light's area inside the triangle (0, a, b), signed by the triangle's orientation, by clipping the
+// (convex, counter-clockwise) light polygon to the triangle: exact for any convex light.
+float clippedFanArea(const std::vector<Vec2>& light, const Vec2& a, const Vec2& b);
+// A closed ring of n light-space points (nearer the light than p) projected from p: minus the sum of
+// its edges' fan areas in `covered` (rings run counter-clockwise seen from the centre, clockwise in
+// (x, y)) and its winding around the light's centre. Every fan area by clipping.
+void ringFansByClipping(const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring, size_t n, float& covered,
+                        int& winding);
+// The same, with most fan areas read off the light's sectors: an edge inside the light gives its own
+// triangle; a chain of consecutive edges outside it gives its ends' sweeps and its crossings of the
+// +x axis; only edges crossing the light's outline are clipped. False where a chain ends at a point
+// without a direction (then ringFansByClipping applies).
+bool ringFansBySectors(const LightSectors& sectors, const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring,
+                       size_t n, float& covered, int& winding);
 
 // A uniform grid over a rectangle of u-space whose cells list the items whose boxes overlap them,
 // in item order.

@@ -70,95 +70,6 @@ namespace {
 
 using namespace silhouette;
 
-// Area of the convex polygon `poly` (counter-clockwise) clipped to the triangle (0, a, b),
-// signed by the triangle's orientation: exact for any convex light.
-float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
-  const float cross = a0.x * b0.y - a0.y * b0.x;
-  if (cross == 0.0f) return 0.0f;
-  const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
-  std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
-  int n = static_cast<int>(poly.size());
-  std::copy(poly.begin(), poly.end(), bufA.begin());
-  // Inside of the counter-clockwise triangle (0, a, b): left of 0->a, a->b, b->0.
-  const Vec2 corners[3] = {Vec2(0.0f), a, b};
-  Vec2* in = bufA.data();
-  Vec2* out = bufB.data();
-  for (int e = 0; e < 3 && n > 0; ++e) {
-    const Vec2 s = corners[e], t = corners[(e + 1) % 3];
-    const Vec2 nOut(t.y - s.y, s.x - t.x);  // right normal: outside
-    n = clipHalfPlane(in, n, out, nOut, glm::dot(nOut, s));
-    std::swap(in, out);
-  }
-  float twice = 0.0f;
-  for (int i = 0; i < n; ++i) {
-    const Vec2 &p = in[i], &q = in[(i + 1) % n];
-    twice += p.x * q.y - p.y * q.x;
-  }
-  return (cross > 0.0f ? 0.5f : -0.5f) * twice;
-}
-
-// A ring's projected edges from p: minus the sum of their fan areas (rings run counter-clockwise seen
-// from the centre, clockwise in (x, y)) in `covered`, and the ring's winding around the centre.
-// Every fan area by clipping.
-void fansByClipping(const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring, size_t n, float& covered,
-                    int& winding) {
-  covered = 0.0f;
-  winding = 0;
-  const Vec2 first = projectFrom(p, ring[0]);
-  Vec2 a = first;
-  for (size_t i = 0; i < n; ++i) {
-    const Vec2 b = i + 1 < n ? projectFrom(p, ring[i + 1]) : first;
-    covered -= clippedFanArea(light, a, b);
-    winding += crossingOfPositiveX(a, b);
-    a = b;
-  }
-}
-
-// The same, with most fan areas read off the light's sectors (LightSectors): an edge inside the light
-// gives its own triangle; a chain of consecutive edges outside it gives its ends' sweeps and its
-// crossings of the +x axis; only edges crossing the light's outline are clipped. False where a chain
-// ends at a point without a direction (then fansByClipping applies).
-bool fansBySectors(const LightSectors& sectors, const std::vector<Vec2>& light, const Vec3& p, const Vec3* ring,
-                   size_t n, float& covered, int& winding) {
-  covered = 0.0f;
-  winding = 0;
-  const Vec2 first = projectFrom(p, ring[0]);
-  const uint32_t firstCode = sectors.outcode(first);
-  Vec2 a = first;
-  uint32_t ca = firstCode;
-  bool chain = false;  // a chain of edges outside the light is open: its first point's sweep, its crossings
-  float chainStart = 0.0f;
-  int chainCrossings = 0;
-  auto endChain = [&](const Vec2& q) {
-    float end;
-    if (!sectors.sweep(q, end)) return false;
-    covered -= end - chainStart + sectors.area() * static_cast<float>(chainCrossings);
-    chain = false;
-    return true;
-  };
-  for (size_t i = 0; i < n; ++i) {
-    const bool last = i + 1 == n;
-    const Vec2 b = last ? first : projectFrom(p, ring[i + 1]);
-    const uint32_t cb = last ? firstCode : sectors.outcode(b);
-    const int crossing = crossingOfPositiveX(a, b);
-    winding += crossing;
-    if (sectors.outside(a, b, ca, cb)) {
-      if (!chain) {
-        if (!sectors.sweep(a, chainStart)) return false;
-        chain = true;
-        chainCrossings = 0;
-      }
-      chainCrossings += crossing;
-    } else {
-      if (chain && !endChain(a)) return false;
-      covered -= (ca | cb) == 0 ? 0.5f * (a.x * b.y - a.y * b.x) : clippedFanArea(light, a, b);
-    }
-    a = b;
-    ca = cb;
-  }
-  return !chain || endChain(first);
-}
-
 struct WedgeRing {
   uint32_t first = 0, count = 0;  //!< its vertices in order: Side::vertices[first, first + count), light space
   int32_t objectId = 0;
@@ -366,8 +277,8 @@ class WedgesTechnique final : public ShadowTechnique {
       if (n < 3) continue;
       float covered = 0.0f;
       int winding = 0;  // around the light's centre, the origin of the light plane
-      if (!(side.sectors.valid() && fansBySectors(side.sectors, side.plane.vertices, p, ring, n, covered, winding)))
-        fansByClipping(side.plane.vertices, p, ring, n, covered, winding);
+      if (!(side.sectors.valid() && ringFansBySectors(side.sectors, side.plane.vertices, p, ring, n, covered, winding)))
+        ringFansByClipping(side.plane.vertices, p, ring, n, covered, winding);
       // covered = area * (the ring's hidden windings at the centre, -winding) + its wedge corrections.
       if (cut) covered += side.plane.area * (static_cast<float>(winding) + (blocker() == r.objectId ? 1.0f : 0.0f));
       if (r.occluder != current) {
