@@ -4,7 +4,8 @@
 // Light::convexParts (the fewest convex pieces bounded by its edges and diagonals:
 // penumbra/planar_polygon.h says how and why), one instance of the technique is prepared per piece,
 // each piece a polygon light of its own (its centroid its centre sample, its own silhouettes and
-// edge shadows), and their visibilities are combined by area:
+// edge shadows; the instances of ssv and wedges share the scene's occluders, stages.h's
+// OccluderCache), and their visibilities are combined by area:
 //     V = sum_i A_i V_i / sum_i A_i,
 // exact whenever each V_i is, because V is the visible fraction of the emitting area and the pieces
 // tile it without overlap. A pixel every piece leaves fully lit (or fully hidden) keeps V = 1 (0)

@@ -262,7 +262,9 @@ struct Side {
 
 class SsvTechnique final : public ShadowTechnique {
  public:
-  explicit SsvTechnique(const SsvOptions& options) : options_(options) {}
+  // `occluders`: shared by the instances that run the parts of one concave light (convex_parts.h).
+  SsvTechnique(const SsvOptions& options, std::shared_ptr<OccluderCache> occluders)
+      : options_(options), occluderCache_(std::move(occluders)) {}
   std::string_view name() const override { return "ssv"; }
 
  private:
@@ -273,7 +275,7 @@ class SsvTechnique final : public ShadowTechnique {
     sides_[1] = Side{};
     sides_[0].plane = makeLightPlane(light, bounds, "ssv");
     sides_[1].plane = makeLightPlane(light, bounds, "ssv", true);
-    occluders_ = &occluderCache_.get(scene);  // made again only when the geometry changed
+    occluders_ = &occluderCache_->get(scene);  // made again only when the geometry changed
     rays_ = nullptr;
     rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
@@ -1007,7 +1009,7 @@ class SsvTechnique final : public ShadowTechnique {
   }
 
   SsvOptions options_;
-  OccluderCache occluderCache_;
+  std::shared_ptr<OccluderCache> occluderCache_;
   const std::vector<Occluder>* occluders_ = nullptr;  //!< occluderCache_'s
   bool backBuilt_ = false;
   RaySceneCache raysCache_;
@@ -1026,7 +1028,9 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const SsvOptions& o) {
   validateOptions("ssv", o);
 
   // A concave light runs as its convex parts, V combined by area (Section 5.2.5; convex_parts.h).
-  return overConvexParts("ssv", [o] { return std::make_unique<SsvTechnique>(o); });
+  return overConvexParts("ssv", [o, occluders = std::make_shared<OccluderCache>()] {
+    return std::make_unique<SsvTechnique>(o, occluders);
+  });
 }
 
 TechniqueInfo ssvTechniqueInfo() {

@@ -94,7 +94,9 @@ struct Side {
 
 class WedgesTechnique final : public ShadowTechnique {
  public:
-  explicit WedgesTechnique(const WedgesOptions& options) : grid_(options.grid) {}
+  // `occluders`: shared by the instances that run the parts of one concave light (convex_parts.h).
+  WedgesTechnique(const WedgesOptions& options, std::shared_ptr<OccluderCache> occluders)
+      : grid_(options.grid), occluderCache_(std::move(occluders)) {}
   std::string_view name() const override { return "wedges"; }
 
  private:
@@ -108,7 +110,7 @@ class WedgesTechnique final : public ShadowTechnique {
       sides_[back].plane = makeLightPlane(light, bounds, "wedges", back == 1);
       sides_[back].sectors.build(sides_[back].plane.vertices);
     }
-    occluders_ = &occluderCache_.get(scene);  // made again only when the geometry changed
+    occluders_ = &occluderCache_->get(scene);  // made again only when the geometry changed
     rays_ = nullptr;
     rays_ = &raysCache_.get(scene);  // built when the geometry changed, else kept
     light_ = light;
@@ -292,7 +294,7 @@ class WedgesTechnique final : public ShadowTechnique {
   }
 
   int grid_;
-  OccluderCache occluderCache_;
+  std::shared_ptr<OccluderCache> occluderCache_;
   const std::vector<Occluder>* occluders_ = nullptr;  //!< occluderCache_'s
   bool backBuilt_ = false;
   RaySceneCache raysCache_;
@@ -311,7 +313,9 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const WedgesOptions& o) {
   validateOptions("wedges", o);
 
   // A concave light runs as its convex parts, V combined by area (convex_parts.h).
-  return overConvexParts("wedges", [o] { return std::make_unique<WedgesTechnique>(o); });
+  return overConvexParts("wedges", [o, occluders = std::make_shared<OccluderCache>()] {
+    return std::make_unique<WedgesTechnique>(o, occluders);
+  });
 }
 
 TechniqueInfo wedgesTechniqueInfo() {
