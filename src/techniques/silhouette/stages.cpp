@@ -101,10 +101,6 @@ int clipHalfPlane(const Vec2* in, int count, Vec2* out, const Vec2& n, float d) 
   return m;
 }
 
-namespace {
-float cross2(const Vec2& a, const Vec2& b) { return a.x * b.y - a.y * b.x; }
-}  // namespace
-
 bool LightSectors::build(const std::vector<Vec2>& polygon) {
   *this = LightSectors{};
   const size_t n = polygon.size();
@@ -181,7 +177,7 @@ bool LightSectors::sweep(const Vec2& q, float& swept) const {
 }
 
 float clippedFanArea(const std::vector<Vec2>& poly, const Vec2& a0, const Vec2& b0) {
-  const float cross = a0.x * b0.y - a0.y * b0.x;
+  const float cross = cross2(a0, b0);
   if (cross == 0.0f) return 0.0f;
   const Vec2 a = cross > 0.0f ? a0 : b0, b = cross > 0.0f ? b0 : a0;
   std::array<Vec2, kMaxLightVertices + 4> bufA, bufB;
@@ -252,7 +248,7 @@ bool ringFansBySectors(const LightSectors& sectors, const std::vector<Vec2>& lig
       chainCrossings += crossing;
     } else {
       if (chain && !endChain(a)) return false;
-      covered -= (ca | cb) == 0 ? 0.5f * (a.x * b.y - a.y * b.x) : clippedFanArea(light, a, b);
+      covered -= (ca | cb) == 0 ? 0.5f * cross2(a, b) : clippedFanArea(light, a, b);
     }
     a = b;
     ca = cb;

@@ -186,10 +186,14 @@ class LightSectors {
   float area_ = 0.0f;
 };
 
+// The z component of the cross product of a and b: twice the signed area of the triangle (0, a, b),
+// positive where b lies counter-clockwise of a.
+inline float cross2(const Vec2& a, const Vec2& b) { return a.x * b.y - a.y * b.x; }
+
 // The signed crossing of segment a-b with the +x axis from the origin (the winding number's rule,
 // Sunday 2001): +1 upward with the origin on its left, -1 downward with it on its right.
 inline int crossingOfPositiveX(const Vec2& a, const Vec2& b) {
-  const float side = a.x * b.y - a.y * b.x;
+  const float side = cross2(a, b);
   if (a.y <= 0.0f) return (b.y > 0.0f && side > 0.0f) ? 1 : 0;
   return (b.y <= 0.0f && side < 0.0f) ? -1 : 0;
 }

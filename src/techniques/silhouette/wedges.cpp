@@ -239,10 +239,11 @@ class WedgesTechnique final : public ShadowTechnique {
     for (const uint32_t* it = begin; it != end; ++it) {
       const WedgeRing& r = side.rings[*it];
       if (r.sheet && r.objectId == objectId) continue;
+      // Whether the ring lies wholly within the depths zNear <= z <= zMax (uncut).
+      const bool within = !r.crossesNear && r.zMax <= zMax;
       // A ring within the depths none of whose edges' wedges reach p covers nothing of the light:
       // all its edges project outside the light, winding around the centre zero times.
-      if (!r.crossesNear && r.zMax <= zMax && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z))
-        continue;
+      if (within && beyondEdgeShadows(side.plane, r.uLower, r.uUpper, r.zMin, u, p.z)) continue;
       // The ring as a closed polygon clipped to zNear <= z <= zMax (Sutherland-Hodgman): where the
       // silhouette passes beyond p's depth (p on or beside the occluder), the cut is closed along
       // the plane just in front of p, whose projection runs far outside the light, as the part of
@@ -252,7 +253,7 @@ class WedgesTechnique final : public ShadowTechnique {
       const Vec3* ring = side.vertices.data() + r.first;
       size_t n = r.count;
       bool cut = false;
-      if (r.crossesNear || !(r.zMax <= zMax)) {
+      if (!within) {
         clipped.assign(ring, ring + n);
         for (const float bound : {zNear_, zMax}) {
           const bool low = bound == zNear_;
