@@ -427,11 +427,53 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     RibbonTexel winners[kTile * kTile];
     float spanU[kTile], spanC[kTile], spanDistance[kTile], spanP[kTile];
     uint8_t spanOuter[kTile];
+    // Each row's greatest priority (never below it: priorities only fall) and the tile's.
+    float rowMax[kTile];
+    std::vector<std::pair<float, uint32_t>> order;
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
+      const int tileWidth = std::min(kTile, mapSize - ti * kTile), tileHeight = std::min(kTile, mapSize - tj * kTile);
       std::fill(priority, priority + kTile * kTile, kInfinity);
       std::fill(winners, winners + kTile * kTile, kNoRibbon);
-      for (uint32_t k : bins[static_cast<size_t>(tile)]) {
+      std::fill(rowMax, rowMax + kTile, kInfinity);
+      float tileMax = kInfinity;
+      bool tileMaxStale = false;
+      // Where outer sides are wanted the tile's edges go in the order of the least priority each
+      // can give in it (c at least its lesser end's, the distance at least the tile's texel centres'
+      // to the segment's bounding box, lowered by least()'s margins below), so that the nearest
+      // ribbons claim the texels first and the spans of the rest are trimmed to little or nothing;
+      // once every texel is won more cheaply than the next edge can give, the tile is done. Inner
+      // sides alone (kirsch) leave most of a tile unclaimed, outside the footprints, and there the
+      // order and its upkeep cost more than they saved: those edges go in index order. Which edge
+      // wins a texel does not depend on the order: the least priority, then the lowest index (the
+      // compares below).
+      const std::vector<uint32_t>& bin = bins[static_cast<size_t>(tile)];
+      const bool ordered = wantOuter;
+      if (ordered) {
+        order.clear();
+        const float x0 = static_cast<float>(ti * kTile) + 0.5f, x1 = x0 + static_cast<float>(tileWidth - 1);
+        const float y0 = static_cast<float>(tj * kTile) + 0.5f, y1 = y0 + static_cast<float>(tileHeight - 1);
+        const float rateFloor = space.ratePerTexel * (1.0f - 1e-5f);
+        for (uint32_t k : bin) {
+          const Edge& e = edges[k];
+          const float dx = std::max({0.0f, std::min(e.a.x, e.b.x) - x1, x0 - std::max(e.a.x, e.b.x)});
+          const float dy = std::max({0.0f, std::min(e.a.y, e.b.y) - y1, y0 - std::max(e.a.y, e.b.y)});
+          const float distance = std::sqrt(dx * dx + dy * dy);
+          const float cLeast = std::min(e.zetaA, e.zetaB);
+          const float cFloor = cLeast - 1e-5f * std::abs(cLeast);
+          order.emplace_back(cFloor + std::max(distance - 0.01f - 1e-5f * distance, 0.0f) * rateFloor, k);
+        }
+        std::sort(order.begin(), order.end());
+      }
+      for (size_t q = 0; q < bin.size(); ++q) {
+        const uint32_t k = ordered ? order[q].second : bin[q];
+        if (ordered) {
+          if (tileMaxStale) {
+            tileMax = *std::max_element(rowMax, rowMax + tileHeight);
+            tileMaxStale = false;
+          }
+          if (tileMax <= order[q].first) break;  // nothing left in the tile that this edge or a later one can take
+        }
         const Edge& e = edges[k];
         const Box& box = boxes[k];
         const Vec2 d = e.b - e.a;
@@ -460,6 +502,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           const float y = static_cast<float>(j) + 0.5f;
           const float dy = std::max({0.0f, yLo - y, y - yHi});
           if (dy > h + 1.0f) continue;
+          if (ordered && rowMax[j - tj * kTile] <= least(dy, 0.0f)) continue;  // the row is won more cheaply
           const float reach = std::sqrt(std::max(h * h - dy * dy, 0.0f));
           float spanLo = xLo - reach, spanHi = xHi + reach;
           if (std::abs(e.outward.x) > 1e-3f) {
@@ -547,6 +590,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const __m128 belowEdge = _mm_set1_ps(kBelowEdge), minusOne = _mm_set1_ps(-1.0f);
             const __m128 orthographic = _mm_castsi128_ps(_mm_set1_epi32(space.orthographic ? -1 : 0));
             const __m128i objectId = _mm_set1_epi32(e.objectId);
+            const __m128 tiesWanted = _mm_castsi128_ps(_mm_set1_epi32(ordered ? -1 : 0));
             for (; m + 4 <= count; m += 4) {
               const __m128 qx =
                   _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
@@ -584,9 +628,11 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
                 const __m128 above = _mm_and_ps(finite, _mm_cmplt_ps(topZeta, c));
                 kept = _mm_andnot_ps(_mm_and_ps(outer, above), kept);
               }
-              const __m128 take = _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
-                                                        _mm_cmplt_ps(p, _mm_loadu_ps(prio + m))),
-                                             kept);
+              const __m128 take =
+                  _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
+                                        _mm_or_ps(_mm_cmplt_ps(p, _mm_loadu_ps(prio + m)),
+                                                  _mm_and_ps(tiesWanted, _mm_cmpeq_ps(p, _mm_loadu_ps(prio + m))))),
+                             kept);
               _mm_storeu_ps(spanU + m, u);
               _mm_storeu_ps(spanC + m, c);
               _mm_storeu_ps(spanDistance + m, distance);
@@ -619,16 +665,20 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
             const bool kept = (outer || ownObject) && farRow[m] > c + kBelowEdge * std::abs(c) &&
                               !(topRow && outer && above(topRow[m]));
-            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) && p < prio[m] && kept;
+            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) &&
+                              (p < prio[m] || (ordered && p == prio[m])) && kept;
             spanU[m] = u;
             spanC[m] = c;
             spanDistance[m] = distance;
             spanP[m] = take ? p : kInfinity;
             spanOuter[m] = outer ? 1 : 0;
           }
+          bool took = false;
           for (int m = 0; m < count; ++m) {
-            if (!(spanP[m] < prio[m])) continue;
             const int i = si0 + m;
+            if (!(spanP[m] < kInfinity)) continue;  // not taken by the pass above
+            // A tie goes to the lower index, as in index order, where the first to come keeps it.
+            if (spanP[m] == prio[m] && static_cast<int32_t>(k) > row[i - ti * kTile].edge) continue;
             const float u = spanU[m], c = spanC[m], distance = spanDistance[m], p = spanP[m];
             const bool outer = spanOuter[m] != 0;
             const Image<int32_t>* coverage = filter.coverage;
@@ -645,10 +695,15 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             }
             prio[m] = p;
             row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, static_cast<int32_t>(k)};
+            took = true;
+          }
+          if (ordered && took) {
+            const float* rowPriority = priority + (j - tj * kTile) * kTile;
+            rowMax[j - tj * kTile] = *std::max_element(rowPriority, rowPriority + tileWidth);
+            tileMaxStale = true;
           }
         }
       }
-      const int tileWidth = std::min(kTile, mapSize - ti * kTile);
       for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
         const RibbonTexel* from = winners + (j - tj * kTile) * kTile;
         RibbonTexel* to = out.row(j) + ti * kTile;

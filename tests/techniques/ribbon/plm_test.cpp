@@ -153,9 +153,9 @@ TEST(Plm, RefusesSegmentLightsNamingTheShape) {
 
 // The ribbons of plm.h by their definition alone: every edge, in list order, at every texel within
 // its width of it, through every filter, the least priority winning (ties to the first edge) — no
-// tiles, no edges skipped ahead of the texels, no trimmed rows, no vector pass. The same operations
-// in the same order as rasterizeRibbons' scalar path (both files are built without fused
-// multiply-add), so the two agree to the bit.
+// tiles, no edges reordered or skipped ahead of the texels, no trimmed or skipped rows, no vector pass. The same
+// operations in the same order as rasterizeRibbons' scalar path (both files are built without fused multiply-add), so
+// the two agree to the bit.
 Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, const plm::Space& space, int n,
                                           plm::RibbonSides sides, float margin, const plm::RibbonFilter& filter,
                                           const Image<float>& farthest) {
