@@ -73,8 +73,10 @@
 //    the hard shadow of a shadow-volume pass gives): the object hides the centre when the first
 //    thing the ray meets is the object. The ray sees the object, not one of its silhouettes: the
 //    object's outlines (penumbra and umbra silhouettes) are flipped only where together they
-//    disagree with it; the straddled walls' silhouette below, and a cut silhouette with no edge
-//    shadow on the light, follow it each (SsvTechnique::fixCutSides says why). Elsewhere no ray is
+//    disagree with it; the straddled walls' silhouette below follows it alone, and a cut outline
+//    with no edge shadow on the light, which hides all of the light or none, is decided by the
+//    centre's ray where it would hide the centre and by rays to points the rest leaves visible
+//    where it would hide nothing (SsvTechnique::fixCutSides says why). Elsewhere no ray is
 //    traced: the curves and the angle sweep agree with the projection to the last bit, a
 //    ray would not.
 //  - Receivers behind the light's plane are handled in the light space of its other face (planar
@@ -114,6 +116,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -197,6 +200,7 @@ struct GroupRun {
 // Per-thread buffers of the per-pixel pass.
 struct Scratch {
   std::vector<GroupRun> runs;
+  std::vector<int32_t> undecided;  //!< objects whose cut outline hides all of the light or none (fixCutSides)
   std::vector<Vec3> loop, tmp;
   std::vector<int32_t> loopEdge, tmpEdge;
   std::vector<Approximant> approximants;
@@ -260,6 +264,16 @@ struct Side {
   bool binned = false;
 };
 
+// What the per-pixel pass asks the ray tracer: the object that first meets the ray from the pixel
+// to the light's centre (traced once if asked), and to a given point of the light.
+template <typename Centre, typename Toward>
+struct Blockers {
+  Centre centre;
+  Toward toward;
+};
+template <typename Centre, typename Toward>
+Blockers(Centre, Toward) -> Blockers<Centre, Toward>;
+
 class SsvTechnique final : public ShadowTechnique {
  public:
   // `occluders`: shared by the instances that run the parts of one concave light (convex_parts.h).
@@ -310,13 +324,18 @@ class SsvTechnique final : public ShadowTechnique {
           const Vec3 front = sides_[0].plane.lsFromWs(wsP);
           const Side& side = sides_[front.z > 0.0f ? 0 : 1];
           const Vec3 p = front.z > 0.0f ? front : side.plane.lsFromWs(wsP);
-          // The object that hides the light's centre from p (kNoObject: none), traced once if needed.
+          // The object that hides the light's centre from p (kNoObject: none), traced once if needed,
+          // and the one that hides a given point of the light (world space).
           std::optional<int32_t> centreBlocker;
-          auto blocker = [&]() {
-            if (!centreBlocker) centreBlocker = silhouette::centreBlockerAt(*rays_, *light_, gbuffer, x, y, epsilon_);
-            return *centreBlocker;
-          };
-          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blocker);
+          Blockers blockers{[&]() {
+                              if (!centreBlocker)
+                                centreBlocker = silhouette::centreBlockerAt(*rays_, *light_, gbuffer, x, y, epsilon_);
+                              return *centreBlocker;
+                            },
+                            [&](const Vec3& wsLightPoint) {
+                              return silhouette::blockerToward(*rays_, *light_, gbuffer, x, y, wsLightPoint, epsilon_);
+                            }};
+          v(x, y) = visibilityAt(side, p, gbuffer.objectId(x, y), scratch, blockers);
         }
     });
   }
@@ -548,9 +567,16 @@ class SsvTechnique final : public ShadowTechnique {
   // it either way, which adds or removes one winding everywhere on the square. Which side is hidden
   // is then fixed by whether the object hides the light's centre from p: one ray, what the hard
   // shadow of a shadow-volume pass gives. A silhouette that disagrees with it is flipped:
-  //  - a cut silhouette whose winding is the same over the whole square (only loops: no edge shadow
-  //    contains p) says nothing but hidden or not, and follows the ray; so does the straddled
-  //    walls' silhouette (header), which counts walls rather than outlining the object;
+  //  - the straddled walls' silhouette (header), which counts walls rather than outlining the
+  //    object, follows the ray;
+  //  - a cut outline whose winding is the same over the whole square (only loops: no edge shadow
+  //    contains p) hides all of the light or none. Where it would hide all and the ray sees the
+  //    centre, it hides none. Where it would hide none and the ray meets the object, the ray
+  //    cannot tell it from the other outlines when they hide the centre themselves (p on the ground
+  //    beside a box standing on it: the cut umbra silhouette leaves the light alone and the
+  //    penumbra silhouette hides part of it, the centre included); then rays to points the others
+  //    leave visible decide (undecidedHideAll). Taking the ray for it hid the whole light along
+  //    the foot of every flat-based model fitted onto the ground;
   //  - the object's outlines (its penumbra and umbra silhouettes) are flipped only where together
   //    they disagree with the ray. The ray sees the object, not one outline: outlines compete, and
   //    in a penumbra on the object one may leave the centre visible (its curve cutting the square
@@ -558,15 +584,15 @@ class SsvTechnique final : public ShadowTechnique {
   //    on single pixels.
   // Whether a silhouette hides the centre is its rings' projections' winding, not its curve's: an
   // approximant may pass the centre on the other side than its projected edge, in the penumbra.
-  template <typename Blocker>
-  static void fixCutSides(const Side& side, Scratch& s, size_t begin, size_t end, Blocker& blocker) {
+  template <typename Blockers>
+  static void fixCutSides(const Side& side, Scratch& s, size_t begin, size_t end, Blockers& blockers) {
     bool anyCut = false, anyOutline = false;
     for (size_t k = begin; k < end; ++k) {
       anyCut = anyCut || s.runs[k].cut;
       anyOutline = anyOutline || !side.groups[s.runs[k].group].straddled;
     }
     if (!anyCut) return;
-    const bool hidesCentre = blocker() == s.runs[begin].objectId;
+    const bool hidesCentre = blockers.centre() == s.runs[begin].objectId;
     // A loop goes right after the run's pieces (a group's pieces stay consecutive for
     // hiddenCells), moving those of the runs after it.
     auto flip = [&](size_t k) {
@@ -584,10 +610,23 @@ class SsvTechnique final : public ShadowTechnique {
     auto outline = [&](size_t k) { return anyOutline && !side.groups[s.runs[k].group].straddled; };
     bool outlinesHide = false;
     for (size_t k = begin; k < end; ++k) {
-      if (disagrees(k) && (!outline(k) || onlyLoops(s, s.runs[k]))) flip(k);
+      // An outline with only loops that hides the centre hides all of the light: where the ray sees
+      // the centre, it hides none.
+      if (disagrees(k) && (!outline(k) || (onlyLoops(s, s.runs[k]) && !hidesCentre))) flip(k);
       if (outline(k)) outlinesHide = outlinesHide || s.runs[k].centreWinding != 0;
     }
-    if (outlinesHide == hidesCentre) return;
+    if (outlinesHide == hidesCentre) {
+      // The other outlines hide the centre, as the ray says; one with only loops that hides nothing
+      // may still hide all of the light (p in the umbra on its object) or nothing (p on the ground
+      // beside a box standing on it, its bottom face in p's plane): the centre cannot tell. A second
+      // ray decides, towards a point of the light the rest leaves visible (visibilityAt).
+      for (size_t k = begin; k < end; ++k)
+        if (outline(k) && disagrees(k) && onlyLoops(s, s.runs[k])) {
+          s.undecided.push_back(s.runs[k].objectId);
+          break;
+        }
+      return;
+    }
     for (size_t k = begin; k < end; ++k)
       if (outline(k) && disagrees(k)) flip(k);
   }
@@ -880,8 +919,8 @@ class SsvTechnique final : public ShadowTechnique {
     }
   }
 
-  template <typename Blocker>
-  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, Scratch& s, Blocker& blocker) const {
+  template <typename Blockers>
+  float visibilityAt(const Side& side, const Vec3& p, int32_t objectId, Scratch& s, Blockers& blockers) const {
     if (!side.binned || !(p.z > zNear_)) return 1.0f;
     const Vec2 u(p.x / p.z, p.y / p.z);
     // The rings to combine: those with an edge shadow that may contain p (the edge grid), and
@@ -907,6 +946,7 @@ class SsvTechnique final : public ShadowTechnique {
     s.pieces.clear();
     const float zMax = p.z * (1.0f - 1e-4f);
     s.runs.clear();
+    s.undecided.clear();
     for (size_t i = 0; i < s.rings.size();) {
       // The rings of one group bound one facet set: their windings add.
       const uint32_t group = side.rings[s.rings[i]].group;
@@ -930,7 +970,7 @@ class SsvTechnique final : public ShadowTechnique {
     for (size_t begin = 0; begin < s.runs.size();) {
       size_t end = begin + 1;
       while (end < s.runs.size() && s.runs[end].objectId == s.runs[begin].objectId) ++end;
-      fixCutSides(side, s, begin, end, blocker);
+      fixCutSides(side, s, begin, end, blockers);
       begin = end;
     }
     // A silhouette none of whose edge shadows contains p and that winds around the square hides
@@ -991,7 +1031,36 @@ class SsvTechnique final : public ShadowTechnique {
       for (const uint8_t h : s.hidden) count += !h;
       visible = double(count) / (n * n);
     }
+    if (visible > 0.0 && !s.undecided.empty() && undecidedHideAll(side, s, blockers)) return 0.0f;
     return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
+  }
+
+  // Whether the undecided outlines of fixCutSides hide all of the light: whether their objects hide
+  // every point the rest leaves visible, tested at the visible cells (s.hidden) farthest along each
+  // axis of the light square, one ray each. Where they hide all of the light, they hide these;
+  // where they hide none, the rest's approximants may still be off by a little near their curves
+  // (a corner of the box whose face the rest does not outline), so one blocked point is not enough.
+  template <typename Blockers>
+  static bool undecidedHideAll(const Side& side, const Scratch& s, Blockers& blockers) {
+    const size_t nx = s.cx.size();
+    size_t extreme[4] = {SIZE_MAX, SIZE_MAX, SIZE_MAX, SIZE_MAX};  // least and greatest x, least and greatest y
+    for (size_t i = 0; i < s.hidden.size(); ++i) {
+      if (s.hidden[i]) continue;
+      const size_t ix = i % nx, iy = i / nx;
+      if (extreme[0] == SIZE_MAX || ix < extreme[0] % nx) extreme[0] = i;
+      if (extreme[1] == SIZE_MAX || ix > extreme[1] % nx) extreme[1] = i;
+      if (extreme[2] == SIZE_MAX || iy < extreme[2] / nx) extreme[2] = i;
+      if (extreme[3] == SIZE_MAX || iy > extreme[3] / nx) extreme[3] = i;
+    }
+    for (int k = 0; k < 4; ++k) {
+      const size_t i = extreme[k];
+      if (i == SIZE_MAX) return false;
+      if (std::find(extreme, extreme + k, i) != extreme + k) continue;  // tested already
+      const Vec2 q = side.plane.lower + Vec2(s.cx[i % nx], s.cy[i / nx]) / side.squareScale;
+      const int32_t hit = blockers.toward(side.plane.wsOrigin + side.plane.lsFrame.fromLocal(Vec3(q, 0.0f)));
+      if (std::find(s.undecided.begin(), s.undecided.end(), hit) == s.undecided.end()) return false;
+    }
+    return true;
   }
 
   // The fraction of the light's area on the visible side of the line dot(x, m) = offset (the exact

@@ -410,6 +410,17 @@ int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer&
   return hit ? hit->objectId : kNoObject;
 }
 
+int32_t blockerToward(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y,
+                      const Vec3& wsLightPoint, float epsilon) {
+  const Vec3 wsP = gbuffer.wsPosition(x, y);
+  const Vec3 wsOrigin = rt::offsetOrigin(light, wsP, gbuffer.wsGeometricNormal(x, y), epsilon);
+  const Vec3 toLight = wsLightPoint - wsP;
+  const float distance = glm::length(toLight);
+  if (!(distance > 0.0f)) return kNoObject;
+  const std::optional<RayHit> hit = rays.intersect(rt::shadowRay(wsP, wsOrigin, toLight / distance, distance, epsilon));
+  return hit ? hit->objectId : kNoObject;
+}
+
 }  // namespace silhouette
 
 }  // namespace penumbra

@@ -255,5 +255,8 @@ std::vector<float> receiverCellFar(const GBuffer& gbuffer, const LightPlane& pla
 // offset and clipped as raytraced-hard's. ssv and wedges trace it only where their silhouettes
 // cannot tell which side of their curves is hidden.
 int32_t centreBlockerAt(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y, float epsilon);
+// The same towards the point wsLightPoint of the light (the origin offset as above).
+int32_t blockerToward(const RayScene& rays, const Light& light, const GBuffer& gbuffer, int x, int y,
+                      const Vec3& wsLightPoint, float epsilon);
 
 }  // namespace penumbra::silhouette
