@@ -73,10 +73,10 @@
 //    the hard shadow of a shadow-volume pass gives): the object hides the centre when the first
 //    thing the ray meets is the object. The ray sees the object, not one of its silhouettes: the
 //    object's outlines (penumbra and umbra silhouettes) are flipped only where together they
-//    disagree with it; the straddled walls' silhouette below follows it alone, and a cut outline
-//    with no edge shadow on the light, which hides all of the light or none, is decided by the
-//    centre's ray where it would hide the centre and by rays to points the rest leaves visible
-//    where it would hide nothing (SsvTechnique::fixCutSides says why). Elsewhere no ray is
+//    disagree with it; the straddled walls' silhouette below, and a cut outline with no edge shadow
+//    on the light (it hides all of the light or none), follow it alone, except where they leave
+//    the centre visible while another silhouette of the object hides it: there rays to points the
+//    rest leaves visible decide (SsvTechnique::fixCutSides says why). Elsewhere no ray is
 //    traced: the curves and the angle sweep agree with the projection to the last bit, a
 //    ray would not.
 //  - Receivers behind the light's plane are handled in the light space of its other face (planar
@@ -193,14 +193,15 @@ struct GroupRun {
   uint32_t group;
   int32_t objectId;
   size_t firstPiece, endPiece;
-  int centreWinding;  //!< of its rings' projections around the light's centre
-  bool cut;           //!< its facet set reaches beyond p or behind the light's plane
+  int centreWinding;       //!< of its rings' projections around the light's centre
+  bool cut;                //!< its facet set reaches beyond p or behind the light's plane
+  bool undecided = false;  //!< fixCutSides' scratch: hides all of the light or none, the centre's ray cannot tell
 };
 
 // Per-thread buffers of the per-pixel pass.
 struct Scratch {
   std::vector<GroupRun> runs;
-  std::vector<int32_t> undecided;  //!< objects whose cut outline hides all of the light or none (fixCutSides)
+  std::vector<size_t> undecided;  //!< runs whose hidden side the centre's ray cannot tell (fixCutSides)
   std::vector<Vec3> loop, tmp;
   std::vector<int32_t> loopEdge, tmpEdge;
   std::vector<Approximant> approximants;
@@ -568,20 +569,21 @@ class SsvTechnique final : public ShadowTechnique {
   // is then fixed by whether the object hides the light's centre from p: one ray, what the hard
   // shadow of a shadow-volume pass gives. A silhouette that disagrees with it is flipped:
   //  - the straddled walls' silhouette (header), which counts walls rather than outlining the
-  //    object, follows the ray;
-  //  - a cut outline whose winding is the same over the whole square (only loops: no edge shadow
-  //    contains p) hides all of the light or none. Where it would hide all and the ray sees the
-  //    centre, it hides none. Where it would hide none and the ray meets the object, the ray
-  //    cannot tell it from the other outlines when they hide the centre themselves (p on the ground
-  //    beside a box standing on it: the cut umbra silhouette leaves the light alone and the
-  //    penumbra silhouette hides part of it, the centre included); then rays to points the others
-  //    leave visible decide (undecidedHideAll). Taking the ray for it hid the whole light along
-  //    the foot of every flat-based model fitted onto the ground;
+  //    object, and a cut outline whose winding is the same over the whole square (only loops: no
+  //    edge shadow contains p, so it hides all of the light or none) follow the ray where it sees
+  //    the centre. Where the ray meets the object and they leave the centre visible, the ray tells
+  //    nothing about them if another silhouette of the object hides the centre itself (p on the
+  //    ground beside a box standing on it: the cut umbra silhouette, or a shell's straddled walls,
+  //    leave the centre visible while the penumbra silhouette hides part of the light, the centre
+  //    included). They are then flipped only if rays to points the rest leaves visible meet the
+  //    object (visibilityAt, undecidedHide); otherwise they follow the ray. Following it there hid
+  //    the whole light along the foot of every flat-based model fitted onto the ground;
   //  - the object's outlines (its penumbra and umbra silhouettes) are flipped only where together
   //    they disagree with the ray. The ray sees the object, not one outline: outlines compete, and
   //    in a penumbra on the object one may leave the centre visible (its curve cutting the square
   //    elsewhere) while the other hides it; flipping the first would hide nearly the whole light
-  //    on single pixels.
+  //    on single pixels. Where none hides the centre but the straddled walls' silhouette does (the
+  //    walls of a box open at the top), the ray is explained and they are undecided as above.
   // Whether a silhouette hides the centre is its rings' projections' winding, not its curve's: an
   // approximant may pass the centre on the other side than its projected edge, in the penumbra.
   template <typename Blockers>
@@ -593,42 +595,65 @@ class SsvTechnique final : public ShadowTechnique {
     }
     if (!anyCut) return;
     const bool hidesCentre = blockers.centre() == s.runs[begin].objectId;
-    // A loop goes right after the run's pieces (a group's pieces stay consecutive for
-    // hiddenCells), moving those of the runs after it.
-    auto flip = [&](size_t k) {
-      GroupRun& run = s.runs[k];
-      const int loop = hidesCentre ? 1 : -run.centreWinding;
-      const size_t count = static_cast<size_t>(std::abs(loop));
-      s.pieces.insert(s.pieces.begin() + static_cast<std::ptrdiff_t>(run.endPiece), count, loopPiece(loop, run.group));
-      for (size_t later = k; later < s.runs.size(); ++later) {
-        if (later > k) s.runs[later].firstPiece += count;
-        s.runs[later].endPiece += count;
-      }
-      run.centreWinding = hidesCentre ? 1 : 0;
-    };
+    auto flip = [&](size_t k) { flipRun(s, k, hidesCentre); };
     auto disagrees = [&](size_t k) { return s.runs[k].cut && (s.runs[k].centreWinding != 0) != hidesCentre; };
     auto outline = [&](size_t k) { return anyOutline && !side.groups[s.runs[k].group].straddled; };
+    // A cut outline with only loops, or the straddled walls' silhouette, that leaves the centre
+    // visible where the ray meets the object waits until the rest is decided.
+    for (size_t k = begin; k < end; ++k)
+      s.runs[k].undecided = hidesCentre && disagrees(k) && (!outline(k) || onlyLoops(s, s.runs[k]));
     bool outlinesHide = false;
     for (size_t k = begin; k < end; ++k) {
-      // An outline with only loops that hides the centre hides all of the light: where the ray sees
-      // the centre, it hides none.
-      if (disagrees(k) && (!outline(k) || (onlyLoops(s, s.runs[k]) && !hidesCentre))) flip(k);
+      if (!s.runs[k].undecided && disagrees(k) && (!outline(k) || onlyLoops(s, s.runs[k]))) flip(k);
       if (outline(k)) outlinesHide = outlinesHide || s.runs[k].centreWinding != 0;
     }
-    if (outlinesHide == hidesCentre) {
-      // The other outlines hide the centre, as the ray says; one with only loops that hides nothing
-      // may still hide all of the light (p in the umbra on its object) or nothing (p on the ground
-      // beside a box standing on it, its bottom face in p's plane): the centre cannot tell. A second
-      // ray decides, towards a point of the light the rest leaves visible (visibilityAt).
+    // Where another silhouette of the object hides the centre, the ray is explained and cannot tell
+    // an undecided one's hidden side (p on the ground beside a box standing on it: the cut umbra
+    // silhouette, or a shell's straddled walls, leave the centre visible while the penumbra
+    // silhouette hides part of the light, the centre included; or the straddled walls of a box open
+    // at the top hide the centre while its outlines leave it visible): rays to points the rest leaves
+    // visible decide (visibilityAt, undecidedHide). Where none does, it follows the ray.
+    auto othersHide = [&]() {
       for (size_t k = begin; k < end; ++k)
-        if (outline(k) && disagrees(k) && onlyLoops(s, s.runs[k])) {
-          s.undecided.push_back(s.runs[k].objectId);
-          break;
+        if (!s.runs[k].undecided && s.runs[k].centreWinding != 0) return true;
+      return false;
+    };
+    if (outlinesHide != hidesCentre) {
+      // No outline hides the centre the ray sees hidden: they are flipped together, unless the
+      // straddled walls hide it, which leaves them undecided.
+      const bool othersExplain = hidesCentre && othersHide();
+      for (size_t k = begin; k < end; ++k)
+        if (outline(k) && disagrees(k)) {
+          if (othersExplain) {
+            s.runs[k].undecided = true;
+          } else {
+            flip(k);
+            s.runs[k].undecided = false;
+          }
         }
-      return;
     }
-    for (size_t k = begin; k < end; ++k)
-      if (outline(k) && disagrees(k)) flip(k);
+    const bool explained = othersHide();
+    for (size_t k = begin; k < end; ++k) {
+      if (!s.runs[k].undecided) continue;
+      if (explained)
+        s.undecided.push_back(k);
+      else
+        flip(k);
+    }
+  }
+
+  // Flips run k's hidden side: a loop around the square, right after the run's pieces (a group's
+  // pieces stay consecutive for hiddenCells), moving those of the runs after it.
+  static void flipRun(Scratch& s, size_t k, bool hidesCentre) {
+    GroupRun& run = s.runs[k];
+    const int loop = hidesCentre ? 1 : -run.centreWinding;
+    const size_t count = static_cast<size_t>(std::abs(loop));
+    s.pieces.insert(s.pieces.begin() + static_cast<std::ptrdiff_t>(run.endPiece), count, loopPiece(loop, run.group));
+    for (size_t later = k; later < s.runs.size(); ++later) {
+      if (later > k) s.runs[later].firstPiece += count;
+      s.runs[later].endPiece += count;
+    }
+    run.centreWinding = hidesCentre ? 1 : 0;
   }
 
   // Ring r as a closed polygon clipped to zNear <= z <= zMax in s.loop (Sutherland-Hodgman against
@@ -973,6 +998,18 @@ class SsvTechnique final : public ShadowTechnique {
       fixCutSides(side, s, begin, end, blockers);
       begin = end;
     }
+    const float v = visibleFraction(s);
+    if (v > 0.0f && !s.undecided.empty() && undecidedHide(side, s, blockers)) {
+      for (const size_t k : s.undecided) flipRun(s, k, true);
+      return visibleFraction(s);
+    }
+    return v;
+  }
+
+  // The visible fraction of the light square under s.runs' pieces; s.hidden, s.cx and s.cy say
+  // which cells are hidden (none when no piece meets the square).
+  float visibleFraction(Scratch& s) const {
+    s.hidden.clear();
     // A silhouette none of whose edge shadows contains p and that winds around the square hides
     // all of the light (the umbra): nothing else can change V.
     for (const GroupRun& run : s.runs)
@@ -1031,18 +1068,17 @@ class SsvTechnique final : public ShadowTechnique {
       for (const uint8_t h : s.hidden) count += !h;
       visible = double(count) / (n * n);
     }
-    if (visible > 0.0 && !s.undecided.empty() && undecidedHideAll(side, s, blockers)) return 0.0f;
     return std::clamp(static_cast<float>(visible), 0.0f, 1.0f);
   }
 
-  // Whether the undecided outlines of fixCutSides hide all of the light: whether their objects hide
-  // every point the rest leaves visible, tested at the visible cells (s.hidden) farthest along each
-  // axis of the light square, one ray each. Where they hide all of the light, they hide these;
-  // where they hide none, the rest's approximants may still be off by a little near their curves
-  // (a corner of the box whose face the rest does not outline), so one blocked point is not enough.
+  // Whether the undecided runs of fixCutSides are to be flipped: whether their objects hide from p
+  // the visible cells (s.hidden) farthest along each axis of the light square, one ray each, as
+  // they would hide them flipped. One blocked point alone is not enough: near the curves the rest's
+  // approximants may be off by a little (a corner of a box whose face the rest does not outline).
   template <typename Blockers>
-  static bool undecidedHideAll(const Side& side, const Scratch& s, Blockers& blockers) {
+  static bool undecidedHide(const Side& side, const Scratch& s, Blockers& blockers) {
     const size_t nx = s.cx.size();
+    if (s.hidden.empty() || nx == 0) return false;
     size_t extreme[4] = {SIZE_MAX, SIZE_MAX, SIZE_MAX, SIZE_MAX};  // least and greatest x, least and greatest y
     for (size_t i = 0; i < s.hidden.size(); ++i) {
       if (s.hidden[i]) continue;
@@ -1058,7 +1094,9 @@ class SsvTechnique final : public ShadowTechnique {
       if (std::find(extreme, extreme + k, i) != extreme + k) continue;  // tested already
       const Vec2 q = side.plane.lower + Vec2(s.cx[i % nx], s.cy[i / nx]) / side.squareScale;
       const int32_t hit = blockers.toward(side.plane.wsOrigin + side.plane.lsFrame.fromLocal(Vec3(q, 0.0f)));
-      if (std::find(s.undecided.begin(), s.undecided.end(), hit) == s.undecided.end()) return false;
+      const bool byUndecided =
+          std::any_of(s.undecided.begin(), s.undecided.end(), [&](size_t run) { return s.runs[run].objectId == hit; });
+      if (!byUndecided) return false;
     }
     return true;
   }
