@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -66,6 +67,10 @@ class ShadowTechnique {
   // Ends a finer pass of the running prepare() or visibility(): `name` takes the time since the
   // call began or since the previous endPass() of the call.
   void endPass(std::string name);
+  // Set by prepareImpl where the technique's options ask for it (LightMapOptions::horizon):
+  // visibility() then clamps V to the light above each receiver's horizon (src/core/horizon.h)
+  // after visibilityImpl, within the visibility pass's time.
+  void setHorizonClamp(bool on) { horizonClamp_ = on; }
 
  private:
   virtual void prepareImpl(const Scene& scene, const Light& light) = 0;
@@ -74,7 +79,9 @@ class ShadowTechnique {
   ProgressCallback progress_;
   PassTimings timings_;
   size_t preparePasses_ = 0;  //!< timings_'s passes that belong to the last prepare()
-  Timer passTimer_;           //!< since the running call began or its last endPass()
+  bool horizonClamp_ = false;
+  std::optional<Light> horizonLight_;  //!< the last prepare()'s light, where V is clamped to its horizon
+  Timer passTimer_;                    //!< since the running call began or its last endPass()
 };
 
 }  // namespace penumbra

@@ -1,13 +1,18 @@
 // The timing around every technique's passes: see technique.h.
 #include "penumbra/technique.h"
 
+#include "core/horizon.h"
+
 namespace penumbra {
 
 void ShadowTechnique::prepare(const Scene& scene, const Light& light) {
   timings_ = {};
   preparePasses_ = 0;
   passTimer_.reset();
+  horizonClamp_ = false;
   prepareImpl(scene, light);
+  horizonLight_.reset();
+  if (horizonClamp_) horizonLight_ = light;
   timings_.add("prepare", passTimer_.elapsedMs());
   preparePasses_ = timings_.passes.size();
 }
@@ -17,6 +22,7 @@ void ShadowTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   timings_.passes.erase(timings_.passes.begin() + static_cast<std::ptrdiff_t>(preparePasses_), timings_.passes.end());
   passTimer_.reset();
   visibilityImpl(gbuffer, v);
+  if (horizonLight_) clampToHorizon(gbuffer, *horizonLight_, v);
   timings_.add("visibility", passTimer_.elapsedMs());
 }
 

@@ -42,6 +42,7 @@ struct DepthBias {
 struct LightMapOptions {
   int size = 1024;                       //!< texels per side
   LightMapFit fit = LightMapFit::Tight;  //!< how the map is fitted each frame (raster.h)
+  bool horizon = false;                  //!< clamp V to the light above each receiver's horizon (core/horizon.h)
 
   static void describe(OptionFields<LightMapOptions>& f) {
     f.add(&LightMapOptions::size, OptionDecl("map_size")
@@ -55,6 +56,11 @@ struct LightMapOptions {
               "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
               "plus what the quantized axis's tilt costs)"),
           {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}});
+    f.add(&LightMapOptions::horizon,
+          OptionDecl("horizon").help(
+              "clamp V to the share of the light above each receiver's tangent plane (the side its geometric normal "
+              "points to): what the receiver's own surface hides and a map seen from the light's centre cannot "
+              "(near a terminator; on a facet turned away from the light, all of it); off: the paper's V"));
   }
 };
 

@@ -55,6 +55,7 @@ class HybridTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
+    setHorizonClamp(options_.lightMap.horizon);
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
     // The rays look from the map's origin too (shadow_map.h): under map_fit=stable a light moving
     // within one lattice cell then changes nothing, as for every light-map technique.

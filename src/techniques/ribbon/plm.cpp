@@ -818,6 +818,7 @@ class PlmTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
+    setHorizonClamp(options_.lightMap.horizon);
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
     createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin

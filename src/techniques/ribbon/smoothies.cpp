@@ -49,6 +49,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
+    setHorizonClamp(options_.lightMap.horizon);
     plm::emitterRadius(sceneLight, "smoothies");
     createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin

@@ -735,6 +735,7 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
 }
 
 void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
+  setHorizonClamp(options_.lightMap.horizon);
   createShadowMap(scene, sceneLight, options_.lightMap, map_);
   light_ = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin
   const Light& light = *light_;

@@ -24,6 +24,7 @@ class HardShadowTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
+    setHorizonClamp(options_.lightMap.horizon);
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
   }
 

@@ -626,6 +626,7 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
 }
 
 void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
+  setHorizonClamp(options_.lightMap.horizon);
   prepared_ = false;  // a failed prepare() leaves nothing for visibility() to use
   if (light.shape() != LightShape::Segment)
     fail(

@@ -32,6 +32,7 @@ class PcfTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
+    setHorizonClamp(options_.lightMap.horizon);
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
   }
 

@@ -1,0 +1,104 @@
+// lightAboveHorizon and clampToHorizon of horizon.h.
+#include "core/horizon.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace penumbra {
+namespace {
+
+// The share of a uniformly filled disk (centre c, unit normal m, radius r) on the side of the plane
+// through p where n . (x - p) > 0. Over the disk n . (x - p) runs over s +- r |n - (n . m) m|, s its
+// value at the centre; the part on either side of 0 is a circular segment.
+float diskShare(const Vec3& c, const Vec3& m, float r, const Vec3& p, const Vec3& n) {
+  const float s = glm::dot(n, c - p);
+  const float reach = r * glm::length(n - glm::dot(n, m) * m);
+  if (!(s < reach)) return 1.0f;
+  const float t = std::clamp(s / reach, -1.0f, 1.0f);  // the plane's distance from the centre, in radii
+  return 1.0f - (std::acos(t) - t * std::sqrt(std::max(0.0f, 1.0f - t * t))) / kPi;
+}
+
+// The share of a planar polygon's area on the side n . (x - p) > 0: one Sutherland-Hodgman clip
+// against the plane, whose output has the right signed area for a concave polygon too.
+float polygonShare(const std::vector<Vec3>& vertices, const Vec3& normal, const Vec3& p, const Vec3& n) {
+  const size_t count = vertices.size();
+  bool anyBelow = false;
+  for (const Vec3& v : vertices) anyBelow = anyBelow || glm::dot(n, v - p) < 0.0f;
+  if (!anyBelow) return 1.0f;
+  auto twiceArea = [&](const Vec3* loop, size_t size) {
+    Vec3 sum(0.0f);
+    for (size_t i = 0; i < size; ++i) sum += glm::cross(loop[i], loop[i + 1 < size ? i + 1 : 0]);
+    return glm::dot(sum, normal);
+  };
+  // The clip adds at most one vertex per edge it cuts; a light of many vertices clips into the heap.
+  std::array<Vec3, 40> local;
+  std::vector<Vec3> heap;
+  if (2 * count > local.size()) heap.resize(2 * count);
+  Vec3* clipped = heap.empty() ? local.data() : heap.data();
+  size_t size = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const Vec3 &a = vertices[i], &b = vertices[i + 1 < count ? i + 1 : 0];
+    const float sa = glm::dot(n, a - p), sb = glm::dot(n, b - p);
+    if (sa >= 0.0f) clipped[size++] = a;
+    if ((sa >= 0.0f) != (sb >= 0.0f)) clipped[size++] = a + (b - a) * (sa / (sa - sb));
+  }
+  const float whole = twiceArea(vertices.data(), count);
+  if (size < 3 || !(std::abs(whole) > 0.0f)) return 0.0f;
+  return std::clamp(twiceArea(clipped, size) / whole, 0.0f, 1.0f);
+}
+
+}  // namespace
+
+float lightAboveHorizon(const Light& light, const Vec3& p, const Vec3& ng) {
+  if (!(glm::dot(ng, ng) > 0.0f)) return 1.0f;
+  switch (light.shape()) {
+    case LightShape::Rect:
+    case LightShape::Polygon:
+      return polygonShare(light.vertices(), light.normal(), p, ng);
+    case LightShape::Disk:
+      return diskShare(light.center(), light.normal(), light.radius(), p, ng);
+    case LightShape::Sphere: {
+      // Light::sample fills the silhouette disk seen from p: centre (d^2 - R^2) / d along w, radius
+      // R sqrt(d^2 - R^2) / d.
+      const Vec3 toCentre = light.center() - p;
+      const float d2 = glm::dot(toCentre, toCentre), r2 = light.radius() * light.radius();
+      if (!(d2 > r2)) return 1.0f;  // p inside the light
+      const float d = std::sqrt(d2);
+      const Vec3 w = toCentre / d;
+      return diskShare(p + ((d2 - r2) / d) * w, w, light.radius() * std::sqrt(d2 - r2) / d, p, ng);
+    }
+    case LightShape::Directional:
+      // Directions through the disk of radius tan(angular diameter / 2) at unit distance.
+      return diskShare(p + light.direction(), light.direction(), std::tan(0.5f * light.angularDiameter()), p, ng);
+    case LightShape::Segment: {
+      const float sa = glm::dot(ng, light.a() - p), sb = glm::dot(ng, light.b() - p);
+      if (sa >= 0.0f && sb >= 0.0f) return 1.0f;
+      if (sa <= 0.0f && sb <= 0.0f) return 0.0f;
+      return std::max(sa, sb) / (std::abs(sa) + std::abs(sb));
+    }
+  }
+  return 1.0f;
+}
+
+void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v) {
+  // Most receivers see all of the light above their plane: the light's bounding sphere (directional:
+  // its cone of directions) wholly on the normal's side decides that with one dot product.
+  const bool directional = light.isDirectional();
+  const Vec3 centre = directional ? light.direction() : light.center();
+  const float reach = directional ? std::sin(0.5f * light.angularDiameter()) : light.extent();
+  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < gbuffer.width(); ++x) {
+        if (!gbuffer.hit(x, y) || !(v(x, y) > 0.0f)) continue;
+        const Vec3 p = gbuffer.wsPosition(x, y), ng = gbuffer.wsGeometricNormal(x, y);
+        if (glm::dot(ng, directional ? centre : centre - p) >= reach * glm::length(ng)) continue;
+        v(x, y) = std::min(v(x, y), lightAboveHorizon(light, p, ng));
+      }
+  });
+}
+
+}  // namespace penumbra
