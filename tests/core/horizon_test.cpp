@@ -9,14 +9,13 @@
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
+
 #include "core/horizon.h"
 
 #include "penumbra/metrics.h"
-#include "penumbra/params.h"
 #include "penumbra/primitives.h"
 #include "penumbra/raster.h"
-#include "penumbra/reference.h"
-#include "penumbra/registry.h"
+#include "techniques/shadow_map_fixture.h"
 
 namespace penumbra {
 namespace {
@@ -122,22 +121,12 @@ Scene sphereScene() {
 
 TEST(Horizon, TheClampLowersTheErrorOfLightMapTechniquesNearATerminatorAndNeverRaisesV) {
   const Scene scene = sphereScene();
-  const Light& light = scene.lights[0];
   const GBuffer g = renderGBuffer(scene, 96, 96);
-  const Image<uint8_t> mask = errorMask(g, light);
-  ReferenceTechnique reference(ReferenceOptions{256, 1});
-  reference.prepare(scene, light);
-  Image<float> truth;
-  reference.visibility(g, truth);
+  const Image<uint8_t> mask = errorMask(g, scene.lights[0]);
+  const Image<float> truth = testing::runTechnique("reference", scene, g, {"spp=256"});
   for (const char* name : {"hard", "pcss", "plm"}) {
-    Image<float> off, on;
-    ParamSet horizon;
-    horizon.setFromKeyValue("horizon=true", "test");
-    auto plain = createTechnique(name), clamped = createTechnique(name, horizon);
-    plain->prepare(scene, light);
-    plain->visibility(g, off);
-    clamped->prepare(scene, light);
-    clamped->visibility(g, on);
+    const Image<float> off = testing::runTechnique(name, scene, g),
+                       on = testing::runTechnique(name, scene, g, {"horizon=true"});
     int lowered = 0;
     for (size_t i = 0; i < on.size(); ++i) {
       ASSERT_LE(on[i], off[i]) << name;  // the clamp only lowers V
