@@ -67,10 +67,14 @@ class ShadowTechnique {
   // Ends a finer pass of the running prepare() or visibility(): `name` takes the time since the
   // call began or since the previous endPass() of the call.
   void endPass(std::string name);
-  // Set by prepareImpl where the technique's options ask for it (LightMapOptions::horizon):
-  // visibility() then clamps V to the light above each receiver's horizon (src/core/horizon.h)
-  // after visibilityImpl, within the visibility pass's time.
-  void setHorizonClamp(bool on) { horizonClamp_ = on; }
+  // Called by prepareImpl where the technique's options ask for it (LightMapOptions::horizon):
+  // visibility() then clamps V to the share of `light` above each receiver's horizon
+  // (src/core/horizon.h) after visibilityImpl, within the visibility pass's time. A light-map
+  // technique passes the light as its map sees it (lightAtMapOrigin), so that under a stable fit the
+  // clamp holds still with the map.
+  void setHorizonClamp(bool on, const Light& light) {
+    if (on) horizonLight_ = light;
+  }
 
  private:
   virtual void prepareImpl(const Scene& scene, const Light& light) = 0;
@@ -78,9 +82,8 @@ class ShadowTechnique {
 
   ProgressCallback progress_;
   PassTimings timings_;
-  size_t preparePasses_ = 0;  //!< timings_'s passes that belong to the last prepare()
-  bool horizonClamp_ = false;
-  std::optional<Light> horizonLight_;  //!< the last prepare()'s light, where V is clamped to its horizon
+  size_t preparePasses_ = 0;           //!< timings_'s passes that belong to the last prepare()
+  std::optional<Light> horizonLight_;  //!< set by the last prepare() where V is clamped to its horizon
   Timer passTimer_;                    //!< since the running call began or its last endPass()
 };
 

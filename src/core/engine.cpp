@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 
@@ -80,7 +81,9 @@ GBuffer makeGBuffer(const EngineGBuffer& b, const Camera& camera, const std::vec
     if (!std::isfinite(length) || !(length > 0.0f))
       fail("engine G-buffer: {} at pixel ({}, {}) is ({}, {}, {}): expected a finite, non-zero normal", buffer, x, y,
            v.x, v.y, v.z);
-    v /= length;
+    // A normal already unit to float rounding is kept to the bit: divided again, its last bits would
+    // move, and an engine's copy of penumbra's own G-buffer would no longer give the same V.
+    if (std::abs(length - 1.0f) > 8.0f * std::numeric_limits<float>::epsilon()) v /= length;
     return glm::dot(v, eye - p) < 0.0f ? -v : v;
   };
   for (int y = 0; y < b.height; ++y)

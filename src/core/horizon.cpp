@@ -1,9 +1,13 @@
 // lightAboveHorizon and clampToHorizon of horizon.h.
 #include "core/horizon.h"
 
+#include "core/target_clones.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -84,20 +88,46 @@ float lightAboveHorizon(const Light& light, const Vec3& p, const Vec3& ng) {
   return 1.0f;
 }
 
+namespace {
+
+// Which pixels of a row the clamp may lower (cand[x] = 1): those that see geometry, have V > 0, and
+// whose plane does not leave the light's bounding sphere (directional: its cone of directions) wholly
+// on the normal's side, the quick accept of clampToHorizon. The dot products in glm's order (x, y,
+// then z) and no fused multiply-add (CMakeLists.txt), so each target decides as the scalar form does.
+PENUMBRA_CLONES_AVX512 void horizonCandidates(int width, const Vec3* __restrict p, const Vec3* __restrict ng,
+                                              const int32_t* __restrict ids, const float* __restrict v, Vec3 centre,
+                                              bool directional, float reach, uint8_t* __restrict cand) {
+  const float keep = directional ? 0.0f : 1.0f;  // directional: the centre is a direction, not a point
+  for (int x = 0; x < width; ++x) {
+    const float dx = centre.x - keep * p[x].x, dy = centre.y - keep * p[x].y, dz = centre.z - keep * p[x].z;
+    const float nx = ng[x].x, ny = ng[x].y, nz = ng[x].z;
+    const float facing = nx * dx + ny * dy + nz * dz;
+    const float length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    cand[x] = static_cast<uint8_t>((ids[x] != kNoObject) & (v[x] > 0.0f) & !(facing >= reach * length));
+  }
+}
+
+}  // namespace
+
 void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v) {
   // Most receivers see all of the light above their plane: the light's bounding sphere (directional:
-  // its cone of directions) wholly on the normal's side decides that with one dot product.
+  // its cone of directions) wholly on the normal's side decides that with one dot product, a row at
+  // a time in one vector loop; the closed form runs on the rest.
   const bool directional = light.isDirectional();
   const Vec3 centre = directional ? light.direction() : light.center();
   const float reach = directional ? std::sin(0.5f * light.angularDiameter()) : light.extent();
+  const int width = gbuffer.width();
   tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < gbuffer.width(); ++x) {
-        if (!gbuffer.hit(x, y) || !(v(x, y) > 0.0f)) continue;
-        const Vec3 p = gbuffer.wsPosition(x, y), ng = gbuffer.wsGeometricNormal(x, y);
-        if (glm::dot(ng, directional ? centre : centre - p) >= reach * glm::length(ng)) continue;
-        v(x, y) = std::min(v(x, y), lightAboveHorizon(light, p, ng));
-      }
+    std::vector<uint8_t> cand(static_cast<size_t>(width));
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      float* out = v.row(y);
+      const Vec3* positions = gbuffer.wsPosition.row(y);
+      const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
+      horizonCandidates(width, positions, normals, gbuffer.objectId.row(y), out, centre, directional, reach,
+                        cand.data());
+      for (int x = 0; x < width; ++x)
+        if (cand[static_cast<size_t>(x)]) out[x] = std::min(out[x], lightAboveHorizon(light, positions[x], normals[x]));
+    }
   });
 }
 

@@ -9,10 +9,8 @@ void ShadowTechnique::prepare(const Scene& scene, const Light& light) {
   timings_ = {};
   preparePasses_ = 0;
   passTimer_.reset();
-  horizonClamp_ = false;
-  prepareImpl(scene, light);
   horizonLight_.reset();
-  if (horizonClamp_) horizonLight_ = light;
+  prepareImpl(scene, light);
   timings_.add("prepare", passTimer_.elapsedMs());
   preparePasses_ = timings_.passes.size();
 }

@@ -125,7 +125,7 @@ TEST(Horizon, TheClampLowersTheErrorOfLightMapTechniquesNearATerminatorAndNeverR
   const Image<uint8_t> mask = errorMask(g, scene.lights[0]);
   const Image<float> truth = testing::runTechnique("reference", scene, g, {"spp=256"});
   for (const char* name : {"hard", "pcss", "plm"}) {
-    const Image<float> off = testing::runTechnique(name, scene, g),
+    const Image<float> off = testing::runTechnique(name, scene, g, {"horizon=false"}),
                        on = testing::runTechnique(name, scene, g, {"horizon=true"});
     int lowered = 0;
     for (size_t i = 0; i < on.size(); ++i) {

@@ -24,10 +24,10 @@ inline OptionDecl illuminationTableOption() {
 }
 
 struct PlmOptions {
-  LightMapOptions lightMap;       //!< the light map g: size and fit
-  DepthBias bias;                 //!< of the compares with g, c and b (shadow_map.h)
-  float marginTexels = 2.0f;      //!< added to every ribbon's half-width
-  bool illuminationTable = true;  //!< V = f(l_g) through Appendix A's table (else V = l_g)
+  LightMapOptions lightMap = kSoftLightMap;  //!< the light map g: size, fit and horizon
+  DepthBias bias;                            //!< of the compares with g, c and b (shadow_map.h)
+  float marginTexels = 2.0f;                 //!< added to every ribbon's half-width
+  bool illuminationTable = true;             //!< V = f(l_g) through Appendix A's table (else V = l_g)
 
   static void describe(OptionFields<PlmOptions>& f) {
     f.nest(&PlmOptions::lightMap);
@@ -38,9 +38,9 @@ struct PlmOptions {
 };
 
 struct SmoothiesOptions {
-  LightMapOptions lightMap;   //!< the light map: size and fit
-  DepthBias bias;             //!< of the hard compare and the smoothie compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every smoothie's width
+  LightMapOptions lightMap = kSoftLightMap;  //!< the light map: size, fit and horizon
+  DepthBias bias;                            //!< of the hard compare and the smoothie compare (shadow_map.h)
+  float marginTexels = 2.0f;                 //!< added to every smoothie's width
   bool illuminationTable = true;
 
   static void describe(OptionFields<SmoothiesOptions>& f) {
@@ -52,9 +52,9 @@ struct SmoothiesOptions {
 };
 
 struct KirschOptions {
-  LightMapOptions lightMap;   //!< the light map: size and fit
-  DepthBias bias;             //!< of the hard compare (shadow_map.h)
-  float marginTexels = 2.0f;  //!< added to every ribbon's width
+  LightMapOptions lightMap = kSoftLightMap;  //!< the light map: size, fit and horizon
+  DepthBias bias;                            //!< of the hard compare (shadow_map.h)
+  float marginTexels = 2.0f;                 //!< added to every ribbon's width
   bool illuminationTable = true;
 
   static void describe(OptionFields<KirschOptions>& f) {

@@ -55,8 +55,8 @@ class HybridTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    setHorizonClamp(options_.lightMap.horizon);
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
     // The rays look from the map's origin too (shadow_map.h): under map_fit=stable a light moving
     // within one lattice cell then changes nothing, as for every light-map technique.
     state_.prepare(scene, lightAtMapOrigin(light, map_));

@@ -818,11 +818,11 @@ class PlmTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
-    setHorizonClamp(options_.lightMap.horizon);
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
     createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     const Light& light = *light_;
+    setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "plm");
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);

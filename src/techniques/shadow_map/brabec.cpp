@@ -735,9 +735,9 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
 }
 
 void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
-  setHorizonClamp(options_.lightMap.horizon);
   createShadowMap(scene, sceneLight, options_.lightMap, map_);
   light_ = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin
+  setHorizonClamp(options_.lightMap.horizon, *light_);
   const Light& light = *light_;
   lightRadius_ = light.extent();
   // A segment's footprint is a segment along its direction in the map (its component across the

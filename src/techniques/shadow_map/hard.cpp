@@ -24,8 +24,8 @@ class HardShadowTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    setHorizonClamp(options_.lightMap.horizon);
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {

@@ -626,8 +626,8 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
 }
 
 void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
-  setHorizonClamp(options_.lightMap.horizon);
-  prepared_ = false;  // a failed prepare() leaves nothing for visibility() to use
+  setHorizonClamp(options_.lightMap.horizon, light);  // its maps look from several points: the light itself
+  prepared_ = false;                                  // a failed prepare() leaves nothing for visibility() to use
   if (light.shape() != LightShape::Segment)
     fail(
         "heidrich: a {} light is not supported: soft shadow maps for linear lights need a segment light "

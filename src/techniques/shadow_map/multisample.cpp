@@ -68,7 +68,7 @@ class MultisampleTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    setHorizonClamp(options_.lightMap.horizon);
+    setHorizonClamp(options_.lightMap.horizon, light);  // one map per sample point: the light itself
     weights_.clear();
     const CmjSampler sampler(static_cast<uint32_t>(options_.samples));
     maps_.resize(sampler.count());

@@ -74,9 +74,9 @@ class PcssTechnique final : public ShadowTechnique {
 
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
-    setHorizonClamp(options_.lightMap.horizon);
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
     // Segment and rect lights: the taps lie on the light's own image in the map (see the file
     // comment), not on the disk that circumscribes it.
     lineDirection_.reset();
