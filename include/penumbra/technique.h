@@ -75,6 +75,13 @@ class ShadowTechnique {
   void setHorizonClamp(bool on, const Light& light) {
     if (on) horizonLight_ = light;
   }
+  // For a visibilityImpl that writes V a row at a time: the light whose horizon clamps V this pass
+  // (nullptr where the clamp is off), for it to clamp each row it writes while the row's G-buffer reads
+  // are in cache (clampRowToHorizon, src/core/horizon.h); visibility() then does not clamp again.
+  const Light* horizonForRows() {
+    horizonInRows_ = horizonLight_.has_value();
+    return horizonLight_ ? &*horizonLight_ : nullptr;
+  }
 
  private:
   virtual void prepareImpl(const Scene& scene, const Light& light) = 0;
@@ -84,6 +91,7 @@ class ShadowTechnique {
   PassTimings timings_;
   size_t preparePasses_ = 0;           //!< timings_'s passes that belong to the last prepare()
   std::optional<Light> horizonLight_;  //!< set by the last prepare() where V is clamped to its horizon
+  bool horizonInRows_ = false;         //!< the running visibilityImpl clamps its rows itself
   Timer passTimer_;                    //!< since the running call began or its last endPass()
 };
 

@@ -7,7 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <vector>
+#include <cstring>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -109,25 +109,36 @@ PENUMBRA_CLONES_AVX512 void horizonCandidates(int width, const Vec3* __restrict 
 
 }  // namespace
 
-void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v) {
+void clampRowToHorizon(const GBuffer& gbuffer, const Light& light, int y, float* v) {
   // Most receivers see all of the light above their plane: the light's bounding sphere (directional:
-  // its cone of directions) wholly on the normal's side decides that with one dot product, a row at
-  // a time in one vector loop; the closed form runs on the rest.
+  // its cone of directions) wholly on the normal's side decides that with one dot product, in one
+  // vector loop over a run of the row; the closed form runs on the rest.
   const bool directional = light.isDirectional();
   const Vec3 centre = directional ? light.direction() : light.center();
   const float reach = directional ? std::sin(0.5f * light.angularDiameter()) : light.extent();
-  const int width = gbuffer.width();
-  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<uint8_t> cand(static_cast<size_t>(width));
-    for (int y = rows.begin(); y < rows.end(); ++y) {
-      float* out = v.row(y);
-      const Vec3* positions = gbuffer.wsPosition.row(y);
-      const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
-      horizonCandidates(width, positions, normals, gbuffer.objectId.row(y), out, centre, directional, reach,
-                        cand.data());
-      for (int x = 0; x < width; ++x)
-        if (cand[static_cast<size_t>(x)]) out[x] = std::min(out[x], lightAboveHorizon(light, positions[x], normals[x]));
+  const Vec3* positions = gbuffer.wsPosition.row(y);
+  const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
+  const int32_t* ids = gbuffer.objectId.row(y);
+  constexpr int kRun = 256;
+  uint8_t cand[kRun];
+  for (int x0 = 0; x0 < gbuffer.width(); x0 += kRun) {
+    const int n = std::min(kRun, gbuffer.width() - x0);
+    horizonCandidates(n, positions + x0, normals + x0, ids + x0, v + x0, centre, directional, reach, cand);
+    std::fill(cand + n, cand + kRun, uint8_t{0});
+    // Eight flags at a time: most runs hold no candidate at all.
+    for (int k0 = 0; k0 < n; k0 += 8) {
+      uint64_t flags;
+      std::memcpy(&flags, cand + k0, sizeof(flags));
+      if (flags == 0) continue;
+      for (int k = k0; k < k0 + 8; ++k)
+        if (cand[k]) v[x0 + k] = std::min(v[x0 + k], lightAboveHorizon(light, positions[x0 + k], normals[x0 + k]));
     }
+  }
+}
+
+void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) clampRowToHorizon(gbuffer, light, y, v.row(y));
   });
 }
 

@@ -33,4 +33,9 @@ float lightAboveHorizon(const Light& light, const Vec3& p, const Vec3& ng);
 // normal; in parallel over rows.
 void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v);
 
+// The same for row y alone, in place (v: the row's V): for a pass that writes V a row at a time and
+// clamps each row while the row's G-buffer reads are still in cache, where a pass of its own would read
+// the position and normal of every pixel from memory again.
+void clampRowToHorizon(const GBuffer& gbuffer, const Light& light, int y, float* v);
+
 }  // namespace penumbra

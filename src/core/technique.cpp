@@ -19,8 +19,9 @@ void ShadowTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   // A new visibility pass replaces the previous one's timings; the prepare's stay.
   timings_.passes.erase(timings_.passes.begin() + static_cast<std::ptrdiff_t>(preparePasses_), timings_.passes.end());
   passTimer_.reset();
+  horizonInRows_ = false;
   visibilityImpl(gbuffer, v);
-  if (horizonLight_) clampToHorizon(gbuffer, *horizonLight_, v);
+  if (horizonLight_ && !horizonInRows_) clampToHorizon(gbuffer, *horizonLight_, v);
   timings_.add("visibility", passTimer_.elapsedMs());
 }
 

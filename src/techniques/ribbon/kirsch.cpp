@@ -66,16 +66,19 @@ class KirschTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("kirsch: visibility() called before prepare()");
-    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int, int, const ShadowReceiver& r) {
-      if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
-      const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
-      const plm::RibbonTexel& width = widths_(i, j);
-      if (!width.covered()) return 0.0f;
-      const float c = space_.zeta(map_.lsDepth(i, j));  // the occluding point
-      const float z = space_.zeta(r.lsDepth);
-      const float blocked = std::clamp(-width.w * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
-      return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
-    });
+    forEachReceiver(
+        gbuffer, map_, options_.bias, v,
+        [&](int, int, const ShadowReceiver& r) {
+          if (!r.inMap || hardShadow(map_, r) == 1.0f) return 1.0f;
+          const int i = static_cast<int>(std::floor(r.s)), j = static_cast<int>(std::floor(r.t));
+          const plm::RibbonTexel& width = widths_(i, j);
+          if (!width.covered()) return 0.0f;
+          const float c = space_.zeta(map_.lsDepth(i, j));  // the occluding point
+          const float z = space_.zeta(r.lsDepth);
+          const float blocked = std::clamp(-width.w * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
+          return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
+        },
+        horizonForRows());
   }
 
   KirschOptions options_;

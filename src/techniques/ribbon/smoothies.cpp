@@ -63,16 +63,19 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("smoothies: visibility() called before prepare()");
-    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int, int, const ShadowReceiver& r) {
-      if (!r.inMap) return 1.0f;
-      if (hardShadow(map_, r) == 0.0f) return 0.0f;
-      const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
-      const float biased = r.lsDepth - r.bias;
-      if (!s.covered() || !(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > s.c)) return 1.0f;
-      const float z = space_.zeta(r.lsDepth);
-      const float alpha = std::clamp(s.w * space_.ratePerTexel / (z - s.c), 0.0f, 1.0f);
-      return options_.illuminationTable ? table_(alpha) : alpha;
-    });
+    forEachReceiver(
+        gbuffer, map_, options_.bias, v,
+        [&](int, int, const ShadowReceiver& r) {
+          if (!r.inMap) return 1.0f;
+          if (hardShadow(map_, r) == 0.0f) return 0.0f;
+          const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
+          const float biased = r.lsDepth - r.bias;
+          if (!s.covered() || !(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > s.c)) return 1.0f;
+          const float z = space_.zeta(r.lsDepth);
+          const float alpha = std::clamp(s.w * space_.ratePerTexel / (z - s.c), 0.0f, 1.0f);
+          return options_.illuminationTable ? table_(alpha) : alpha;
+        },
+        horizonForRows());
   }
 
   SmoothiesOptions options_;

@@ -39,9 +39,10 @@ class PcfTechnique final : public ShadowTechnique {
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
     if (map_.size == 0) fail("pcf: visibility() called before prepare()");
     const float width = static_cast<float>(options_.kernel);
-    forEachReceiver(gbuffer, map_, options_.bias, v, [&](int, int, const ShadowReceiver& r) {
-      return r.inMap ? pcfBox(map_, r, r.s, r.t, width) : 1.0f;
-    });
+    forEachReceiver(
+        gbuffer, map_, options_.bias, v,
+        [&](int, int, const ShadowReceiver& r) { return r.inMap ? pcfBox(map_, r, r.s, r.t, width) : 1.0f; },
+        horizonForRows());
   }
 
   PcfOptions options_;

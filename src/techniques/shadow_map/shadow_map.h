@@ -40,6 +40,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/horizon.h"
 #include "penumbra/gbuffer.h"
 #include "penumbra/image.h"
 #include "penumbra/light.h"
@@ -292,9 +293,11 @@ void forEachReceiverRow(const GBuffer& gbuffer, const LightMap& map, const Depth
 
 // Runs f(x, y, receiver) -> V for every pixel of the G-buffer that sees geometry, with its receiver in
 // `map` set up a row at a time (makeReceiverRow), in parallel over rows; V = 1 where the pixel sees
-// nothing. Deterministic: every pixel is computed on its own.
+// nothing; then, given a `horizon` light (ShadowTechnique::horizonForRows), clamps the row to its horizon.
+// Deterministic: every pixel is computed on its own.
 template <class F>
-void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, Image<float>& v, F&& f) {
+void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, Image<float>& v, F&& f,
+                     const Light* horizon = nullptr) {
   // Every pixel written below, in parallel: no serial fill first (and a fresh image's pages are first
   // touched by both cores).
   v.resizeForOverwrite(gbuffer.width(), gbuffer.height());
@@ -302,6 +305,7 @@ void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBia
     float* out = v.row(y);
     const int32_t* ids = gbuffer.objectId.row(y);
     for (int x = 0; x < gbuffer.width(); ++x) out[x] = ids[x] != kNoObject ? f(x, y, receivers[x]) : 1.0f;
+    if (horizon) clampRowToHorizon(gbuffer, *horizon, y, out);
   });
 }
 
