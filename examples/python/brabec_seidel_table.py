@@ -45,7 +45,7 @@ def main():
     print("| technique | scene and setup | RMSE8 | raytraced-hard there |")
     print("|---|---|---|---|")
     for name, label in ROWS:
-        params = {"map_size": args.map_size, "horizon": False} if name in MAPPED else {}
+        params = {"map_size": args.map_size, "horizon": "off"} if name in MAPPED else {}
         print(f"| {label} | {setup} | {rmse8(name, **params):.2f} | {exact:.2f} |")
 
 

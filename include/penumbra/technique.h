@@ -34,6 +34,22 @@ struct PassTimings {
   }
 };
 
+// How a light-map technique bounds V by the receiver's own surface (LightMapOptions::horizon). A map
+// seen from the light's centre cannot see it: next to a smooth model's terminator, facets turned from
+// the light's centre (while their shading normals still face it) are lit through the map.
+enum class HorizonClamp {
+  Off,     //!< the paper's V
+  Facing,  //!< V = 0 where the receiver's face turns from the light's centre: its own solid hides the light
+  Plane,   //!< V at most the share of the light above the plane of the receiver's face (core/horizon.h)
+};
+
+// The clamp a pass applies: its mode, and the light as the technique's map sees it (null when Off).
+struct HorizonBound {
+  HorizonClamp mode = HorizonClamp::Off;
+  const Light* light = nullptr;
+  explicit operator bool() const { return light != nullptr; }
+};
+
 // Called with the fraction done in [0, 1] by long passes; may be empty. It may be called from any
 // worker thread, so it must be thread-safe; a technique calls it at most a few hundred times a pass.
 using ProgressCallback = std::function<void(double)>;
@@ -67,20 +83,20 @@ class ShadowTechnique {
   // Ends a finer pass of the running prepare() or visibility(): `name` takes the time since the
   // call began or since the previous endPass() of the call.
   void endPass(std::string name);
-  // Called by prepareImpl where the technique's options ask for it (LightMapOptions::horizon):
-  // visibility() then clamps V to the share of `light` above each receiver's horizon
-  // (src/core/horizon.h) after visibilityImpl, within the visibility pass's time. A light-map
-  // technique passes the light as its map sees it (lightAtMapOrigin), so that under a stable fit the
-  // clamp holds still with the map.
-  void setHorizonClamp(bool on, const Light& light) {
-    if (on) horizonLight_ = light;
+  // Called by prepareImpl with the technique's LightMapOptions::horizon: visibility() then clamps V
+  // by each receiver's own surface as `mode` says (src/core/horizon.h) after visibilityImpl, within
+  // the visibility pass's time. A light-map technique passes the light as its map sees it
+  // (lightAtMapOrigin), so that under a stable fit the clamp holds still with the map.
+  void setHorizonClamp(HorizonClamp mode, const Light& light) {
+    horizonMode_ = mode;
+    if (mode != HorizonClamp::Off) horizonLight_ = light;
   }
-  // For a visibilityImpl that writes V a row at a time: the light whose horizon clamps V this pass
-  // (nullptr where the clamp is off), for it to clamp each row it writes while the row's G-buffer reads
-  // are in cache (clampRowToHorizon, src/core/horizon.h); visibility() then does not clamp again.
-  const Light* horizonForRows() {
+  // For a visibilityImpl that writes V a row at a time: the clamp of this pass (empty where it is
+  // off), for it to clamp each row it writes while the row's G-buffer reads are in cache
+  // (clampRowToHorizon, src/core/horizon.h); visibility() then does not clamp again.
+  HorizonBound horizonForRows() {
     horizonInRows_ = horizonLight_.has_value();
-    return horizonLight_ ? &*horizonLight_ : nullptr;
+    return horizonLight_ ? HorizonBound{horizonMode_, &*horizonLight_} : HorizonBound{};
   }
 
  private:
@@ -90,9 +106,10 @@ class ShadowTechnique {
   ProgressCallback progress_;
   PassTimings timings_;
   size_t preparePasses_ = 0;           //!< timings_'s passes that belong to the last prepare()
-  std::optional<Light> horizonLight_;  //!< set by the last prepare() where V is clamped to its horizon
-  bool horizonInRows_ = false;         //!< the running visibilityImpl clamps its rows itself
-  Timer passTimer_;                    //!< since the running call began or its last endPass()
+  std::optional<Light> horizonLight_;  //!< set by the last prepare() where V is clamped by the receiver
+  HorizonClamp horizonMode_ = HorizonClamp::Off;
+  bool horizonInRows_ = false;  //!< the running visibilityImpl clamps its rows itself
+  Timer passTimer_;             //!< since the running call began or its last endPass()
 };
 
 }  // namespace penumbra

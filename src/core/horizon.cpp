@@ -107,18 +107,38 @@ PENUMBRA_CLONES_AVX512 void horizonCandidates(int width, const Vec3* __restrict 
   }
 }
 
+// Facing: V = 0 at every pixel of a run that sees geometry and whose face turns from the light's centre
+// (towards: the centre, or for a directional light its direction), in one vector loop; the dot product
+// in glm's order and unfused, as rt::lightSide takes it.
+PENUMBRA_CLONES_AVX512 void zeroFacingAway(int width, const Vec3* __restrict p, const Vec3* __restrict ng,
+                                           const int32_t* __restrict ids, Vec3 towards, bool directional,
+                                           float* __restrict v) {
+  const float keep = directional ? 0.0f : 1.0f;
+  for (int x = 0; x < width; ++x) {
+    const float dx = towards.x - keep * p[x].x, dy = towards.y - keep * p[x].y, dz = towards.z - keep * p[x].z;
+    const float facing = ng[x].x * dx + ng[x].y * dy + ng[x].z * dz;
+    v[x] = (ids[x] != kNoObject) & (facing < 0.0f) ? 0.0f : v[x];
+  }
+}
+
 }  // namespace
 
-void clampRowToHorizon(const GBuffer& gbuffer, const Light& light, int y, float* v) {
-  // Most receivers see all of the light above their plane: the light's bounding sphere (directional:
-  // its cone of directions) wholly on the normal's side decides that with one dot product, in one
-  // vector loop over a run of the row; the closed form runs on the rest.
+void clampRowToHorizon(const GBuffer& gbuffer, const HorizonBound& bound, int y, float* v) {
+  if (!bound) return;
+  const Light& light = *bound.light;
   const bool directional = light.isDirectional();
   const Vec3 centre = directional ? light.direction() : light.center();
-  const float reach = directional ? std::sin(0.5f * light.angularDiameter()) : light.extent();
   const Vec3* positions = gbuffer.wsPosition.row(y);
   const Vec3* normals = gbuffer.wsGeometricNormal.row(y);
   const int32_t* ids = gbuffer.objectId.row(y);
+  if (bound.mode == HorizonClamp::Facing) {
+    zeroFacingAway(gbuffer.width(), positions, normals, ids, centre, directional, v);
+    return;
+  }
+  // Plane. Most receivers see all of the light above their plane: the light's bounding sphere
+  // (directional: its cone of directions) wholly on the normal's side decides that with one dot
+  // product, in one vector loop over a run of the row; the closed form runs on the rest.
+  const float reach = directional ? std::sin(0.5f * light.angularDiameter()) : light.extent();
   constexpr int kRun = 256;
   uint8_t cand[kRun];
   for (int x0 = 0; x0 < gbuffer.width(); x0 += kRun) {
@@ -136,9 +156,9 @@ void clampRowToHorizon(const GBuffer& gbuffer, const Light& light, int y, float*
   }
 }
 
-void clampToHorizon(const GBuffer& gbuffer, const Light& light, Image<float>& v) {
+void clampToHorizon(const GBuffer& gbuffer, const HorizonBound& bound, Image<float>& v) {
   tbb::parallel_for(tbb::blocked_range<int>(0, gbuffer.height()), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y) clampRowToHorizon(gbuffer, light, y, v.row(y));
+    for (int y = rows.begin(); y < rows.end(); ++y) clampRowToHorizon(gbuffer, bound, y, v.row(y));
   });
 }
 

@@ -80,7 +80,7 @@ LawlorTable runLawlorTable(const Scene& scene, const LawlorTableOptions& options
       if (spec.technique == "reference") given.set("seed", int64_t(options.sampledSeed), "Lawlor table");
       if (row.usesMap) given.set("map_size", int64_t{mapSize}, "Lawlor table");
       // The paper's V: no technique of Fig. 10 clamps to the receiver's horizon.
-      if (info.hasParam("horizon")) given.setFromKeyValue("horizon=false", "Lawlor table");
+      if (info.hasParam("horizon")) given.setFromKeyValue("horizon=off", "Lawlor table");
       auto technique = createTechnique(spec.technique, given);
       technique->prepare(scene, light);
       Image<float> v;

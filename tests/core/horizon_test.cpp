@@ -124,20 +124,32 @@ TEST(Horizon, TheClampLowersTheErrorOfLightMapTechniquesNearATerminatorAndNeverR
   const GBuffer g = renderGBuffer(scene, 96, 96);
   const Image<uint8_t> mask = errorMask(g, scene.lights[0]);
   const Image<float> truth = testing::runTechnique("reference", scene, g, {"spp=256"});
+  const Light& light = scene.lights[0];
   for (const char* name : {"hard", "pcss", "plm"}) {
-    const Image<float> off = testing::runTechnique(name, scene, g, {"horizon=false"}),
-                       on = testing::runTechnique(name, scene, g, {"horizon=true"});
-    int lowered = 0;
-    for (size_t i = 0; i < on.size(); ++i) {
-      ASSERT_LE(on[i], off[i]) << name;  // the clamp only lowers V
-      lowered += on[i] < off[i] ? 1 : 0;
+    const Image<float> off = testing::runTechnique(name, scene, g, {"horizon=off"});
+    const double before = compareVisibility(off, truth, mask).rmse8;
+    for (const char* mode : {"facing", "plane"}) {
+      const Image<float> on = testing::runTechnique(name, scene, g, {std::string("horizon=") + mode});
+      int lowered = 0;
+      for (int y = 0; y < g.height(); ++y)
+        for (int x = 0; x < g.width(); ++x) {
+          const float a = off(x, y), b = on(x, y);
+          ASSERT_LE(b, a) << name << " " << mode;  // the clamp only lowers V
+          lowered += b < a ? 1 : 0;
+          if (std::string(mode) == "facing" && b < a) {
+            // only to 0, and only on a face turned from the light's centre
+            EXPECT_EQ(b, 0.0f) << name;
+            EXPECT_LT(glm::dot(g.wsGeometricNormal(x, y), light.center() - g.wsPosition(x, y)), 0.0f) << name;
+          }
+        }
+      const double after = compareVisibility(on, truth, mask).rmse8;
+      std::printf(
+          "[ measured ] sphere under a large rect light, %s: RMSE8 %.2f -> %.2f with horizon=%s, %d pixels "
+          "lowered\n",
+          name, before, after, mode, lowered);
+      EXPECT_GT(lowered, 50) << name << " " << mode;
+      EXPECT_LT(after, before) << name << " " << mode;
     }
-    const double before = compareVisibility(off, truth, mask).rmse8, after = compareVisibility(on, truth, mask).rmse8;
-    std::printf(
-        "[ measured ] sphere under a large rect light, %s: RMSE8 %.2f -> %.2f with horizon, %d pixels lowered\n", name,
-        before, after, lowered);
-    EXPECT_GT(lowered, 50) << name;
-    EXPECT_LT(after, before) << name;
   }
 }
 

@@ -40,9 +40,9 @@ struct DepthBias {
 // (renderLightMap). Every light-map technique nests it in its options, so map_size and map_fit read
 // the same everywhere.
 struct LightMapOptions {
-  int size = 1024;                       //!< texels per side
-  LightMapFit fit = LightMapFit::Tight;  //!< how the map is fitted each frame (raster.h)
-  bool horizon = false;                  //!< clamp V to the light above each receiver's horizon (core/horizon.h)
+  int size = 1024;                           //!< texels per side
+  LightMapFit fit = LightMapFit::Tight;      //!< how the map is fitted each frame (raster.h)
+  HorizonClamp horizon = HorizonClamp::Off;  //!< bound V by the receiver's own surface (core/horizon.h)
 
   static void describe(OptionFields<LightMapOptions>& f) {
     f.add(&LightMapOptions::size, OptionDecl("map_size")
@@ -58,21 +58,25 @@ struct LightMapOptions {
           {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}});
     f.add(&LightMapOptions::horizon,
           OptionDecl("horizon").help(
-              "clamp V to the share of the light above each receiver's tangent plane (the side its geometric normal "
-              "points to): what the receiver's own surface hides and a map seen from the light's centre cannot "
-              "(near a terminator; on a facet turned away from the light, all of it); off: the paper's V"));
+              "bound V by the receiver's own surface, which a map seen from the light's centre cannot see: off "
+              "(the paper's V), facing (V = 0 where the receiver's face turns from the light's centre: beside a "
+              "smooth model's terminator its solid hides the light, as the reference finds) or plane (V at most "
+              "the share of the light above the plane of the receiver's face)"),
+          {{"off", HorizonClamp::Off}, {"facing", HorizonClamp::Facing}, {"plane", HorizonClamp::Plane}});
   }
 };
 
 // The light map of the soft single-sample techniques pcf, pcss, plm, smoothies and kirsch: the same,
-// with `horizon` on. Each estimates the share of the light a receiver sees from one map, and the share
-// above the receiver's own tangent plane bounds it (core/horizon.h): on the real-mesh corpus it removes
-// most of their umbra leaks, at facets turned from the light beside a terminator
-// (docs/real-meshes.md). Off by default elsewhere: a hard shadow (`hard`) is one point's visibility and
-// multisample's V a count of its point samples; brabec already gives a receiver facing away V = 0, and
-// the clamp adds specks at faceted terminators to its smooth outer penumbra; heidrich stays within the
-// bound; hybrid answers the uncertain pixels with rays. The papers' reproductions set it off.
-inline constexpr LightMapOptions kSoftLightMap{.horizon = true};
+// with `horizon` facing. Next to a smooth model's terminator, facets turned from the light's centre
+// (their shading normals still facing it) are lit through a map seen from that centre, where the
+// reference finds them in their own solid's shadow: most of the umbra leaks of these techniques on the
+// real-mesh corpus (docs/real-meshes.md). `plane` bounds V by the share above the face's plane instead;
+// against the reference it does worse, since a face turned towards the light's centre does not shadow
+// itself there (the reference's rays leave from the light's side of it, rt::lightSide), as the smooth
+// surface it stands for would not. Off by default elsewhere: a hard shadow (`hard`) is one point's
+// visibility and multisample's V a count of its point samples; brabec applies the facing rule itself;
+// heidrich and hybrid are left as they were measured. The papers' reproductions set it off.
+inline constexpr LightMapOptions kSoftLightMap{.horizon = HorizonClamp::Facing};
 
 struct HardShadowOptions {
   LightMapOptions lightMap;  //!< the light map: size and fit

@@ -912,7 +912,7 @@ class PlmTechnique final : public ShadowTechnique {
     const uint8_t* footprints = footprint2x2_.data();
     const FetchConstants constants{towardLight.x, towardLight.y, towardLight.z, directional ? 0.0f : 1.0f, n};
     v.resizeForOverwrite(width, gbuffer.height());  // every pixel written below, in parallel
-    const Light* horizon = horizonForRows();
+    const HorizonBound horizon = horizonForRows();
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& row) {
       float* out = v.row(y);
       const int32_t* ids = gbuffer.objectId.row(y);
@@ -951,7 +951,7 @@ class PlmTechnique final : public ShadowTechnique {
           out[x] = ribbonPixel(r, ids[x], footprint, i0[k], i1[k], j0[k], j1[k], ws[k], wt[k], g, zc[k]);
         }
       }
-      if (horizon) clampRowToHorizon(gbuffer, *horizon, y, out);
+      clampRowToHorizon(gbuffer, horizon, y, out);
     });
   }
 

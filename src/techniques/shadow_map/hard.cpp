@@ -34,7 +34,7 @@ class HardShadowTechnique final : public ShadowTechnique {
     // compare per pixel.
     v.resizeForOverwrite(gbuffer.width(), gbuffer.height());  // every pixel written below, in parallel
     const float* depth = map_.lsDepth.row(0);
-    const Light* horizon = horizonForRows();
+    const HorizonBound horizon = horizonForRows();
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& r) {
       float* out = v.row(y);
       const int32_t* ids = gbuffer.objectId.row(y);
@@ -42,7 +42,7 @@ class HardShadowTechnique final : public ShadowTechnique {
         const auto i = static_cast<size_t>(x);
         out[x] = ids[x] != kNoObject && r.inMap[i] && depth[r.nearestTexel[i]] < r.nearestThreshold[i] ? 0.0f : 1.0f;
       }
-      if (horizon) clampRowToHorizon(gbuffer, *horizon, y, out);
+      clampRowToHorizon(gbuffer, horizon, y, out);
     });
   }
 

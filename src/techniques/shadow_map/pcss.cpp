@@ -114,7 +114,7 @@ class PcssTechnique final : public ShadowTechnique {
     // row's pixels in one call (the work that does not depend on the pixel done once), then each
     // pixel's filter; per-row counts of the paths the pixels took.
     tbb::enumerable_thread_specific<RowScratch> scratch;
-    const Light* horizon = horizonForRows();
+    const HorizonBound horizon = horizonForRows();
     forEachReceiverRow(gbuffer, map_, options_.bias, [&](int y, const ReceiverRow& receivers) {
       RowScratch& w = scratch.local();
       w.resize(static_cast<size_t>(width));
@@ -161,7 +161,7 @@ class PcssTechnique final : public ShadowTechnique {
       const DepthTexels texels = depthTexels(map_);
       pcfDiskRow(texels, receivers, w.bilinear, w.radius.data(), w.rotation.data(), filterPattern(), out);
       pcfDiskNearestRow(texels, receivers, w.nearest, w.radius.data(), w.rotation.data(), filterPattern(), out);
-      if (horizon) clampRowToHorizon(gbuffer, *horizon, y, out);
+      clampRowToHorizon(gbuffer, horizon, y, out);
       for (size_t k = 0; k <= kPathCount; ++k) counts[k] += local[k];
     });
     int64_t total = 0;

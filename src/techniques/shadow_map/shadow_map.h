@@ -293,11 +293,12 @@ void forEachReceiverRow(const GBuffer& gbuffer, const LightMap& map, const Depth
 
 // Runs f(x, y, receiver) -> V for every pixel of the G-buffer that sees geometry, with its receiver in
 // `map` set up a row at a time (makeReceiverRow), in parallel over rows; V = 1 where the pixel sees
-// nothing; then, given a `horizon` light (ShadowTechnique::horizonForRows), clamps the row to its horizon.
+// nothing; then clamps the row by the receivers' own surfaces as `horizon` says
+// (ShadowTechnique::horizonForRows).
 // Deterministic: every pixel is computed on its own.
 template <class F>
 void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBias& bias, Image<float>& v, F&& f,
-                     const Light* horizon = nullptr) {
+                     const HorizonBound& horizon = {}) {
   // Every pixel written below, in parallel: no serial fill first (and a fresh image's pages are first
   // touched by both cores).
   v.resizeForOverwrite(gbuffer.width(), gbuffer.height());
@@ -305,7 +306,7 @@ void forEachReceiver(const GBuffer& gbuffer, const LightMap& map, const DepthBia
     float* out = v.row(y);
     const int32_t* ids = gbuffer.objectId.row(y);
     for (int x = 0; x < gbuffer.width(); ++x) out[x] = ids[x] != kNoObject ? f(x, y, receivers[x]) : 1.0f;
-    if (horizon) clampRowToHorizon(gbuffer, *horizon, y, out);
+    clampRowToHorizon(gbuffer, horizon, y, out);
   });
 }
 

@@ -284,7 +284,7 @@ Quality measure(const char* name, const std::vector<std::string>& params) {
 // raytraced-hard 22.3 / 67.4 and 25.5 / 70.2.
 TEST(Brabec, QualityWithThePapersMapSize) {
   for (const char* name : {"torus", "crowded"}) {
-    const Quality q = measure(name, {"map_size=256", "horizon=false"});  // the paper's V
+    const Quality q = measure(name, {"map_size=256", "horizon=off"});  // the paper's V
     EXPECT_LT(q.brabec.rmse8, 15.5) << name;
     EXPECT_LT(q.brabec.penumbraRmse8, 45.0) << name;
     // Clearly better than a hard shadow, exact or mapped.
@@ -881,7 +881,7 @@ BoundComparison compareBound(const Scene& scene, int lightIndex, int size) {
     BrabecOptions o;
     o.coverageBound = bound;
     o.interpolate = interpolate;
-    o.lightMap.horizon = false;  // the bound alone: the clamp lowers V on the teapots' own surfaces too
+    o.lightMap.horizon = HorizonClamp::Off;  // the bound alone
     BrabecTechnique t(o);
     t.prepare(scene, light);
     Image<float> v;
