@@ -28,8 +28,8 @@ struct EngineGBuffer {
   std::span<const int32_t> objectId;         //!< per pixel: the id of the EngineMesh seen, kNoObject (-1) if none
   std::span<const float> csDepth;            //!< optional (empty): view depth per pixel; else from the camera
   std::span<const float> wsGeometricNormal;  //!< optional (empty): face normal per pixel; else the shading normal
-  // Without face normals, a technique's horizon clamp (`horizon`) takes the shading normal's plane for
-  // the receiver's; near the terminator of a coarse mesh that plane is not its face's.
+  // Without face normals, a technique's `horizon` takes the shading normal for the face's: `facing` then
+  // finds no face turned from the light where the shading normal faces it, which is where its leaks are.
 };
 
 // One of the engine's meshes, in world space: an occluder, and a receiver where its id is in the
