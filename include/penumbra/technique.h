@@ -96,11 +96,14 @@ class ShadowTechnique {
   // (clampRowToHorizon, src/core/horizon.h); visibility() then does not clamp again.
   HorizonBound horizonForRows() {
     horizonInRows_ = horizonLight_.has_value();
-    return horizonLight_ ? HorizonBound{horizonMode_, &*horizonLight_} : HorizonBound{};
+    return horizonBound();
   }
 
  private:
   virtual void prepareImpl(const Scene& scene, const Light& light) = 0;
+  HorizonBound horizonBound() const {
+    return horizonLight_ ? HorizonBound{horizonMode_, &*horizonLight_} : HorizonBound{};
+  }
   virtual void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) = 0;
 
   ProgressCallback progress_;

@@ -21,7 +21,7 @@ void ShadowTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   passTimer_.reset();
   horizonInRows_ = false;
   visibilityImpl(gbuffer, v);
-  if (horizonLight_ && !horizonInRows_) clampToHorizon(gbuffer, HorizonBound{horizonMode_, &*horizonLight_}, v);
+  if (horizonLight_ && !horizonInRows_) clampToHorizon(gbuffer, horizonBound(), v);
   timings_.add("visibility", passTimer_.elapsedMs());
 }
 

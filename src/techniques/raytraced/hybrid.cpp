@@ -56,10 +56,11 @@ class HybridTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& light) override {
     createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
-    setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
-    // The rays look from the map's origin too (shadow_map.h): under map_fit=stable a light moving
-    // within one lattice cell then changes nothing, as for every light-map technique.
-    state_.prepare(scene, lightAtMapOrigin(light, map_));
+    // The rays and the clamp look from the map's origin too (shadow_map.h): under map_fit=stable a light
+    // moving within one lattice cell then changes nothing, as for every light-map technique.
+    const Light atOrigin = lightAtMapOrigin(light, map_);
+    setHorizonClamp(options_.lightMap.horizon, atOrigin);
+    state_.prepare(scene, atOrigin);
     zMin_ = minMapDepth(map_);
     lightSize_ = light.extent();
     searchScale_ = map_.orthographic ? lightSize_ : lightSize_ / zMin_;
