@@ -82,6 +82,32 @@ class CmjSampler {
       jitterLanes<false>(strata, patterns, column, row, sx, sy, count, ux, uy);
   }
 
+  // For many samples of one pattern (a pixel that fills ray packets alone): sampleInStratum's two
+  // permutations tabulated once, sx of every column (columns() entries) and sy of every row (rows()
+  // entries), so that each sample then costs its jitter alone.
+  void tabulatePermutations(uint32_t pattern, uint32_t* columnSx, uint32_t* rowSy) const {
+    for (uint32_t c = 0; c < m_; ++c) columnSx[c] = permute(c, m_, pattern * 0x68bc21ebu);
+    for (uint32_t r = 0; r < n_; ++r) rowSy[r] = permute(r, n_, pattern * 0x02e5be93u);
+  }
+  // sampleLanes for count <= 16 lanes that all take `pattern`, through its tables
+  // (tabulatePermutations): the same points, bit for bit.
+  [[gnu::always_inline]] void sampleLanesOfOnePattern(const uint32_t* strata, uint32_t pattern,
+                                                      const uint32_t* columnSx, const uint32_t* rowSy, int count,
+                                                      float* ux, float* uy) const {
+    alignas(64) uint32_t column[16], row[16], sx[16], sy[16], patterns[16];
+    for (int i = 0; i < count; ++i) {
+      row[i] = rowOf(strata[i]);
+      column[i] = strata[i] - row[i] * m_;
+      sx[i] = columnSx[column[i]];
+      sy[i] = rowSy[row[i]];
+      patterns[i] = pattern;
+    }
+    if (((m_ & (m_ - 1)) | (n_ & (n_ - 1))) == 0)
+      jitterLanes<true>(strata, patterns, column, row, sx, sy, count, ux, uy);
+    else
+      jitterLanes<false>(strata, patterns, column, row, sx, sy, count, ux, uy);
+  }
+
  private:
   static constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 

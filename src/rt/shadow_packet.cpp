@@ -77,40 +77,83 @@ struct Out {
 #define PENUMBRA_LANE_OUT \
   Out { dirX, dirY, dirZ, tMax, weight, fix }
 
+// Light::sample's set-up for a sphere light at P: the silhouette disk seen from P and its frame
+// around P -> centre. The same operations whether made per lane (sphereKernel) or once for lanes that
+// share P (onePointSphereKernel), so the rays are the same to the bit.
+struct SphereView {
+  float tx, ty, tz, d2;                //!< centre - P and its squared length
+  float wx, wy, wz;                    //!< unit P -> centre
+  float fxx, fxy, fxz, fyx, fyy, fyz;  //!< the disk's frame
+  float h2, diskRadius, axial;         //!< d2 - r2, the disk's radius, the distance to its plane
+};
+inline __attribute__((always_inline)) SphereView sphereView(const LightConstants& k, float px, float py, float pz) {
+  SphereView s;
+  s.tx = k.center.x - px;
+  s.ty = k.center.y - py;
+  s.tz = k.center.z - pz;
+  s.d2 = s.tx * s.tx + s.ty * s.ty + s.tz * s.tz;
+  const float invD = 1.0f / std::sqrt(s.d2);
+  s.wx = s.tx * invD;
+  s.wy = s.ty * invD;
+  s.wz = s.tz * invD;
+  const float sign = std::copysign(1.0f, s.wz);
+  const float fa = -1.0f / (sign + s.wz);
+  const float fb = s.wx * s.wy * fa;
+  s.fxx = 1.0f + sign * s.wx * s.wx * fa;
+  s.fxy = sign * fb;
+  s.fxz = -sign * s.wx;
+  s.fyx = fb;
+  s.fyy = sign + s.wy * s.wy * fa;
+  s.fyz = -s.wy;
+  s.h2 = s.d2 - k.r2;
+  s.diskRadius = k.radius * std::sqrt(s.h2) * invD;
+  s.axial = s.h2 * invD;
+  return s;
+}
+
+// A point of the disk (u in [0,1)^2), the direction to it, the sphere's front surface, and the ray
+// from the origin O to that point. Flags the lanes the scalar path takes (P inside the light, or a
+// degenerate ray).
+inline __attribute__((always_inline)) void sphereRay(const LightConstants& k, const SphereView& v, float ux, float uy,
+                                                     float px, float py, float pz, float ox, float oy, float oz,
+                                                     float epsilon, float& dirX, float& dirY, float& dirZ, float& tMax,
+                                                     int32_t& fixOut) {
+  float qx, qy;
+  concentric(ux, uy, qx, qy);
+  qx *= v.diskRadius;
+  qy *= v.diskRadius;
+  float sx = v.axial * v.wx + qx * v.fxx + qy * v.fyx;
+  float sy = v.axial * v.wy + qx * v.fxy + qy * v.fyy;
+  float sz = v.axial * v.wz + qx * v.fxz + qy * v.fyz;
+  const float sInv = 1.0f / std::sqrt(sx * sx + sy * sy + sz * sz);
+  sx *= sInv;
+  sy *= sInv;
+  sz *= sInv;
+  const float b = sx * v.tx + sy * v.ty + sz * v.tz;
+  const float t = b - std::sqrt(std::max(0.0f, b * b - v.h2));
+  int32_t fix = !(v.d2 > k.r2);  // P inside the light (or not finite): the scalar path's special case
+  segmentTo(px + t * sx, py + t * sy, pz + t * sz, ox, oy, oz, epsilon, dirX, dirY, dirZ, tMax, fix);
+  fixOut = fix;
+}
+
 inline __attribute__((always_inline)) void sphereKernel(const LightConstants& k, const ShadowLanes& __restrict in,
                                                         int count, float epsilon, const Out out) {
   for (int i = 0; i < count; ++i) {
-    // Light::sample's set-up: the silhouette disk seen from P, its frame around P -> centre.
-    const float tx = k.center.x - in.px[i], ty = k.center.y - in.py[i], tz = k.center.z - in.pz[i];
-    const float d2 = tx * tx + ty * ty + tz * tz;
-    const float invD = 1.0f / std::sqrt(d2);
-    const float wx = tx * invD, wy = ty * invD, wz = tz * invD;
-    const float sign = std::copysign(1.0f, wz);
-    const float fa = -1.0f / (sign + wz);
-    const float fb = wx * wy * fa;
-    const float fxx = 1.0f + sign * wx * wx * fa, fxy = sign * fb, fxz = -sign * wx;
-    const float fyx = fb, fyy = sign + wy * wy * fa, fyz = -wy;
-    const float h2 = d2 - k.r2;
-    const float diskRadius = k.radius * std::sqrt(h2) * invD;
-    const float axial = h2 * invD;
-    // Then a point of the disk, the direction to it, the sphere's front surface.
-    float qx, qy;
-    concentric(in.ux[i], in.uy[i], qx, qy);
-    qx *= diskRadius;
-    qy *= diskRadius;
-    float sx = axial * wx + qx * fxx + qy * fyx;
-    float sy = axial * wy + qx * fxy + qy * fyy;
-    float sz = axial * wz + qx * fxz + qy * fyz;
-    const float sInv = 1.0f / std::sqrt(sx * sx + sy * sy + sz * sz);
-    sx *= sInv;
-    sy *= sInv;
-    sz *= sInv;
-    const float b = sx * tx + sy * ty + sz * tz;
-    const float t = b - std::sqrt(std::max(0.0f, b * b - h2));
-    int32_t fix = !(d2 > k.r2);  // P inside the light (or not finite): the scalar path's special case
-    segmentTo(in.px[i] + t * sx, in.py[i] + t * sy, in.pz[i] + t * sz, in.ox[i], in.oy[i], in.oz[i], epsilon,
-              out.dirX[i], out.dirY[i], out.dirZ[i], out.tMax[i], fix);
-    out.fix[i] = fix;
+    const SphereView v = sphereView(k, in.px[i], in.py[i], in.pz[i]);
+    sphereRay(k, v, in.ux[i], in.uy[i], in.px[i], in.py[i], in.pz[i], in.ox[i], in.oy[i], in.oz[i], epsilon,
+              out.dirX[i], out.dirY[i], out.dirZ[i], out.tMax[i], out.fix[i]);
+    out.weight[i] = 1.0f;
+  }
+}
+
+// Lanes that share one point P and origin O (lane 0's): the view made once, by the caller.
+inline __attribute__((always_inline)) void onePointSphereKernel(const LightConstants& k, const SphereView& v,
+                                                                const ShadowLanes& __restrict in, int count,
+                                                                float epsilon, const Out out) {
+  const float px = in.px[0], py = in.py[0], pz = in.pz[0], ox = in.ox[0], oy = in.oy[0], oz = in.oz[0];
+  for (int i = 0; i < count; ++i) {
+    sphereRay(k, v, in.ux[i], in.uy[i], px, py, pz, ox, oy, oz, epsilon, out.dirX[i], out.dirY[i], out.dirZ[i],
+              out.tMax[i], out.fix[i]);
     out.weight[i] = 1.0f;
   }
 }
@@ -178,6 +221,11 @@ inline __attribute__((always_inline)) void directionalKernel(const LightConstant
 PENUMBRA_LANE_CLONES void sphereLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count,
                                       float epsilon, PENUMBRA_LANE_OUTPUTS) {
   sphereKernel(k, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void onePointSphereLanes(const LightConstants& k, const SphereView& v,
+                                              const ShadowLanes& __restrict in, int count, float epsilon,
+                                              PENUMBRA_LANE_OUTPUTS) {
+  onePointSphereKernel(k, v, in, count, epsilon, PENUMBRA_LANE_OUT);
 }
 PENUMBRA_LANE_CLONES void diskLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon,
                                     PENUMBRA_LANE_OUTPUTS) {
@@ -337,15 +385,40 @@ void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& la
   }
 }
 
-void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
-                     float* weight) {
-  alignas(64) int32_t fix[16];
+namespace {
+
+// The lanes the vector kernels flagged (fix[i]), and every lane of a polygon light (scalar): the
+// scalar path, rt::shadowRay on Light::sample.
+void scalarLanes(const Light& light, const ShadowLanes& lanes, int count, float epsilon, const int32_t* fix,
+                 bool scalar, RayPacket16& packet, float* weight) {
+  for (int i = 0; i < count; ++i) {
+    if (!scalar && !fix[i]) continue;
+    const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]);
+    const LightSample s = light.sample(wsP, Vec2(lanes.ux[i], lanes.uy[i]));
+    const Ray ray = shadowRay(wsP, Vec3(lanes.ox[i], lanes.oy[i], lanes.oz[i]), s.wsDirection, s.distance, epsilon);
+    packet.dirX[i] = ray.direction.x;
+    packet.dirY[i] = ray.direction.y;
+    packet.dirZ[i] = ray.direction.z;
+    packet.tMax[i] = ray.tMax;
+    weight[i] = s.weight;
+  }
+}
+
+void copyOrigins(const ShadowLanes& lanes, int count, RayPacket16& packet) {
   for (int i = 0; i < count; ++i) {
     packet.orgX[i] = lanes.ox[i];
     packet.orgY[i] = lanes.oy[i];
     packet.orgZ[i] = lanes.oz[i];
     packet.tMin[i] = 0.0f;
   }
+}
+
+}  // namespace
+
+void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                     float* weight) {
+  alignas(64) int32_t fix[16];
+  copyOrigins(lanes, count, packet);
   LightConstants k;
   k.center = light.center();
   k.radius = light.radius();
@@ -380,17 +453,24 @@ void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, fl
       scalar = true;  // a triangle picked by area per sample: not worth a vector form
       break;
   }
-  for (int i = 0; i < count; ++i) {
-    if (!scalar && !fix[i]) continue;
-    const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]);
-    const LightSample s = light.sample(wsP, Vec2(lanes.ux[i], lanes.uy[i]));
-    const Ray ray = shadowRay(wsP, Vec3(lanes.ox[i], lanes.oy[i], lanes.oz[i]), s.wsDirection, s.distance, epsilon);
-    packet.dirX[i] = ray.direction.x;
-    packet.dirY[i] = ray.direction.y;
-    packet.dirZ[i] = ray.direction.z;
-    packet.tMax[i] = ray.tMax;
-    weight[i] = s.weight;
+  scalarLanes(light, lanes, count, epsilon, fix, scalar, packet, weight);
+}
+
+void buildShadowRaysFromOnePoint(const Light& light, const ShadowLanes& lanes, int count, float epsilon,
+                                 RayPacket16& packet, float* weight) {
+  if (light.shape() != LightShape::Sphere) {
+    buildShadowRays(light, lanes, count, epsilon, packet, weight);
+    return;
   }
+  alignas(64) int32_t fix[16];
+  copyOrigins(lanes, count, packet);
+  LightConstants k;
+  k.center = light.center();
+  k.radius = light.radius();
+  k.r2 = k.radius * k.radius;
+  const SphereView view = sphereView(k, lanes.px[0], lanes.py[0], lanes.pz[0]);
+  onePointSphereLanes(k, view, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
+  scalarLanes(light, lanes, count, epsilon, fix, false, packet, weight);
 }
 
 }  // namespace penumbra::rt

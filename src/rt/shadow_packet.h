@@ -50,6 +50,12 @@ void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& la
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight);
 
+// buildShadowRays for lanes that all hold lane 0's P, Ng and O (many samples of one point): the
+// light's per-point set-up (a sphere's silhouette disk seen from P) is made once instead of per
+// lane. The same rays and weights to the bit.
+void buildShadowRaysFromOnePoint(const Light& light, const ShadowLanes& lanes, int count, float epsilon,
+                                 RayPacket16& packet, float* weight);
+
 // Writes lanes [0, count) of `packet` with the ray from each lane's point to the light's centre
 // (origin, direction, tMin, tMax; the rest as the packet holds them), the ray raytraced-hard and parker
 // trace: rt::shadowRay(P, rt::offsetOrigin(P, Ng, side, epsilon), d, Light::distanceToCenter(P),

@@ -18,8 +18,14 @@
 // are not left idle (each pixel's samples are summed in the same order, so V does not depend on the
 // packing); the rays' origins, the sample patterns and points and the rays are made sixteen at a
 // time in vector form (rt::offsetOrigins, patternLanes, CmjSampler::sampleLanes,
-// rt::buildShadowRays), compiled for AVX2 and AVX-512F too (core/target_clones.h); the hot loop
-// allocates nothing; rows run in parallel with oneTBB. The Embree scene is built by the first prepare
+// rt::buildShadowRays), compiled for AVX2 and AVX-512F too (core/target_clones.h). Above 16 spp, where
+// a pixel fills its packets alone, what depends on the pixel only is made once per pixel, not per
+// packet: its lanes' origins and pattern, its pattern's permutations of the sample grid
+// (CmjSampler::tabulatePermutations) and a sphere light's silhouette disk (rt::buildShadowRaysFromOnePoint).
+// Under unit weights (every light but a limb-darkened sun) a packet's visible lanes are counted, not
+// summed one by one, and V and its error are read from a table by that count. Each gives the same
+// floats as the direct form, bit for bit. The hot loop allocates nothing; rows run in parallel with
+// oneTBB. The Embree scene is built by the first prepare
 // and kept by later ones while every object's id, positions and triangles are the same (a light or
 // camera moving over a static scene).
 #include "penumbra/reference.h"
@@ -56,6 +62,14 @@ PENUMBRA_CLONES_AVX512 void sampleLanes(const CmjSampler& sampler, const uint32_
                                         const uint32_t* __restrict patterns, int count, float* __restrict ux,
                                         float* __restrict uy) {
   sampler.sampleLanes(strata, patterns, count, ux, uy);
+}
+
+// CmjSampler::sampleLanesOfOnePattern, compiled for AVX2 and AVX-512F too.
+PENUMBRA_CLONES_AVX512 void sampleLanesOfOnePattern(const CmjSampler& sampler, const uint32_t* __restrict strata,
+                                                    uint32_t pattern, const uint32_t* __restrict columnSx,
+                                                    const uint32_t* __restrict rowSy, int count, float* __restrict ux,
+                                                    float* __restrict uy) {
+  sampler.sampleLanesOfOnePattern(strata, pattern, columnSx, rowSy, count, ux, uy);
 }
 
 }  // namespace
@@ -113,6 +127,34 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
   const bool wholePixels = spp <= 16;
   const int pixelsPerPacket = wholePixels ? static_cast<int>(16 / spp) : 1;
 
+  // A pixel's V and the standard error of its estimate from its sums.
+  auto estimate = [spp](const auto& sums, float& V, float& error) {
+    const double v = sums.w > 0.0 ? sums.wVis / sums.w : 1.0;
+    double se = 0.0;
+    if (spp > 1 && sums.w > 0.0) {
+      // sum (w (vis - V))^2 with vis in {0, 1}: sum w^2 vis (1 - 2V) + V^2 sum w^2.
+      const double ss = std::max(0.0, sums.w2Vis * (1.0 - 2.0 * v) + v * v * sums.w2);
+      const double meanW = sums.w / spp;
+      se = std::sqrt(ss / (spp - 1)) / meanW / std::sqrt(static_cast<double>(spp));
+    }
+    V = static_cast<float>(v);
+    error = static_cast<float>(se);
+  };
+  // With unit weights (Sums::whole) the sums are {spp, k, spp, k} for k visible samples, so V and its
+  // error take spp + 1 values: tabulated once (up to 2^16 spp), the same floats estimate() gives, where
+  // per pixel two square roots and three divisions cost a fifth of the pass at 4 spp.
+  std::vector<float> wholeV, wholeError;
+  if (spp <= (1u << 16)) {
+    wholeV.resize(spp + 1);
+    wholeError.resize(spp + 1);
+    struct {
+      double w, wVis, w2, w2Vis;
+    } whole{static_cast<double>(spp), 0.0, static_cast<double>(spp), 0.0};
+    for (uint32_t k = 0; k <= spp; ++k) {
+      whole.wVis = whole.w2Vis = static_cast<double>(k);
+      estimate(whole, wholeV[k], wholeError[k]);
+    }
+  }
   std::atomic<int> rowsDone{0};
   std::atomic<int64_t> hitPixels{0};
   // Each row's sum and maximum of the standard error, summed over the rows in order afterwards (the
@@ -125,43 +167,74 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     float weights[16];
     int xs[16];
     int64_t localHits = 0;
-    // Sums in double: with millions of samples a float sum would lose the low bits of V.
+    // Sums in double: with millions of samples a float sum would lose the low bits of V. While every
+    // weight so far is 1 (every light but a limb-darkened sun), the sums are whole numbers, exact in
+    // a double in any order: a packet's lanes are then counted rather than summed one by one (a chain
+    // of dependent additions that cost a third of the pass at high spp), the same sums to the bit.
     struct Sums {
       double w = 0.0, wVis = 0.0, w2 = 0.0, w2Vis = 0.0;
+      bool whole = true;  //!< every weight added so far was 1
     };
     auto add = [&](Sums& sums, int first, int count) {
+      bool unitWeights = sums.whole;
+      int visible = 0;
+      for (int i = first; i < first + count; ++i) {
+        unitWeights &= weights[i] == 1.0f;
+        visible += packet.blocked(i) ? 0 : 1;
+      }
+      if (unitWeights) {
+        sums.w += count;
+        sums.wVis += visible;
+        sums.w2 += count;
+        sums.w2Vis += visible;
+        return;
+      }
+      sums.whole = false;
+      // In locals: summed through the struct, each step went through memory.
+      double sw = sums.w, swVis = sums.wVis, sw2 = sums.w2, sw2Vis = sums.w2Vis;
       for (int i = first; i < first + count; ++i) {
         const double w = weights[i];
         const double vis = packet.blocked(i) ? 0.0 : 1.0;
-        sums.w += w;
-        sums.wVis += w * vis;
-        sums.w2 += w * w;
-        sums.w2Vis += w * w * vis;
+        sw += w;
+        swVis += w * vis;
+        sw2 += w * w;
+        sw2Vis += w * w * vis;
       }
+      sums = {sw, swVis, sw2, sw2Vis, false};
     };
-    auto finish = [&](const Sums& sums, int x, int y) {
-      const double V = sums.w > 0.0 ? sums.wVis / sums.w : 1.0;
-      double se = 0.0;
-      if (spp > 1 && sums.w > 0.0) {
-        // sum (w (vis - V))^2 with vis in {0, 1}: sum w^2 vis (1 - 2V) + V^2 sum w^2.
-        const double ss = std::max(0.0, sums.w2Vis * (1.0 - 2.0 * V) + V * V * sums.w2);
-        const double meanW = sums.w / spp;
-        se = std::sqrt(ss / (spp - 1)) / meanW / std::sqrt(static_cast<double>(spp));
+    // The row being traced: its images' rows and its error sum and maximum, kept in locals and
+    // stored once per row (through the vectors, every pixel's update went through memory).
+    float* vRow = nullptr;
+    float* errorRow = nullptr;
+    double errorSum = 0.0;
+    float errorMax = 0.0f;
+    auto finish = [&](const Sums& sums, int x) {
+      float V, error;
+      if (sums.whole && !wholeV.empty()) {  // V and its error tabulated by the count of visible samples
+        const auto visible = static_cast<size_t>(sums.wVis);
+        V = wholeV[visible];
+        error = wholeError[visible];
+      } else {
+        estimate(sums, V, error);
       }
-      v(x, y) = static_cast<float>(V);
-      stdError_(x, y) = static_cast<float>(se);
-      rowErrorSum[static_cast<size_t>(y)] += stdError_(x, y);
-      rowErrorMax[static_cast<size_t>(y)] = std::max(rowErrorMax[static_cast<size_t>(y)], stdError_(x, y));
+      vRow[x] = V;
+      errorRow[x] = error;
+      errorSum += error;
+      errorMax = std::max(errorMax, error);
     };
     alignas(64) uint32_t laneStrata[16], lanePatterns[16];
+    std::vector<uint32_t> columnSx(wholePixels ? 0 : columns), rowSy(wholePixels ? 0 : rows);
     alignas(64) uint64_t lanePixels[16];
-    // Lanes [0, group n): lane i is sample first + i % n of pixel xs[i / n] of row y. Every lane holds
-    // its pixel's point, normal and index, and the origins and patterns are made for all of them in one
-    // vector loop (for each sample where n > 1, which costs less than a pixel-by-pixel set-up).
-    auto fillLanes = [&](int y, int group, int n, uint32_t first) {
+    // Lanes [0, group n): lane i is a sample of pixel xs[i / n] of row y. Every lane holds its pixel's
+    // point, normal and index, and the origins and patterns are made for all of them in one vector loop
+    // (for each sample where n > 1, which costs less than a pixel-by-pixel set-up).
+    const Vec3* positionRow = nullptr;
+    const Vec3* normalRow = nullptr;
+    auto fillSurfaces = [&](int y, int group, int n) {
+      const uint64_t rowStart = static_cast<uint64_t>(y) * width;
       for (int j = 0; j < group; ++j) {
-        const Vec3 p = gbuffer.wsPosition(xs[j], y), ng = gbuffer.wsGeometricNormal(xs[j], y);
-        const uint64_t pixel = static_cast<uint64_t>(y) * width + xs[j];
+        const Vec3 p = positionRow[xs[j]], ng = normalRow[xs[j]];
+        const uint64_t pixel = rowStart + static_cast<uint64_t>(xs[j]);
         for (int lane = j * n; lane < (j + 1) * n; ++lane) {
           lanes.setSurface(lane, p, ng);
           lanePixels[lane] = pixel;
@@ -170,45 +243,68 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       const int count = group * n;
       rt::offsetOrigins(light, epsilon, count, lanes);
       patternLanes(seed, count, lanePixels, lanePatterns);
-      for (int lane = 0; lane < count; ++lane) {
-        const uint32_t index = first + static_cast<uint32_t>(lane % n);
-        laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, lanePatterns[lane]);
-      }
       return count;
     };
-    // Traces lanes [0, count): their sample points, rays and occlusion.
-    auto trace = [&](int count) {
-      sampleLanes(sampler, laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
-      rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
-      rays.occluded16(packet, count);
-    };
     for (int y = range.begin(); y < range.end(); ++y) {
+      vRow = v.row(y);
+      errorRow = stdError_.row(y);
+      positionRow = gbuffer.wsPosition.row(y);
+      normalRow = gbuffer.wsGeometricNormal.row(y);
+      const int32_t* objectRow = gbuffer.objectId.row(y);
+      errorSum = 0.0;
+      errorMax = 0.0f;
       int x = 0;
       while (x < width) {
         // The next pixelsPerPacket pixels of the row that see geometry.
         int group = 0;
         for (; x < width && group < pixelsPerPacket; ++x)
-          if (gbuffer.hit(x, y)) xs[group++] = x;
+          if (objectRow[x] != kNoObject) xs[group++] = x;
         if (group == 0) break;
         localHits += group;
         if (wholePixels) {
+          // Lane j n + k takes sample k of pixel xs[j].
           const int n = static_cast<int>(spp);
-          trace(fillLanes(y, group, n, 0));
+          const int count = fillSurfaces(y, group, n);
+          for (int j = 0; j < group; ++j)
+            for (int k = 0; k < n; ++k)
+              laneStrata[j * n + k] = fullGrid ? gridOrder[static_cast<size_t>(k)]
+                                               : sampler.stratum(static_cast<uint32_t>(k), lanePatterns[j * n]);
+          sampleLanes(sampler, laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
+          // A pixel alone in its packet (9 to 16 spp): the light's per-point set-up once, the same rays.
+          if (group == 1)
+            rt::buildShadowRaysFromOnePoint(light, lanes, count, epsilon, packet, weights);
+          else
+            rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
+          rays.occluded16(packet, count);
           for (int j = 0; j < group; ++j) {
             Sums sums;
             add(sums, j * n, n);
-            finish(sums, xs[j], y);
+            finish(sums, xs[j]);
           }
           continue;
         }
+        // The pixel fills every packet: its lanes' point, origin and pattern, and its pattern's
+        // permutations of the grid's columns and rows, are made once.
+        fillSurfaces(y, 1, 16);
+        const uint32_t pattern = lanePatterns[0];
+        sampler.tabulatePermutations(pattern, columnSx.data(), rowSy.data());
         Sums sums;
         for (uint32_t first = 0; first < spp; first += 16) {
           const int count = static_cast<int>(std::min<uint32_t>(16, spp - first));
-          trace(fillLanes(y, 1, count, first));
+          for (int lane = 0; lane < count; ++lane) {
+            const uint32_t index = first + static_cast<uint32_t>(lane);
+            laneStrata[lane] = fullGrid ? gridOrder[index] : sampler.stratum(index, pattern);
+          }
+          sampleLanesOfOnePattern(sampler, laneStrata, pattern, columnSx.data(), rowSy.data(), count, lanes.ux,
+                                  lanes.uy);
+          rt::buildShadowRaysFromOnePoint(light, lanes, count, epsilon, packet, weights);
+          rays.occluded16(packet, count);
           add(sums, 0, count);
         }
-        finish(sums, xs[0], y);
+        finish(sums, xs[0]);
       }
+      rowErrorSum[static_cast<size_t>(y)] = errorSum;
+      rowErrorMax[static_cast<size_t>(y)] = errorMax;
       // About a hundred progress reports per pass, whatever the image height.
       const int done = ++rowsDone;
       if (done * 100 / height != (done - 1) * 100 / height) reportProgress(static_cast<double>(done) / height);

@@ -75,6 +75,35 @@ TEST(CmjSampler, LanesAreTheSamplesBitForBit) {
   }
 }
 
+TEST(CmjSampler, OnePatternLanesAreTheLanesBitForBit) {
+  // sampleLanesOfOnePattern (the permutations tabulated once for a pattern) gives the floats
+  // sampleLanes gives for lanes that all take that pattern, on every grid the reference uses.
+  for (const uint32_t count : {17u, 48u, 64u, 100u, 256u, 1000u, 1024u, 4096u}) {
+    const CmjSampler sampler(count);
+    const uint32_t cells = sampler.columns() * sampler.rows();
+    SCOPED_TRACE(::testing::Message() << "count " << count);
+    std::vector<uint32_t> columnSx(sampler.columns()), rowSy(sampler.rows());
+    for (uint32_t trial = 0; trial < 50; ++trial) {
+      const uint32_t pattern = hash32(0x51u + trial);
+      sampler.tabulatePermutations(pattern, columnSx.data(), rowSy.data());
+      for (int lanes = 1; lanes <= 16; lanes += 3) {
+        uint32_t strata[16], patterns[16];
+        float ux[16], uy[16], oneX[16], oneY[16];
+        for (int i = 0; i < lanes; ++i) {
+          strata[i] = hash32(trial * 64 + static_cast<uint32_t>(i)) % cells;
+          patterns[i] = pattern;
+        }
+        sampler.sampleLanes(strata, patterns, lanes, ux, uy);
+        sampler.sampleLanesOfOnePattern(strata, pattern, columnSx.data(), rowSy.data(), lanes, oneX, oneY);
+        for (int i = 0; i < lanes; ++i) {
+          ASSERT_EQ(oneX[i], ux[i]) << "stratum " << strata[i] << " pattern " << pattern;
+          ASSERT_EQ(oneY[i], uy[i]) << "stratum " << strata[i] << " pattern " << pattern;
+        }
+      }
+    }
+  }
+}
+
 TEST(CmjSampler, StrataDecomposeTheSample) {
   // sample(i) is the sample of cell stratum(i); stratum() is a permutation of the cells when count
   // == m * n, and sampleInStratum(s) lies in cell (s % m, s / m) of the m x n grid.

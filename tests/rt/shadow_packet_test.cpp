@@ -1,6 +1,7 @@
 // Tests of the vector shadow-ray builder (src/rt/shadow_packet.h): every lane is the ray the scalar
 // path builds (rt::shadowRay towards Light::sample) for every light shape, to float rounding, the
-// degenerate lanes exactly; the lanes' origins are rt::offsetOrigin's to the bit, and the rays to the light's
+// degenerate lanes exactly; the rays of lanes sharing one point (buildShadowRaysFromOnePoint) are the per-lane
+// builder's to the bit; the lanes' origins are rt::offsetOrigin's to the bit, and the rays to the light's
 // centre rt::shadowRay's; the polynomial sine and cosine are
 // within a few ulp of libm's; packets built in place trace as the same rays traced one at a time.
 #include <bit>
@@ -113,6 +114,45 @@ TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
       float weight[16];
       rt::buildShadowRays(light, lanes, count, epsilon, packet, weight);
       for (int i = 0; i < count; ++i) expectLaneMatches(light, lanes, i, packet, weight, epsilon);
+    }
+  }
+}
+
+TEST(ShadowPacket, OnePointRaysAreTheLaneRaysToTheBit) {
+  // buildShadowRaysFromOnePoint (the light's per-point set-up made once) builds, for lanes that all
+  // hold one point, the rays and weights buildShadowRays builds, bit for bit, on every shape; points
+  // inside the sphere light among them (the scalar path's lanes).
+  const float epsilon = 1e-4f;
+  for (const auto& [name, light] : everyShape()) {
+    SCOPED_TRACE(name);
+    for (uint32_t trial = 0; trial < 32; ++trial) {
+      rt::ShadowLanes lanes;
+      const int count = 1 + static_cast<int>((trial * 7) % 16);
+      const Vec3 inside = light.center() + Vec3(0.0f, 0.01f, 0.0f);
+      setRandomSurface(lanes, 0, trial * 977, light, trial == 3 && !light.isDirectional() ? &inside : nullptr);
+      for (int i = 1; i < count; ++i)
+        lanes.setSurface(i, Vec3(lanes.px[0], lanes.py[0], lanes.pz[0]), Vec3(lanes.nx[0], lanes.ny[0], lanes.nz[0]));
+      rt::offsetOrigins(light, epsilon, count, lanes);
+      for (int i = 0; i < count; ++i) {
+        lanes.ux[i] = unit(trial * 131 + static_cast<uint32_t>(i));
+        lanes.uy[i] = unit(trial * 131 + static_cast<uint32_t>(i) + 64);
+      }
+      RayPacket16 perLane, onePoint;
+      float perLaneWeight[16], onePointWeight[16];
+      rt::buildShadowRays(light, lanes, count, epsilon, perLane, perLaneWeight);
+      rt::buildShadowRaysFromOnePoint(light, lanes, count, epsilon, onePoint, onePointWeight);
+      for (int i = 0; i < count; ++i) {
+        SCOPED_TRACE(::testing::Message() << "lane " << i);
+        EXPECT_EQ(onePoint.orgX[i], perLane.orgX[i]);
+        EXPECT_EQ(onePoint.orgY[i], perLane.orgY[i]);
+        EXPECT_EQ(onePoint.orgZ[i], perLane.orgZ[i]);
+        EXPECT_EQ(onePoint.tMin[i], perLane.tMin[i]);
+        EXPECT_EQ(onePoint.dirX[i], perLane.dirX[i]);
+        EXPECT_EQ(onePoint.dirY[i], perLane.dirY[i]);
+        EXPECT_EQ(onePoint.dirZ[i], perLane.dirZ[i]);
+        EXPECT_EQ(onePoint.tMax[i], perLane.tMax[i]);
+        EXPECT_EQ(onePointWeight[i], perLaneWeight[i]);
+      }
     }
   }
 }
