@@ -276,6 +276,15 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           else
             rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
           rays.occluded16(packet, count);
+          if (n == 1) {
+            // One sample: V = w vis / w is vis itself (w > 0; 1 where w = 0) and its error 0, the sums'
+            // values without them.
+            for (int j = 0; j < group; ++j) {
+              vRow[xs[j]] = weights[j] > 0.0f && packet.blocked(j) ? 0.0f : 1.0f;
+              errorRow[xs[j]] = 0.0f;
+            }
+            continue;
+          }
           for (int j = 0; j < group; ++j) {
             Sums sums;
             add(sums, j * n, n);
