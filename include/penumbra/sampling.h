@@ -69,10 +69,8 @@ class CmjSampler {
   [[gnu::always_inline]] void sampleLanes(const uint32_t* strata, const uint32_t* patterns, int count, float* ux,
                                           float* uy) const {
     alignas(64) uint32_t column[16], row[16], sx[16], sy[16];
-    for (int i = 0; i < count; ++i) {
-      row[i] = rowOf(strata[i]);
-      column[i] = strata[i] - row[i] * m_;
-    }
+    rowsOf(strata, count, row);
+    for (int i = 0; i < count; ++i) column[i] = strata[i] - row[i] * m_;
     permuteLanes(column, m_, patterns, 0x68bc21ebu, count, sx);
     permuteLanes(row, n_, patterns, 0x02e5be93u, count, sy);
     // Dividing by a power of two is multiplying by its reciprocal, bit for bit, and much cheaper.
@@ -95,8 +93,8 @@ class CmjSampler {
                                                       const uint32_t* columnSx, const uint32_t* rowSy, int count,
                                                       float* ux, float* uy) const {
     alignas(64) uint32_t column[16], row[16], sx[16], sy[16], patterns[16];
+    rowsOf(strata, count, row);
     for (int i = 0; i < count; ++i) {
-      row[i] = rowOf(strata[i]);
       column[i] = strata[i] - row[i] * m_;
       sx[i] = columnSx[column[i]];
       sy[i] = rowSy[row[i]];
@@ -195,6 +193,15 @@ class CmjSampler {
   // otherwise a division.
   uint32_t rowOf(uint32_t s) const {
     return exactRow_ ? static_cast<uint32_t>((static_cast<uint64_t>(s) * rowMagic_) >> 32) : s / m_;
+  }
+  // rowOf for lanes [0, count): one column (m = 1, one sample a pixel) without the division, which
+  // does not vectorize.
+  [[gnu::always_inline]] void rowsOf(const uint32_t* strata, int count, uint32_t* row) const {
+    if (m_ == 1) {
+      for (int i = 0; i < count; ++i) row[i] = strata[i];
+      return;
+    }
+    for (int i = 0; i < count; ++i) row[i] = rowOf(strata[i]);
   }
   // A float in [0, 1) from (i, p) (Kensler, Listing 4).
   static float randomFloat(uint32_t i, uint32_t p) {
