@@ -38,7 +38,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "core/image_fill.h"
 #include "core/target_clones.h"
 #include "penumbra/error.h"
 #include "penumbra/registry.h"
@@ -76,6 +75,13 @@ PENUMBRA_CLONES_AVX512 void deinterleave16(const float* __restrict xyz, float* _
   }
 }
 
+// Whether the sixteen pixels from `objectIds` on all see geometry (a vector compare).
+bool allSeeGeometry16(const int32_t* __restrict objectIds) {
+  bool all = true;
+  for (int i = 0; i < 16; ++i) all &= objectIds[i] != kNoObject;
+  return all;
+}
+
 // CmjSampler::sampleLanesOfOnePattern, compiled for AVX2 and AVX-512F too.
 PENUMBRA_CLONES_AVX512 void sampleLanesOfOnePattern(const CmjSampler& sampler, const uint32_t* __restrict strata,
                                                     uint32_t pattern, const uint32_t* __restrict columnSx,
@@ -109,8 +115,10 @@ void ReferenceTechnique::prepareImpl(const Scene& scene, const Light& light) {
 void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
   if (!rays_ || !light_) fail("reference: visibility() called before prepare(); call prepare(scene, light) first");
   const int width = gbuffer.width(), height = gbuffer.height();
-  resetInParallel(v, width, height, 1.0f);
-  resetInParallel(stdError_, width, height, 0.0f);  // in place: fresh pages every frame cost a fault each
+  // Every pixel is written by the row loop below (1 and error 0 where nothing is seen), in place:
+  // fresh pages every frame cost a fault each.
+  v.resizeForOverwrite(width, height);
+  stdError_.resizeForOverwrite(width, height);
   const Light& light = *light_;
   const RayScene& rays = *rays_;
   const float epsilon = epsilon_;
@@ -235,6 +243,8 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       errorMax = std::max(errorMax, error);
     };
     alignas(64) uint32_t laneStrata[16], lanePatterns[16];
+    if (wholePixels && fullGrid)
+      for (int lane = 0; lane < 16; ++lane) laneStrata[lane] = gridOrder[static_cast<size_t>(lane) % spp];
     std::vector<uint32_t> columnSx(wholePixels ? 0 : columns), rowSy(wholePixels ? 0 : rows);
     alignas(64) uint64_t lanePixels[16];
     // Lanes [0, group n): lane i is a sample of pixel xs[i / n] of row y. Every lane holds its pixel's
@@ -276,20 +286,32 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
       errorMax = 0.0f;
       int x = 0;
       while (x < width) {
-        // The next pixelsPerPacket pixels of the row that see geometry.
+        // The next pixelsPerPacket pixels of the row that see geometry; a pixel that sees nothing is lit.
         int group = 0;
-        for (; x < width && group < pixelsPerPacket; ++x)
-          if (objectRow[x] != kNoObject) xs[group++] = x;
+        if (pixelsPerPacket == 16 && x + 16 <= width && allSeeGeometry16(objectRow + x)) {
+          for (int j = 0; j < 16; ++j) xs[j] = x + j;
+          group = 16;
+          x += 16;
+        } else {
+          for (; x < width && group < pixelsPerPacket; ++x) {
+            if (objectRow[x] != kNoObject) {
+              xs[group++] = x;
+            } else {
+              vRow[x] = 1.0f;
+              errorRow[x] = 0.0f;
+            }
+          }
+        }
         if (group == 0) break;
         localHits += group;
         if (wholePixels) {
-          // Lane j n + k takes sample k of pixel xs[j].
+          // Lane j n + k takes sample k of pixel xs[j]: on a full grid the same cells for every packet.
           const int n = static_cast<int>(spp);
           const int count = fillSurfaces(y, group, n);
-          for (int j = 0; j < group; ++j)
-            for (int k = 0; k < n; ++k)
-              laneStrata[j * n + k] = fullGrid ? gridOrder[static_cast<size_t>(k)]
-                                               : sampler.stratum(static_cast<uint32_t>(k), lanePatterns[j * n]);
+          if (!fullGrid)
+            for (int j = 0; j < group; ++j)
+              for (int k = 0; k < n; ++k)
+                laneStrata[j * n + k] = sampler.stratum(static_cast<uint32_t>(k), lanePatterns[j * n]);
           sampleLanes(sampler, laneStrata, lanePatterns, count, lanes.ux, lanes.uy);
           // A pixel alone in its packet (9 to 16 spp): the light's per-point set-up once, the same rays.
           if (group == 1)
