@@ -158,6 +158,31 @@ inline __attribute__((always_inline)) void onePointSphereKernel(const LightConst
   }
 }
 
+// sphereKernel with each lane's origin made on the way (originKernel's operations, its length the
+// view's sqrt(d2), the same expression): one pass over the lanes instead of two. Writes the origins
+// to the packet.
+inline __attribute__((always_inline)) void sphereWithOriginsKernel(const LightConstants& k,
+                                                                   const ShadowLanes& __restrict in, int count,
+                                                                   float epsilon, const Out out, float* __restrict orgX,
+                                                                   float* __restrict orgY, float* __restrict orgZ) {
+  for (int i = 0; i < count; ++i) {
+    const float px = in.px[i], py = in.py[i], pz = in.pz[i];
+    const SphereView v = sphereView(k, px, py, pz);
+    const float len = std::sqrt(v.d2);
+    const bool positive = len > 0.0f;
+    const float ux = positive ? v.tx / len : 0.0f, uy = positive ? v.ty / len : 0.0f, uz = positive ? v.tz / len : 1.0f;
+    const float side = (in.nx[i] * ux + in.ny[i] * uy) + in.nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
+    const float offset = side * epsilon;
+    const float ox = px + offset * in.nx[i], oy = py + offset * in.ny[i], oz = pz + offset * in.nz[i];
+    orgX[i] = ox;
+    orgY[i] = oy;
+    orgZ[i] = oz;
+    sphereRay(k, v, in.ux[i], in.uy[i], px, py, pz, ox, oy, oz, epsilon, out.dirX[i], out.dirY[i], out.dirZ[i],
+              out.tMax[i], out.fix[i]);
+    out.weight[i] = 1.0f;
+  }
+}
+
 // Disk, rect and segment lights: the light point does not depend on P.
 template <LightShape kShape>
 inline __attribute__((always_inline)) void planarKernel(const LightConstants& k, const ShadowLanes& __restrict in,
@@ -226,6 +251,11 @@ PENUMBRA_LANE_CLONES void onePointSphereLanes(const LightConstants& k, const Sph
                                               const ShadowLanes& __restrict in, int count, float epsilon,
                                               PENUMBRA_LANE_OUTPUTS) {
   onePointSphereKernel(k, v, in, count, epsilon, PENUMBRA_LANE_OUT);
+}
+PENUMBRA_LANE_CLONES void sphereWithOriginsLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count,
+                                                 float epsilon, float* __restrict orgX, float* __restrict orgY,
+                                                 float* __restrict orgZ, PENUMBRA_LANE_OUTPUTS) {
+  sphereWithOriginsKernel(k, in, count, epsilon, PENUMBRA_LANE_OUT, orgX, orgY, orgZ);
 }
 PENUMBRA_LANE_CLONES void diskLanes(const LightConstants& k, const ShadowLanes& __restrict in, int count, float epsilon,
                                     PENUMBRA_LANE_OUTPUTS) {
@@ -388,14 +418,15 @@ void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& la
 namespace {
 
 // The lanes the vector kernels flagged (fix[i]), and every lane of a polygon light (scalar): the
-// scalar path, rt::shadowRay on Light::sample.
+// scalar path, rt::shadowRay on Light::sample from the packet's origins.
 void scalarLanes(const Light& light, const ShadowLanes& lanes, int count, float epsilon, const int32_t* fix,
                  bool scalar, RayPacket16& packet, float* weight) {
   for (int i = 0; i < count; ++i) {
     if (!scalar && !fix[i]) continue;
     const Vec3 wsP(lanes.px[i], lanes.py[i], lanes.pz[i]);
     const LightSample s = light.sample(wsP, Vec2(lanes.ux[i], lanes.uy[i]));
-    const Ray ray = shadowRay(wsP, Vec3(lanes.ox[i], lanes.oy[i], lanes.oz[i]), s.wsDirection, s.distance, epsilon);
+    const Ray ray =
+        shadowRay(wsP, Vec3(packet.orgX[i], packet.orgY[i], packet.orgZ[i]), s.wsDirection, s.distance, epsilon);
     packet.dirX[i] = ray.direction.x;
     packet.dirY[i] = ray.direction.y;
     packet.dirZ[i] = ray.direction.z;
@@ -470,6 +501,25 @@ void buildShadowRaysFromOnePoint(const Light& light, const ShadowLanes& lanes, i
   k.r2 = k.radius * k.radius;
   const SphereView view = sphereView(k, lanes.px[0], lanes.py[0], lanes.pz[0]);
   onePointSphereLanes(k, view, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
+  scalarLanes(light, lanes, count, epsilon, fix, false, packet, weight);
+}
+
+void buildShadowRaysAndOrigins(const Light& light, ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                               float* weight) {
+  // Other shapes take the two steps.
+  if (light.shape() != LightShape::Sphere) {
+    offsetOrigins(light, epsilon, count, lanes);
+    buildShadowRays(light, lanes, count, epsilon, packet, weight);
+    return;
+  }
+  alignas(64) int32_t fix[16];
+  LightConstants k;
+  k.center = light.center();
+  k.radius = light.radius();
+  k.r2 = k.radius * k.radius;
+  sphereWithOriginsLanes(k, lanes, count, epsilon, packet.orgX, packet.orgY, packet.orgZ, packet.dirX, packet.dirY,
+                         packet.dirZ, packet.tMax, weight, fix);
+  for (int i = 0; i < count; ++i) packet.tMin[i] = 0.0f;
   scalarLanes(light, lanes, count, epsilon, fix, false, packet, weight);
 }
 

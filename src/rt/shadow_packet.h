@@ -50,6 +50,13 @@ void offsetOrigins(const Light& light, float epsilon, int count, ShadowLanes& la
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight);
 
+// offsetOrigins and then buildShadowRays, in one pass over the lanes for a sphere light (the origin's
+// direction to the centre shares the silhouette disk's set-up): the same origins, rays and weights to
+// the bit. Reads the lanes' P, Ng and u; the origins go to the packet (and, for other shapes, to the
+// lanes too).
+void buildShadowRaysAndOrigins(const Light& light, ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
+                               float* weight);
+
 // buildShadowRays for lanes that all hold lane 0's P, Ng and O (many samples of one point): the
 // light's per-point set-up (a sphere's silhouette disk seen from P) is made once instead of per
 // lane. The same rays and weights to the bit.

@@ -248,18 +248,19 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     std::vector<uint32_t> columnSx(wholePixels ? 0 : columns), rowSy(wholePixels ? 0 : rows);
     alignas(64) uint64_t lanePixels[16];
     // Lanes [0, group n): lane i is a sample of pixel xs[i / n] of row y. Every lane holds its pixel's
-    // point, normal and index, and the origins and patterns are made for all of them in one vector loop
-    // (for each sample where n > 1, which costs less than a pixel-by-pixel set-up).
+    // point, normal and index, and the patterns (and, with `origins`, the ray origins) are made for all
+    // of them in one vector loop (for each sample where n > 1, which costs less than a pixel-by-pixel
+    // set-up). Without `origins` the rays' builder makes them (rt::buildShadowRaysAndOrigins).
     const Vec3* positionRow = nullptr;
     const Vec3* normalRow = nullptr;
-    auto fillSurfaces = [&](int y, int group, int n) {
+    auto fillSurfaces = [&](int y, int group, int n, bool origins) {
       const uint64_t rowStart = static_cast<uint64_t>(y) * width;
       if (n == 1 && group == 16 && xs[15] - xs[0] == 15) {  // sixteen neighbouring pixels: a run of the row
         static_assert(sizeof(Vec3) == 3 * sizeof(float));
         deinterleave16(reinterpret_cast<const float*>(positionRow + xs[0]), lanes.px, lanes.py, lanes.pz);
         deinterleave16(reinterpret_cast<const float*>(normalRow + xs[0]), lanes.nx, lanes.ny, lanes.nz);
         for (int j = 0; j < 16; ++j) lanePixels[j] = rowStart + static_cast<uint64_t>(xs[0] + j);
-        rt::offsetOrigins(light, epsilon, 16, lanes);
+        if (origins) rt::offsetOrigins(light, epsilon, 16, lanes);
         patternLanes(seed, 16, lanePixels, lanePatterns);
         return 16;
       }
@@ -272,7 +273,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         }
       }
       const int count = group * n;
-      rt::offsetOrigins(light, epsilon, count, lanes);
+      if (origins) rt::offsetOrigins(light, epsilon, count, lanes);
       patternLanes(seed, count, lanePixels, lanePatterns);
       return count;
     };
@@ -307,7 +308,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         if (wholePixels) {
           // Lane j n + k takes sample k of pixel xs[j]: on a full grid the same cells for every packet.
           const int n = static_cast<int>(spp);
-          const int count = fillSurfaces(y, group, n);
+          const int count = fillSurfaces(y, group, n, group == 1);
           if (!fullGrid)
             for (int j = 0; j < group; ++j)
               for (int k = 0; k < n; ++k)
@@ -317,7 +318,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
           if (group == 1)
             rt::buildShadowRaysFromOnePoint(light, lanes, count, epsilon, packet, weights);
           else
-            rt::buildShadowRays(light, lanes, count, epsilon, packet, weights);
+            rt::buildShadowRaysAndOrigins(light, lanes, count, epsilon, packet, weights);
           rays.occluded16(packet, count);
           if (n == 1) {
             // One sample: V = w vis / w is vis itself (w > 0; 1 where w = 0) and its error 0, the sums'
@@ -337,7 +338,7 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         }
         // The pixel fills every packet: its lanes' point, origin and pattern, and its pattern's
         // permutations of the grid's columns and rows, are made once.
-        fillSurfaces(y, 1, 16);
+        fillSurfaces(y, 1, 16, true);
         const uint32_t pattern = lanePatterns[0];
         sampler.tabulatePermutations(pattern, columnSx.data(), rowSy.data());
         Sums sums;

@@ -1,8 +1,8 @@
 // Tests of the vector shadow-ray builder (src/rt/shadow_packet.h): every lane is the ray the scalar
 // path builds (rt::shadowRay towards Light::sample) for every light shape, to float rounding, the
-// degenerate lanes exactly; the rays of lanes sharing one point (buildShadowRaysFromOnePoint) are the per-lane
-// builder's to the bit; the lanes' origins are rt::offsetOrigin's to the bit, and the rays to the light's
-// centre rt::shadowRay's; the polynomial sine and cosine are
+// degenerate lanes exactly; the rays of lanes sharing one point (buildShadowRaysFromOnePoint) and the rays
+// built with their origins (buildShadowRaysAndOrigins) are the per-lane builder's to the bit; the lanes' origins are
+// rt::offsetOrigin's to the bit, and the rays to the light's centre rt::shadowRay's; the polynomial sine and cosine are
 // within a few ulp of libm's; packets built in place trace as the same rays traced one at a time.
 #include <bit>
 #include <cmath>
@@ -152,6 +152,48 @@ TEST(ShadowPacket, OnePointRaysAreTheLaneRaysToTheBit) {
         EXPECT_EQ(onePoint.dirZ[i], perLane.dirZ[i]);
         EXPECT_EQ(onePoint.tMax[i], perLane.tMax[i]);
         EXPECT_EQ(onePointWeight[i], perLaneWeight[i]);
+      }
+    }
+  }
+}
+
+TEST(ShadowPacket, RaysWithTheirOriginsAreTheTwoStepsToTheBit) {
+  // buildShadowRaysAndOrigins (one pass for a sphere light) gives the origins, rays and weights of
+  // offsetOrigins followed by buildShadowRays, bit for bit, on every shape; the light's centre and a
+  // point inside the sphere among the points (the scalar path's lanes).
+  const float epsilon = 1e-4f;
+  for (const auto& [name, light] : everyShape()) {
+    SCOPED_TRACE(name);
+    for (uint32_t trial = 0; trial < 32; ++trial) {
+      rt::ShadowLanes lanes;
+      const int count = 1 + static_cast<int>((trial * 5) % 16);
+      const Vec3 centre = light.center(), inside = light.center() + Vec3(0.0f, 0.01f, 0.0f);
+      for (int i = 0; i < count; ++i) {
+        const bool local = !light.isDirectional();
+        setRandomSurface(lanes, i, trial * 313 + static_cast<uint32_t>(i) * 17, light,
+                         local && i == 2   ? &centre
+                         : local && i == 4 ? &inside
+                                           : nullptr);
+        lanes.ux[i] = unit(trial * 71 + static_cast<uint32_t>(i));
+        lanes.uy[i] = unit(trial * 71 + static_cast<uint32_t>(i) + 32);
+      }
+      rt::ShadowLanes twoSteps = lanes;
+      RayPacket16 expected, fused;
+      float expectedWeight[16], fusedWeight[16];
+      rt::offsetOrigins(light, epsilon, count, twoSteps);
+      rt::buildShadowRays(light, twoSteps, count, epsilon, expected, expectedWeight);
+      rt::buildShadowRaysAndOrigins(light, lanes, count, epsilon, fused, fusedWeight);
+      for (int i = 0; i < count; ++i) {
+        SCOPED_TRACE(::testing::Message() << "lane " << i);
+        EXPECT_EQ(fused.orgX[i], expected.orgX[i]);
+        EXPECT_EQ(fused.orgY[i], expected.orgY[i]);
+        EXPECT_EQ(fused.orgZ[i], expected.orgZ[i]);
+        EXPECT_EQ(fused.tMin[i], expected.tMin[i]);
+        EXPECT_EQ(fused.dirX[i], expected.dirX[i]);
+        EXPECT_EQ(fused.dirY[i], expected.dirY[i]);
+        EXPECT_EQ(fused.dirZ[i], expected.dirZ[i]);
+        EXPECT_EQ(fused.tMax[i], expected.tMax[i]);
+        EXPECT_EQ(fusedWeight[i], expectedWeight[i]);
       }
     }
   }
