@@ -246,11 +246,12 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
     if (wholePixels && fullGrid)
       for (int lane = 0; lane < 16; ++lane) laneStrata[lane] = gridOrder[static_cast<size_t>(lane) % spp];
     std::vector<uint32_t> columnSx(wholePixels ? 0 : columns), rowSy(wholePixels ? 0 : rows);
-    alignas(64) uint64_t lanePixels[16];
+    alignas(64) uint64_t pixelIndices[16];
     // Lanes [0, group n): lane i is a sample of pixel xs[i / n] of row y. Every lane holds its pixel's
-    // point, normal and index, and the patterns (and, with `origins`, the ray origins) are made for all
-    // of them in one vector loop (for each sample where n > 1, which costs less than a pixel-by-pixel
-    // set-up). Without `origins` the rays' builder makes them (rt::buildShadowRaysAndOrigins).
+    // point, normal and sample pattern (hashed once per pixel from its index); with `origins` the ray
+    // origins are made for all of them in one vector loop (for each sample where n > 1, which costs less
+    // than a pixel-by-pixel set-up), without it the rays' builder makes them
+    // (rt::buildShadowRaysAndOrigins).
     const Vec3* positionRow = nullptr;
     const Vec3* normalRow = nullptr;
     auto fillSurfaces = [&](int y, int group, int n, bool origins) {
@@ -259,22 +260,24 @@ void ReferenceTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v)
         static_assert(sizeof(Vec3) == 3 * sizeof(float));
         deinterleave16(reinterpret_cast<const float*>(positionRow + xs[0]), lanes.px, lanes.py, lanes.pz);
         deinterleave16(reinterpret_cast<const float*>(normalRow + xs[0]), lanes.nx, lanes.ny, lanes.nz);
-        for (int j = 0; j < 16; ++j) lanePixels[j] = rowStart + static_cast<uint64_t>(xs[0] + j);
+        for (int j = 0; j < 16; ++j) pixelIndices[j] = rowStart + static_cast<uint64_t>(xs[0] + j);
         if (origins) rt::offsetOrigins(light, epsilon, 16, lanes);
-        patternLanes(seed, 16, lanePixels, lanePatterns);
+        patternLanes(seed, 16, pixelIndices, lanePatterns);
         return 16;
       }
+      // The pixels' patterns hashed once each, then every lane takes its pixel's.
+      alignas(64) uint32_t pixelPatterns[16];
+      for (int j = 0; j < group; ++j) pixelIndices[j] = rowStart + static_cast<uint64_t>(xs[j]);
+      patternLanes(seed, group, pixelIndices, pixelPatterns);
       for (int j = 0; j < group; ++j) {
         const Vec3 p = positionRow[xs[j]], ng = normalRow[xs[j]];
-        const uint64_t pixel = rowStart + static_cast<uint64_t>(xs[j]);
         for (int lane = j * n; lane < (j + 1) * n; ++lane) {
           lanes.setSurface(lane, p, ng);
-          lanePixels[lane] = pixel;
+          lanePatterns[lane] = pixelPatterns[j];
         }
       }
       const int count = group * n;
       if (origins) rt::offsetOrigins(light, epsilon, count, lanes);
-      patternLanes(seed, count, lanePixels, lanePatterns);
       return count;
     };
     for (int y = range.begin(); y < range.end(); ++y) {
