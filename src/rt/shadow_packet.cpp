@@ -444,16 +444,22 @@ void copyOrigins(const ShadowLanes& lanes, int count, RayPacket16& packet) {
   }
 }
 
+// A light's centre and radius (a sphere's whole set-up), the start of every shape's constants.
+LightConstants centreAndRadius(const Light& light) {
+  LightConstants k;
+  k.center = light.center();
+  k.radius = light.radius();
+  k.r2 = k.radius * k.radius;
+  return k;
+}
+
 }  // namespace
 
 void buildShadowRays(const Light& light, const ShadowLanes& lanes, int count, float epsilon, RayPacket16& packet,
                      float* weight) {
   alignas(64) int32_t fix[16];
   copyOrigins(lanes, count, packet);
-  LightConstants k;
-  k.center = light.center();
-  k.radius = light.radius();
-  k.r2 = k.radius * k.radius;
+  LightConstants k = centreAndRadius(light);
   bool scalar = false;
   switch (light.shape()) {
     case LightShape::Sphere:
@@ -495,10 +501,7 @@ void buildShadowRaysFromOnePoint(const Light& light, const ShadowLanes& lanes, i
   }
   alignas(64) int32_t fix[16];
   copyOrigins(lanes, count, packet);
-  LightConstants k;
-  k.center = light.center();
-  k.radius = light.radius();
-  k.r2 = k.radius * k.radius;
+  const LightConstants k = centreAndRadius(light);
   const SphereView view = sphereView(k, lanes.px[0], lanes.py[0], lanes.pz[0]);
   onePointSphereLanes(k, view, lanes, count, epsilon, packet.dirX, packet.dirY, packet.dirZ, packet.tMax, weight, fix);
   scalarLanes(light, lanes, count, epsilon, fix, false, packet, weight);
@@ -513,10 +516,7 @@ void buildShadowRaysAndOrigins(const Light& light, ShadowLanes& lanes, int count
     return;
   }
   alignas(64) int32_t fix[16];
-  LightConstants k;
-  k.center = light.center();
-  k.radius = light.radius();
-  k.r2 = k.radius * k.radius;
+  const LightConstants k = centreAndRadius(light);
   sphereWithOriginsLanes(k, lanes, count, epsilon, packet.orgX, packet.orgY, packet.orgZ, packet.dirX, packet.dirY,
                          packet.dirZ, packet.tMax, weight, fix);
   for (int i = 0; i < count; ++i) packet.tMin[i] = 0.0f;

@@ -118,6 +118,23 @@ TEST(ShadowPacket, LanesAreTheScalarRaysForEveryShape) {
   }
 }
 
+// Lanes [0, count) of two packets and their weights are the same, bit for bit.
+void expectSameRays(const RayPacket16& actual, const float* actualWeight, const RayPacket16& expected,
+                    const float* expectedWeight, int count) {
+  for (int i = 0; i < count; ++i) {
+    SCOPED_TRACE(::testing::Message() << "lane " << i);
+    EXPECT_EQ(actual.orgX[i], expected.orgX[i]);
+    EXPECT_EQ(actual.orgY[i], expected.orgY[i]);
+    EXPECT_EQ(actual.orgZ[i], expected.orgZ[i]);
+    EXPECT_EQ(actual.tMin[i], expected.tMin[i]);
+    EXPECT_EQ(actual.dirX[i], expected.dirX[i]);
+    EXPECT_EQ(actual.dirY[i], expected.dirY[i]);
+    EXPECT_EQ(actual.dirZ[i], expected.dirZ[i]);
+    EXPECT_EQ(actual.tMax[i], expected.tMax[i]);
+    EXPECT_EQ(actualWeight[i], expectedWeight[i]);
+  }
+}
+
 TEST(ShadowPacket, OnePointRaysAreTheLaneRaysToTheBit) {
   // buildShadowRaysFromOnePoint (the light's per-point set-up made once) builds, for lanes that all
   // hold one point, the rays and weights buildShadowRays builds, bit for bit, on every shape; points
@@ -141,18 +158,7 @@ TEST(ShadowPacket, OnePointRaysAreTheLaneRaysToTheBit) {
       float perLaneWeight[16], onePointWeight[16];
       rt::buildShadowRays(light, lanes, count, epsilon, perLane, perLaneWeight);
       rt::buildShadowRaysFromOnePoint(light, lanes, count, epsilon, onePoint, onePointWeight);
-      for (int i = 0; i < count; ++i) {
-        SCOPED_TRACE(::testing::Message() << "lane " << i);
-        EXPECT_EQ(onePoint.orgX[i], perLane.orgX[i]);
-        EXPECT_EQ(onePoint.orgY[i], perLane.orgY[i]);
-        EXPECT_EQ(onePoint.orgZ[i], perLane.orgZ[i]);
-        EXPECT_EQ(onePoint.tMin[i], perLane.tMin[i]);
-        EXPECT_EQ(onePoint.dirX[i], perLane.dirX[i]);
-        EXPECT_EQ(onePoint.dirY[i], perLane.dirY[i]);
-        EXPECT_EQ(onePoint.dirZ[i], perLane.dirZ[i]);
-        EXPECT_EQ(onePoint.tMax[i], perLane.tMax[i]);
-        EXPECT_EQ(onePointWeight[i], perLaneWeight[i]);
-      }
+      expectSameRays(onePoint, onePointWeight, perLane, perLaneWeight, count);
     }
   }
 }
@@ -183,18 +189,7 @@ TEST(ShadowPacket, RaysWithTheirOriginsAreTheTwoStepsToTheBit) {
       rt::offsetOrigins(light, epsilon, count, twoSteps);
       rt::buildShadowRays(light, twoSteps, count, epsilon, expected, expectedWeight);
       rt::buildShadowRaysAndOrigins(light, lanes, count, epsilon, fused, fusedWeight);
-      for (int i = 0; i < count; ++i) {
-        SCOPED_TRACE(::testing::Message() << "lane " << i);
-        EXPECT_EQ(fused.orgX[i], expected.orgX[i]);
-        EXPECT_EQ(fused.orgY[i], expected.orgY[i]);
-        EXPECT_EQ(fused.orgZ[i], expected.orgZ[i]);
-        EXPECT_EQ(fused.tMin[i], expected.tMin[i]);
-        EXPECT_EQ(fused.dirX[i], expected.dirX[i]);
-        EXPECT_EQ(fused.dirY[i], expected.dirY[i]);
-        EXPECT_EQ(fused.dirZ[i], expected.dirZ[i]);
-        EXPECT_EQ(fused.tMax[i], expected.tMax[i]);
-        EXPECT_EQ(fusedWeight[i], expectedWeight[i]);
-      }
+      expectSameRays(fused, fusedWeight, expected, expectedWeight, count);
     }
   }
 }
