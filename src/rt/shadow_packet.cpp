@@ -77,6 +77,29 @@ struct Out {
 #define PENUMBRA_LANE_OUT \
   Out { dirX, dirY, dirZ, tMax, weight, fix }
 
+// rt::offsetOrigin for one lane: the point moved epsilon along its geometric normal, to the side of the
+// light's centre (Light::directionToCenter: towards the centre, unit, or +z from the centre itself;
+// a directional light's direction), with selects for the branches.
+template <bool kDirectional>
+inline __attribute__((always_inline)) void laneOrigin(const LightConstants& k, float epsilon, float px, float py,
+                                                      float pz, float nx, float ny, float nz, float& ox, float& oy,
+                                                      float& oz) {
+  float ux = k.direction.x, uy = k.direction.y, uz = k.direction.z;
+  if constexpr (!kDirectional) {
+    const float dx = k.center.x - px, dy = k.center.y - py, dz = k.center.z - pz;
+    const float len = std::sqrt((dx * dx + dy * dy) + dz * dz);
+    const bool positive = len > 0.0f;
+    ux = positive ? dx / len : 0.0f;
+    uy = positive ? dy / len : 0.0f;
+    uz = positive ? dz / len : 1.0f;
+  }
+  const float side = (nx * ux + ny * uy) + nz * uz >= 0.0f ? 1.0f : -1.0f;
+  const float offset = side * epsilon;
+  ox = px + offset * nx;
+  oy = py + offset * ny;
+  oz = pz + offset * nz;
+}
+
 // Light::sample's set-up for a sphere light at P: the silhouette disk seen from P and its frame
 // around P -> centre. The same operations whether made per lane (sphereKernel) or once for lanes that
 // share P (onePointSphereKernel), so the rays are the same to the bit.
@@ -158,9 +181,9 @@ inline __attribute__((always_inline)) void onePointSphereKernel(const LightConst
   }
 }
 
-// sphereKernel with each lane's origin made on the way (originKernel's operations, its length the
-// view's sqrt(d2), the same expression): one pass over the lanes instead of two. Writes the origins
-// to the packet.
+// sphereKernel with each lane's origin made on the way (laneOrigin, whose length to the centre is the
+// view's sqrt(d2), the same expression, which the compiler computes once): one pass over the lanes
+// instead of two. Writes the origins to the packet.
 inline __attribute__((always_inline)) void sphereWithOriginsKernel(const LightConstants& k,
                                                                    const ShadowLanes& __restrict in, int count,
                                                                    float epsilon, const Out out, float* __restrict orgX,
@@ -168,12 +191,8 @@ inline __attribute__((always_inline)) void sphereWithOriginsKernel(const LightCo
   for (int i = 0; i < count; ++i) {
     const float px = in.px[i], py = in.py[i], pz = in.pz[i];
     const SphereView v = sphereView(k, px, py, pz);
-    const float len = std::sqrt(v.d2);
-    const bool positive = len > 0.0f;
-    const float ux = positive ? v.tx / len : 0.0f, uy = positive ? v.ty / len : 0.0f, uz = positive ? v.tz / len : 1.0f;
-    const float side = (in.nx[i] * ux + in.ny[i] * uy) + in.nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
-    const float offset = side * epsilon;
-    const float ox = px + offset * in.nx[i], oy = py + offset * in.ny[i], oz = pz + offset * in.nz[i];
+    float ox, oy, oz;
+    laneOrigin<false>(k, epsilon, px, py, pz, in.nx[i], in.ny[i], in.nz[i], ox, oy, oz);
     orgX[i] = ox;
     orgY[i] = oy;
     orgZ[i] = oz;
@@ -276,9 +295,7 @@ PENUMBRA_LANE_CLONES void directionalLanes(const LightConstants& k, const Shadow
 #undef PENUMBRA_LANE_OUTPUTS
 #undef PENUMBRA_LANE_OUT
 
-// rt::offsetOrigin per lane: the point moved epsilon along its geometric normal, to the side of the
-// light's centre (Light::directionToCenter: towards the centre, unit, or +z from the centre itself;
-// a directional light's direction), with selects for the branches.
+// rt::offsetOrigin per lane (laneOrigin), over the lanes.
 template <bool kDirectional>
 inline __attribute__((always_inline)) void originKernel(const LightConstants& k, float epsilon, int count,
                                                         const float* __restrict px, const float* __restrict py,
@@ -286,22 +303,8 @@ inline __attribute__((always_inline)) void originKernel(const LightConstants& k,
                                                         const float* __restrict ny, const float* __restrict nz,
                                                         float* __restrict ox, float* __restrict oy,
                                                         float* __restrict oz) {
-  for (int i = 0; i < count; ++i) {
-    float ux = k.direction.x, uy = k.direction.y, uz = k.direction.z;
-    if constexpr (!kDirectional) {
-      const float dx = k.center.x - px[i], dy = k.center.y - py[i], dz = k.center.z - pz[i];
-      const float len = std::sqrt((dx * dx + dy * dy) + dz * dz);
-      const bool positive = len > 0.0f;
-      ux = positive ? dx / len : 0.0f;
-      uy = positive ? dy / len : 0.0f;
-      uz = positive ? dz / len : 1.0f;
-    }
-    const float side = (nx[i] * ux + ny[i] * uy) + nz[i] * uz >= 0.0f ? 1.0f : -1.0f;
-    const float offset = side * epsilon;
-    ox[i] = px[i] + offset * nx[i];
-    oy[i] = py[i] + offset * ny[i];
-    oz[i] = pz[i] + offset * nz[i];
-  }
+  for (int i = 0; i < count; ++i)
+    laneOrigin<kDirectional>(k, epsilon, px[i], py[i], pz[i], nx[i], ny[i], nz[i], ox[i], oy[i], oz[i]);
 }
 #define PENUMBRA_ORIGIN_PARAMETERS                                                                                    \
   const LightConstants &k, float epsilon, int count, const float *__restrict px, const float *__restrict py,          \
