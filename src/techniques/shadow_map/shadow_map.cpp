@@ -721,6 +721,80 @@ BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, fl
   return result;
 }
 
+namespace {
+
+// listSearchingPixels' pixels [from, width), added to `result`.
+inline void listSearchingPixelsFrom(int from, const int32_t* ids, const ReceiverRow& receivers, int width, float scale,
+                                    float zMin, float maxRadius, int32_t* pixels, float* radius, uint8_t* clamped,
+                                    float* out, SearchingPixels& result) {
+  for (int x = from; x < width; ++x) {
+    const auto i = static_cast<size_t>(x);
+    const float r = scale * (receivers.lsDepth[i] - zMin) / receivers.texelWorld[i];
+    clamped[i] = r > maxRadius;
+    radius[i] = std::min(r, maxRadius);
+    out[i] = 1.0f;
+    const bool hit = ids[i] != kNoObject;
+    const bool search = hit && receivers.inMap[i] != 0 && receivers.lsDepth[i] > zMin;
+    pixels[result.count] = x;  // kept when the pixel searches: no branch
+    result.count += search;
+    result.hits += hit;
+    result.clamped += search && clamped[i];
+  }
+}
+
+#if PENUMBRA_AVX512_KERNELS
+// listSearchingPixels 16 pixels at a time: the lanes' tests and radii as the scalar loop computes them
+// (min(maxRadius, r) is std::min(r, maxRadius), NaN included), the searching lanes compressed into
+// the list. The maskz forms, all lanes set, because GCC 12 warns of the plain forms' undefined source.
+[[gnu::target("avx512f")]] SearchingPixels listSearchingPixels16(const int32_t* ids, const ReceiverRow& receivers,
+                                                                 int width, float scale, float zMin, float maxRadius,
+                                                                 int32_t* pixels, float* radius, uint8_t* clamped,
+                                                                 float* out) {
+  SearchingPixels result;
+  const __m512 vScale = _mm512_set1_ps(scale), vZMin = _mm512_set1_ps(zMin), vMax = _mm512_set1_ps(maxRadius);
+  const __m512 one = _mm512_set1_ps(1.0f);
+  const __m512i none = _mm512_set1_epi32(kNoObject), zero = _mm512_setzero_si512();
+  const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const float* lsDepth = receivers.lsDepth.data();
+  const float* texelWorld = receivers.texelWorld.data();
+  const int32_t* inMap = receivers.inMap.data();
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    const __m512 z = _mm512_loadu_ps(lsDepth + x);
+    const __m512 r = _mm512_div_ps(_mm512_mul_ps(vScale, _mm512_sub_ps(z, vZMin)), _mm512_loadu_ps(texelWorld + x));
+    const __mmask16 cut = _mm512_cmp_ps_mask(r, vMax, _CMP_GT_OQ);
+    _mm512_storeu_ps(radius + x, _mm512_maskz_min_ps(0xFFFF, vMax, r));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(clamped + x),
+                     _mm512_maskz_cvtepi32_epi8(0xFFFF, _mm512_maskz_set1_epi32(cut, 1)));
+    _mm512_storeu_ps(out + x, one);
+    const __mmask16 hit = _mm512_cmpneq_epi32_mask(_mm512_loadu_si512(ids + x), none);
+    const __mmask16 search =
+        hit & _mm512_cmpneq_epi32_mask(_mm512_loadu_si512(inMap + x), zero) & _mm512_cmp_ps_mask(z, vZMin, _CMP_GT_OQ);
+    _mm512_mask_compressstoreu_epi32(pixels + result.count, search, _mm512_add_epi32(_mm512_set1_epi32(x), lane));
+    result.count += std::popcount(static_cast<unsigned>(search));
+    result.hits += std::popcount(static_cast<unsigned>(hit));
+    result.clamped += std::popcount(static_cast<unsigned>(search & cut));
+  }
+  listSearchingPixelsFrom(x, ids, receivers, width, scale, zMin, maxRadius, pixels, radius, clamped, out, result);
+  return result;
+}
+#endif
+
+}  // namespace
+
+PENUMBRA_KERNEL_CLONES
+SearchingPixels listSearchingPixels(const int32_t* ids, const ReceiverRow& receivers, int width, float scale,
+                                    float zMin, float maxRadius, int32_t* pixels, float* radius, uint8_t* clamped,
+                                    float* out) {
+#if PENUMBRA_AVX512_KERNELS
+  if (cpuHasAvx512())
+    return listSearchingPixels16(ids, receivers, width, scale, zMin, maxRadius, pixels, radius, clamped, out);
+#endif
+  SearchingPixels result;
+  listSearchingPixelsFrom(0, ids, receivers, width, scale, zMin, maxRadius, pixels, radius, clamped, out, result);
+  return result;
+}
+
 void searchBlockersRow(const DepthTexels& map, const ReceiverRow& receivers, std::span<const int32_t> pixels,
                        const float* radiusTexels, const Vec2* rotations, std::span<const Vec2> pattern,
                        BlockerSearch* out) {

@@ -235,6 +235,23 @@ struct BlockerSearch {
   float meanDepth = 0.0f;  //!< mean light-space depth of those blockers (0 when none)
 };
 
+// PCSS's first step over a row of receivers: which pixels search for blockers and how far. A pixel
+// searches when it sees geometry (ids[x] != kNoObject), lies in the map and lies behind the map's
+// nearest depth zMin (nothing can block in front of it); it is listed in `pixels`, in order. Every
+// pixel gets radius[x] = min(scale (z - zMin) / texelWorld, maxRadius) texels (the search disk's
+// world radius at the receiver over the texel size there; scale = R / zMin for a perspective map, R
+// for an orthographic one), clamped[x] = whether the cut applied, and out[x] = 1 (V of the pixels that
+// do not search, replaced where they do). Every array has room for `width` pixels. One pass of 16
+// pixels to a vector where the CPU has AVX-512F; the same results on every path.
+struct SearchingPixels {
+  int count = 0;        //!< pixels listed
+  int64_t hits = 0;     //!< pixels that see geometry
+  int64_t clamped = 0;  //!< listed pixels whose radius was cut
+};
+SearchingPixels listSearchingPixels(const int32_t* ids, const ReceiverRow& receivers, int width, float scale,
+                                    float zMin, float maxRadius, int32_t* pixels, float* radius, uint8_t* clamped,
+                                    float* out);
+
 // PCSS blocker search: the texels under the disk `pattern` (unit-disk offsets) rotated by
 // `rotation` and scaled to `radiusTexels` around (r.s, r.t).
 BlockerSearch searchBlockers(const DepthTexels& map, const ShadowReceiver& r, float radiusTexels,

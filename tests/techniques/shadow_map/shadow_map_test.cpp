@@ -354,6 +354,68 @@ TEST(ShadowMap, DiskKernelRowsAreThePerPixelKernelsToTheBit) {
   EXPECT_GT(partial, 1000) << "the searches must find some blockers, not all, for the depth sums to be compared";
 }
 
+// listSearchingPixels (16 pixels to a vector where the CPU has AVX-512F, a scalar tail) against its
+// definition, pixel by pixel: the list, every radius to the bit, the cut flags and the counts. A row
+// of 120 pixels (seven vectors and a tail), a zMin that leaves some receivers in front of it, a
+// maxRadius that cuts some radii, and a NaN depth and a zero texel size among the receivers.
+TEST(ShadowMap, SearchingPixelsAreTheirDefinition) {
+  const auto bits = [](float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+  };
+  size_t listed = 0, skipped = 0, cut = 0;
+  for (const char* name : {"crowded", "teapots"}) {
+    const Scene scene = loadScene(name);
+    const LightMap map = renderLightMap(scene, scene.lights.front(), 256);
+    const GBuffer gbuffer = renderGBuffer(scene, 120, 80);
+    const float zMin = minMapDepth(map) * 1.3f, scale = 0.55f / zMin, maxRadius = 2.0f;
+    ReceiverRow row;
+    const size_t n = static_cast<size_t>(gbuffer.width());
+    std::vector<int32_t> pixels(n);
+    std::vector<float> radius(n), out(n, 0.0f);
+    std::vector<uint8_t> clamped(n);
+    for (int y = 0; y < gbuffer.height(); ++y) {
+      makeReceiverRow(map, gbuffer.wsPosition.row(y), gbuffer.wsGeometricNormal.row(y), gbuffer.width(), DepthBias{},
+                      row);
+      if (y == 40) {
+        row.lsDepth[33] = std::numeric_limits<float>::quiet_NaN();
+        row.texelWorld[34] = 0.0f;
+      }
+      const int32_t* ids = gbuffer.objectId.row(y);
+      const SearchingPixels got = listSearchingPixels(ids, row, gbuffer.width(), scale, zMin, maxRadius, pixels.data(),
+                                                      radius.data(), clamped.data(), out.data());
+      SearchingPixels want;
+      for (size_t i = 0; i < n; ++i) {
+        const float r = scale * (row.lsDepth[i] - zMin) / row.texelWorld[i];
+        ASSERT_EQ(bits(radius[i]), bits(std::min(r, maxRadius))) << name << " pixel " << i << "," << y;
+        ASSERT_EQ(clamped[i] != 0, r > maxRadius) << name << " pixel " << i << "," << y;
+        ASSERT_EQ(out[i], 1.0f) << name << " pixel " << i << "," << y;
+        const bool hit = ids[i] != kNoObject;
+        want.hits += hit;
+        if (!(hit && row.inMap[i] && row.lsDepth[i] > zMin)) {
+          skipped += hit;
+          continue;
+        }
+        ASSERT_LT(want.count, got.count) << name << " row " << y;
+        ASSERT_EQ(pixels[static_cast<size_t>(want.count)], static_cast<int32_t>(i)) << name << " row " << y;
+        ++want.count;
+        want.clamped += r > maxRadius;
+      }
+      ASSERT_EQ(got.count, want.count) << name << " row " << y;
+      ASSERT_EQ(got.hits, want.hits) << name << " row " << y;
+      ASSERT_EQ(got.clamped, want.clamped) << name << " row " << y;
+      listed += static_cast<size_t>(got.count);
+      cut += static_cast<size_t>(got.clamped);
+    }
+  }
+  std::printf("[ measured ] listed %zu, skipped %zu, cut %zu\n", listed, skipped, cut);
+  EXPECT_GT(listed, 2000u);
+  EXPECT_GT(skipped, 200u) << "some receivers must lie in front of zMin";
+  EXPECT_GT(cut, 500u) << "some radii must be cut";
+  EXPECT_LT(cut, listed / 2);
+}
+
 // minMapDepth (rows in parallel): the least finite depth of the map, NaN and empty texels skipped, kInfinity
 // for a map with none; on odd sizes, whose rows do not fill its eight lanes.
 TEST(ShadowMap, MinMapDepthIsTheLeastDepth) {
