@@ -131,16 +131,26 @@ class PcssTechnique final : public ShadowTechnique {
       setRotations(y, pixels, w.rotation.data());
       searchBlockersRow(depthTexels(map_), receivers, pixels, w.radius.data(), w.rotation.data(), blockerPattern(),
                         w.blockers.data());
-      // Then the pixels the search leaves undecided, each filter's pixels in one call.
+      // The search decides a pixel where it finds no blocker (lit) or only blockers (umbra: the filter
+      // disk lies inside the search disk, as z_b >= zMin makes w <= the search radius, so filtering
+      // would find (nearly) only blockers too; skipping it halves the cost of PCSS in shadowed
+      // regions, as NVIDIA's PCSS sample does). V is written for every searched pixel without a
+      // branch and the undecided ones are kept, in place, for the filters.
+      const int taps = static_cast<int>(blockerPattern().size());
+      size_t undecided = 0;
+      for (const int32_t x : pixels) {
+        const int found = w.blockers[static_cast<size_t>(x)].blockers;
+        out[x] = found == 0 ? 1.0f : 0.0f;
+        w.pixelList[undecided] = x;  // undecided <= the index read: the list is compacted in place
+        undecided += found != 0 && found != taps;
+      }
+      local[kSearchOnly] = static_cast<int64_t>(pixels.size() - undecided);
+      // Then each filter's pixels in one call.
       w.bilinear.clear();
       w.nearest.clear();
-      for (const int32_t x : pixels) {
+      for (const int32_t x : std::span<const int32_t>(w.pixelList.data(), undecided)) {
         const auto i = static_cast<size_t>(x);
         const float filterRadius = filterRadiusOf(receivers[x], w.blockers[i], !w.searchClamped[i], local);
-        if (filterRadius < 0.0f) {  // decided by the search
-          out[x] = w.blockers[i].blockers == 0 ? 1.0f : 0.0f;
-          continue;
-        }
         w.radius[i] = filterRadius;
         (filterRadius <= options_.bilinearMaxRadius ? w.bilinear : w.nearest).push_back(x);
       }
@@ -207,18 +217,10 @@ class PcssTechnique final : public ShadowTechnique {
     return lineDirection_ ? filterLine_ : rectPatterns_ ? filterRect_ : filterDisk_;
   }
 
-  // The filter's radius in texels for a receiver and its blocker search (searchUnclamped: the search's
-  // radius was within the map); -1 where the search decides V alone.
+  // The filter's radius in texels for a receiver and its blocker search, which found some blockers and
+  // some lit taps (searchUnclamped: the search's radius was within the map).
   float filterRadiusOf(const ShadowReceiver& r, const BlockerSearch& blockers, bool searchUnclamped,
                        std::array<int64_t, kPathCount + 1>& counts) const {
-    // No blocker: lit. Every search tap blocked: umbra. The filter disk lies inside the search disk
-    // (z_b >= zMin makes w <= the search radius), so filtering would find (nearly) only blockers
-    // too; skipping it halves the cost of PCSS in shadowed regions (NVIDIA's PCSS sample does the
-    // same).
-    if (blockers.blockers == 0 || blockers.blockers == static_cast<int>(blockerPattern().size())) {
-      ++counts[kSearchOnly];
-      return -1.0f;
-    }
     const float zr = r.lsDepth;
     const float zb = blockers.meanDepth;
     const float penumbraWorld = map_.orthographic ? lightSize_ * (zr - zb) : lightSize_ * (zr - zb) / zb;
