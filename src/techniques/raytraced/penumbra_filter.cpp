@@ -34,22 +34,19 @@ inline float integerPower(float x, int n) {
 constexpr int kChunk = 32;
 
 // One separable pass along (dx, dy) over the active tiles: writes `out` at their pixels of radius
-// >= 1 from `in`, which is read where `inActive` says a tap lies in an active tile and `outside`
-// elsewhere (the second pass reads the first pass's result inside the active tiles and the unfiltered
-// input around them).
+// >= 1 from `in`. The second pass reads the first pass's result inside the active tiles and the
+// unfiltered input around them: `in` holds both (filterPenumbrae copies the input into it first).
 // kPower: options.normalPower when it is one of the exponents instantiated below (so that the normal
 // weight's squarings unroll: the same multiplies as the loop's), 0 otherwise.
 template <int kPower>
 void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
-                    const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
+                    const Image<float>& in, int dx, int dy, Image<float>& out) {
   const int width = g.width(), height = g.height();
   const Image<float>& radius = *input.radius;
   const Image<float>& reach = *input.reach;
   const int tileSize = input.activeTiles ? input.tileSize : std::max(width, height);
   const int tilesX = input.activeTiles ? input.tilesX : 1;
   const int tilesY = (height + tileSize - 1) / tileSize;
-  // The second pass asks this of every tap: shifts instead of two integer divisions where the tile
-  // size is a power of two (the few-ray techniques' 8).
   const bool powerOfTwo = std::has_single_bit(static_cast<unsigned>(tileSize));
   const int tileShift = std::countr_zero(static_cast<unsigned>(tileSize));
   auto active = [&](int x, int y) {
@@ -57,19 +54,16 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
     const int tx = powerOfTwo ? x >> tileShift : x / tileSize, ty = powerOfTwo ? y >> tileShift : y / tileSize;
     return input.activeTiles[static_cast<size_t>(ty) * tilesX + tx] != 0;
   };
-  // Where `in` and `outside` are one image (the first pass), no tap needs to know its tile.
-  const bool sameInput = &in == &outside;
   // The images' storage, read through raw pointers: the taps' loads index them with one linear offset
   // (every image is the G-buffer's size), and the compiler keeps the pointers in registers, where
   // through the images it reloaded each one at every tap.
-  assert(in.width() == width && in.height() == height && outside.width() == width && outside.height() == height);
+  assert(in.width() == width && in.height() == height);
   assert(reach.width() == width && reach.height() == height && out.width() == width && out.height() == height);
   const int32_t* const ids = g.objectId.data();
   const Vec3* const positions = g.wsPosition.data();
   const Vec3* const normals = g.wsNormal.data();
   const float* const reaches = reach.data();
   const float* const ins = in.data();
-  const float* const outsides = outside.data();
   // Pixels along the pass: the tap offsets run over [0, extent) in the pass's coordinate.
   const int extent = dx != 0 ? width : height;
   const ptrdiff_t pitch = dx != 0 ? 1 : width;  // linear offset of one pixel along the pass
@@ -139,7 +133,7 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
               // Biweight in screen distance: smooth, compact (zero at the radius), no exp per tap.
               const float s = 1.0f - d * d * invR2;
               const float w = s * s * planeWeight * normalWeight;
-              sum += w * (sameInput || active(x + k * stride * dx, y + k * stride * dy) ? ins[q] : outsides[q]);
+              sum += w * ins[q];
               weightSum += w;
             }
             out(x, y) = sum / weightSum;
@@ -150,14 +144,14 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
 }
 
 void filterPass(const GBuffer& g, const PenumbraFilterInput& input, const PenumbraFilterOptions& options,
-                const Image<float>& in, const Image<float>& outside, int dx, int dy, Image<float>& out) {
+                const Image<float>& in, int dx, int dy, Image<float>& out) {
   switch (options.normalPower) {
     case 16:  // the few-ray techniques' default
-      return filterPassWith<16>(g, input, options, in, outside, dx, dy, out);
+      return filterPassWith<16>(g, input, options, in, dx, dy, out);
     case 8:
-      return filterPassWith<8>(g, input, options, in, outside, dx, dy, out);
+      return filterPassWith<8>(g, input, options, in, dx, dy, out);
     default:
-      return filterPassWith<0>(g, input, options, in, outside, dx, dy, out);
+      return filterPassWith<0>(g, input, options, in, dx, dy, out);
   }
 }
 
@@ -167,16 +161,18 @@ void filterPenumbrae(const GBuffer& gbuffer, const PenumbraFilterInput& input, c
                      Image<float>& scratch, Image<float>& out) {
   const Image<float>& noisy = *input.noisy;
   const int width = gbuffer.width(), height = gbuffer.height();
-  // Pixels outside the active tiles keep their input; both passes write only inside them. The second
-  // pass reads the first's result only inside them too, so `scratch` needs no fill.
+  // Pixels outside the active tiles keep their input; both passes write only inside them. `scratch`
+  // starts as the input too, so that the second pass reads the first's result inside the active tiles
+  // and the input around them from one image (no test of a tap's tile).
   scratch.resizeForOverwrite(width, height);
   out.resizeForOverwrite(width, height);
   tbb::parallel_for(tbb::blocked_range<int>(0, height, 32), [&](const tbb::blocked_range<int>& rows) {
-    std::copy(noisy.row(rows.begin()), noisy.row(rows.begin()) + static_cast<size_t>(rows.size()) * width,
-              out.row(rows.begin()));
+    const size_t n = static_cast<size_t>(rows.size()) * static_cast<size_t>(width);
+    std::copy(noisy.row(rows.begin()), noisy.row(rows.begin()) + n, out.row(rows.begin()));
+    std::copy(noisy.row(rows.begin()), noisy.row(rows.begin()) + n, scratch.row(rows.begin()));
   });
-  filterPass(gbuffer, input, options, noisy, noisy, 1, 0, scratch);
-  filterPass(gbuffer, input, options, scratch, noisy, 0, 1, out);
+  filterPass(gbuffer, input, options, noisy, 1, 0, scratch);
+  filterPass(gbuffer, input, options, scratch, 0, 1, out);
 }
 
 }  // namespace penumbra::raytraced
