@@ -1,5 +1,5 @@
 // The penumbra-aware spatial filter of the few-ray techniques (raytraced-soft, hybrid): a
-// cross-bilateral Gaussian in screen space whose radius at each pixel follows that pixel's estimated
+// cross-bilateral filter in screen space whose radius at each pixel follows that pixel's estimated
 // penumbra width, so contact shadows stay sharp and wide penumbrae get wide support.
 //
 // What it follows (read to understand; the code is ours):
@@ -16,7 +16,8 @@
 //    frames; this filter is spatial only.
 //
 // Weights of a tap q for the pixel p (all multiply):
-//  - Gaussian in screen distance d, sigma = radius(p) / 2, taps out to radius(p);
+//  - a biweight in screen distance d, (1 - d^2 / radius(p)^2)^2, taps out to radius(p) (smooth and
+//    compact, close to a Gaussian of sigma radius(p) / 2 cut there, without an exp per tap);
 //  - same object id (shadows never leak from an occluder onto the floor it stands on, or back);
 //  - plane distance: |n_p . (x_q - x_p)| against `plane_tolerance` pixel footprints per pixel of d,
 //    so a depth discontinuity within one object (a torus's near side over its far side) stops it;
