@@ -623,26 +623,24 @@ void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<f
       const int t0 = ty << kTileShift, t1 = std::min(n, t0 + kTileSize);
       for (int tx = 0; tx < tiles; ++tx) {
         const int s0 = tx << kTileShift, s1 = std::min(n, s0 + kTileSize);
+        // The tile's id is its first texel's unless another texel's differs (kMixedTile): a flag over
+        // the texels, where a branch per texel on the id seen so far kept the loop scalar.
         float lo = kInfinity, hi = -kInfinity;
-        int32_t id = kNoObject;
-        bool seen = false;
+        const int32_t first = map.objectId.row(t0)[s0];
+        bool mixed = false;
         for (int t = t0; t < t1; ++t) {
           const float* depth = map.lsDepth.row(t);
           const int32_t* ids = map.objectId.row(t);
           for (int s = s0; s < s1; ++s) {
             lo = std::min(lo, depth[s]);
             hi = std::max(hi, depth[s]);
-            if (!seen)
-              id = ids[s];
-            else if (id != ids[s])
-              id = kMixedTile;
-            seen = true;
+            mixed |= ids[s] != first;
           }
         }
         const size_t k = static_cast<size_t>(ty) * tiles + tx;
         minDepth[k] = lo;
         maxDepth[k] = hi;
-        objectId[k] = id;
+        objectId[k] = mixed ? kMixedTile : first;
       }
     }
   });
