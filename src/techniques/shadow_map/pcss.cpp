@@ -120,8 +120,8 @@ class PcssTechnique final : public ShadowTechnique {
       w.resize(static_cast<size_t>(width));
       std::array<int64_t, kPathCount + 1> local{};
       float* out = v.row(y);
-      // The pixels that search and their radii, a row in one vectorized pass (pixel by pixel, the
-      // divisions and the appends cost about half as much as the searches themselves).
+      // The pixels that search and their radii, the whole row in one vectorized pass: the set-up runs
+      // for every pixel, so it takes no branch and no scalar division per pixel.
       const SearchingPixels searching =
           listSearchingPixels(gbuffer.objectId.row(y), receivers, width, searchScale_, zMin_, maxRadius(),
                               w.pixelList.data(), w.radius.data(), w.searchClamped.data(), out);
@@ -184,7 +184,7 @@ class PcssTechnique final : public ShadowTechnique {
 
   // A row's working arrays, kept per thread.
   struct RowScratch {
-    std::vector<int32_t> pixelList;          //!< the row's pixels that search, first (listSearchingPixels)
+    std::vector<int32_t> pixelList;          //!< the pixels that search, then (in place) those left undecided
     std::vector<int32_t> bilinear, nearest;  //!< those that filter, by filter
     std::vector<float> radius;               //!< per pixel: the search's radius, then the filter's, texels
     std::vector<uint8_t> searchClamped;      //!< per pixel: the search's radius was cut to the map's size
