@@ -53,8 +53,8 @@ class CmjSampler {
   // visits them in compact tiles so that each ray packet aims at one small patch of the light).
   uint32_t stratum(uint32_t index, uint32_t pattern) const { return permute(index, m_ * n_, pattern * 0x51633e2du); }
   Vec2 sampleInStratum(uint32_t s, uint32_t pattern) const {
-    const uint32_t sx = permute(s % m_, m_, pattern * 0x68bc21ebu);
-    const uint32_t sy = permute(s / m_, n_, pattern * 0x02e5be93u);
+    const uint32_t sx = permute(s % m_, m_, pattern * kColumnScramble);
+    const uint32_t sy = permute(s / m_, n_, pattern * kRowScramble);
     const float jx = randomFloat(s, pattern * 0x967a889bu);
     const float jy = randomFloat(s, pattern * 0x368cc8b7u);
     const float x = (static_cast<float>(s % m_) + (static_cast<float>(sy) + jx) / n_) / m_;
@@ -71,21 +71,17 @@ class CmjSampler {
     alignas(64) uint32_t column[16], row[16], sx[16], sy[16];
     rowsOf(strata, count, row);
     for (int i = 0; i < count; ++i) column[i] = strata[i] - row[i] * m_;
-    permuteLanes(column, m_, patterns, 0x68bc21ebu, count, sx);
-    permuteLanes(row, n_, patterns, 0x02e5be93u, count, sy);
-    // Dividing by a power of two is multiplying by its reciprocal, bit for bit, and much cheaper.
-    if (((m_ & (m_ - 1)) | (n_ & (n_ - 1))) == 0)
-      jitterLanes<true>(strata, patterns, column, row, sx, sy, count, ux, uy);
-    else
-      jitterLanes<false>(strata, patterns, column, row, sx, sy, count, ux, uy);
+    permuteLanes(column, m_, patterns, kColumnScramble, count, sx);
+    permuteLanes(row, n_, patterns, kRowScramble, count, sy);
+    jitterAllLanes(strata, patterns, column, row, sx, sy, count, ux, uy);
   }
 
   // For many samples of one pattern (a pixel that fills ray packets alone): sampleInStratum's two
   // permutations tabulated once, sx of every column (columns() entries) and sy of every row (rows()
   // entries), so that each sample then costs its jitter alone.
   void tabulatePermutations(uint32_t pattern, uint32_t* columnSx, uint32_t* rowSy) const {
-    for (uint32_t c = 0; c < m_; ++c) columnSx[c] = permute(c, m_, pattern * 0x68bc21ebu);
-    for (uint32_t r = 0; r < n_; ++r) rowSy[r] = permute(r, n_, pattern * 0x02e5be93u);
+    for (uint32_t c = 0; c < m_; ++c) columnSx[c] = permute(c, m_, pattern * kColumnScramble);
+    for (uint32_t r = 0; r < n_; ++r) rowSy[r] = permute(r, n_, pattern * kRowScramble);
   }
   // sampleLanes for count <= 16 lanes that all take `pattern`, through its tables
   // (tabulatePermutations): the same points, bit for bit.
@@ -100,17 +96,26 @@ class CmjSampler {
       sy[i] = rowSy[row[i]];
       patterns[i] = pattern;
     }
+    jitterAllLanes(strata, patterns, column, row, sx, sy, count, ux, uy);
+  }
+
+ private:
+  static constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+  // The pattern's multipliers for the permutations of a stratum's column and of its row.
+  static constexpr uint32_t kColumnScramble = 0x68bc21ebu, kRowScramble = 0x02e5be93u;
+
+  // sampleInStratum's last step for the lanes: the jitter inside each cell. The integers are below
+  // 2^31, so they convert to float as signed ones (one instruction; an unsigned conversion is several).
+  // jitterLanes, dividing by a power-of-two grid's sides as multiplying by their reciprocals (bit for
+  // bit the same, and much cheaper).
+  [[gnu::always_inline]] void jitterAllLanes(const uint32_t* strata, const uint32_t* patterns, const uint32_t* column,
+                                             const uint32_t* row, const uint32_t* sx, const uint32_t* sy, int count,
+                                             float* ux, float* uy) const {
     if (((m_ & (m_ - 1)) | (n_ & (n_ - 1))) == 0)
       jitterLanes<true>(strata, patterns, column, row, sx, sy, count, ux, uy);
     else
       jitterLanes<false>(strata, patterns, column, row, sx, sy, count, ux, uy);
   }
-
- private:
-  static constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
-
-  // sampleInStratum's last step for the lanes: the jitter inside each cell. The integers are below
-  // 2^31, so they convert to float as signed ones (one instruction; an unsigned conversion is several).
   template <bool kPowersOfTwo>
   [[gnu::always_inline]] void jitterLanes(const uint32_t* strata, const uint32_t* patterns, const uint32_t* column,
                                           const uint32_t* row, const uint32_t* sx, const uint32_t* sy, int count,
