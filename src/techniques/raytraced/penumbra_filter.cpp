@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cassert>
 #include <cmath>
 
@@ -47,13 +46,6 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
   const int tileSize = input.activeTiles ? input.tileSize : std::max(width, height);
   const int tilesX = input.activeTiles ? input.tilesX : 1;
   const int tilesY = (height + tileSize - 1) / tileSize;
-  const bool powerOfTwo = std::has_single_bit(static_cast<unsigned>(tileSize));
-  const int tileShift = std::countr_zero(static_cast<unsigned>(tileSize));
-  auto active = [&](int x, int y) {
-    if (!input.activeTiles) return true;
-    const int tx = powerOfTwo ? x >> tileShift : x / tileSize, ty = powerOfTwo ? y >> tileShift : y / tileSize;
-    return input.activeTiles[static_cast<size_t>(ty) * tilesX + tx] != 0;
-  };
   // The images' storage, read through raw pointers: the taps' loads index them with one linear offset
   // (every image is the G-buffer's size), and the compiler keeps the pointers in registers, where
   // through the images it reloaded each one at every tap.
@@ -69,8 +61,8 @@ void filterPassWith(const GBuffer& g, const PenumbraFilterInput& input, const Pe
   const ptrdiff_t pitch = dx != 0 ? 1 : width;  // linear offset of one pixel along the pass
   tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
     for (int tile = range.begin(); tile < range.end(); ++tile) {
+      if (input.activeTiles && !input.activeTiles[static_cast<size_t>(tile)]) continue;  // row-major, as `tile` counts
       const int x0 = (tile % tilesX) * tileSize, y0 = (tile / tilesX) * tileSize;
-      if (!active(x0, y0)) continue;
       const int x1 = std::min(x0 + tileSize, width);
       for (int y = y0; y < std::min(y0 + tileSize, height); ++y)
         for (int xChunk = x0; xChunk < x1; xChunk += kChunk) {
