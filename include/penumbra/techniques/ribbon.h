@@ -23,6 +23,15 @@ inline OptionDecl illuminationTableOption() {
           "light's profile (disk lights; identity for rect, polygon)");
 }
 
+// smoothies and kirsch: where a ribbon texel's fade is measured.
+inline OptionDecl subTexelOption() {
+  return OptionDecl("sub_texel")
+      .help(
+          "measure the fade's distance to the silhouette edge from the pixel's own point in the map (each ribbon texel "
+          "names its edge), not from the texel's centre as the paper's per-texel buffer does: the fade then moves "
+          "continuously with the light instead of in one-texel steps");
+}
+
 struct PlmOptions {
   LightMapOptions lightMap = kSoftLightMap;  //!< the light map g: size, fit and horizon
   DepthBias bias;                            //!< of the compares with g, c and b (shadow_map.h)
@@ -42,12 +51,14 @@ struct SmoothiesOptions {
   DepthBias bias;                            //!< of the hard compare and the smoothie compare (shadow_map.h)
   float marginTexels = 2.0f;                 //!< added to every smoothie's width
   bool illuminationTable = true;
+  bool subTexel = true;  //!< the fade's distance from the pixel's point in the map (else the texel's centre)
 
   static void describe(OptionFields<SmoothiesOptions>& f) {
     f.nest(&SmoothiesOptions::lightMap);
     f.nest(&SmoothiesOptions::bias);
     f.add(&SmoothiesOptions::marginTexels, ribbonMarginOption());
     f.add(&SmoothiesOptions::illuminationTable, illuminationTableOption());
+    f.add(&SmoothiesOptions::subTexel, subTexelOption());
   }
 };
 
@@ -56,12 +67,14 @@ struct KirschOptions {
   DepthBias bias;                            //!< of the hard compare (shadow_map.h)
   float marginTexels = 2.0f;                 //!< added to every ribbon's width
   bool illuminationTable = true;
+  bool subTexel = true;  //!< the fade's distance from the pixel's point in the map (else the texel's centre)
 
   static void describe(OptionFields<KirschOptions>& f) {
     f.nest(&KirschOptions::lightMap);
     f.nest(&KirschOptions::bias);
     f.add(&KirschOptions::marginTexels, ribbonMarginOption());
     f.add(&KirschOptions::illuminationTable, illuminationTableOption());
+    f.add(&KirschOptions::subTexel, subTexelOption());
   }
 };
 

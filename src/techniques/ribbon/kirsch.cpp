@@ -25,14 +25,17 @@
 // distance is the one to the border of the shadow, and the silhouettes inside an object's footprint
 // (a fin over the crankcase, an arm over the body, a contour behind the object's own front) border
 // no lit texel — as widths they faded the middle of an umbra to nearly 1. Both maps are read at the texel holding the
-// pixel (no filtering), then V goes through Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when
-// `illumination_table` is on. A blocked texel no ribbon reaches lies deeper in the shadow than any penumbra: V = 0.
-// Lights: as plm (sphere, disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels),
-// bias_constant (texels), bias_slope (shadow_map.h), margin (texels added to every ribbon's width), illumination_table
-// (bool).
+// pixel (no filtering). With `sub_texel` on (the default) the width is then measured from the pixel's own point in
+// the map to the edge that won the texel, so the fade follows the silhouette below a texel; the paper's per-texel width
+// map (`sub_texel` off) moves it in whole-texel steps, which pop as the light moves. V goes through Appendix A's table
+// of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. A blocked texel no ribbon reaches lies
+// deeper in the shadow than any penumbra: V = 0. Lights: as plm (sphere, disk, rect, polygon, directional; segments
+// rejected). Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels added to
+// every ribbon's width), illumination_table (bool), sub_texel (bool).
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <vector>
 
 #include "core/light_profile.h"
 #include "penumbra/error.h"
@@ -59,8 +62,9 @@ class KirschTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(map_, space_, farthest_);
-    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
-                          plm::RibbonSides::Inner, options_.marginTexels,
+    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
+    plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Inner, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_, widths_);
   }
 
@@ -75,7 +79,11 @@ class KirschTechnique final : public ShadowTechnique {
           if (!width.covered()) return 0.0f;
           const float c = space_.zeta(map_.lsDepth(i, j));  // the occluding point
           const float z = space_.zeta(r.lsDepth);
-          const float blocked = std::clamp(-width.w * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
+          // The shadow width at the pixel's own point (sub_texel) moves with the silhouette below a texel;
+          // at the texel's centre it steps a whole texel at a time.
+          const float inside =
+              options_.subTexel ? lines_[static_cast<size_t>(width.edge)].nearest(Vec2(r.s, r.t)).distance : -width.w;
+          const float blocked = std::clamp(inside * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
           return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
         },
         horizonForRows());
@@ -86,8 +94,9 @@ class KirschTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> widths_;
-  Image<float> farthest_;     //!< prepare()'s working image, kept between calls
-  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges widths_ names
+  Image<float> farthest_;             //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 
 }  // namespace

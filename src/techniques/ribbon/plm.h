@@ -53,6 +53,7 @@
 // none of these changes a texel.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -132,6 +133,38 @@ struct RibbonTexel {
   bool covered() const { return edge >= 0; }
 };
 inline constexpr RibbonTexel kNoRibbon{0.0f, 0.0f, -1};
+
+// A ribbon texel's unsigned distance and c measured at a point p of the map (texels) instead of at
+// the texel's centre: the distance from p to the edge's segment and the edge's zeta at the segment's
+// point nearest p (an end point beyond either end), as rasterizeRibbons measures them at the centre.
+struct EdgePoint {
+  float distance;  //!< texels, >= 0
+  float c;         //!< zeta of the edge at its point nearest p
+};
+// An edge's segment as the per-pixel lookup needs it (28 bytes, where an Edge takes 52).
+struct EdgeLine {
+  Vec2 a{0.0f}, d{0.0f};    //!< the segment a .. a + d, map texels
+  float invLength2 = 0.0f;  //!< 1 / |d|^2; 0 for a segment of one point
+  float zetaA = 0.0f, dZeta = 0.0f;
+
+  explicit EdgeLine(const Edge& e)
+      : a(e.a),
+        d(e.b - e.a),
+        invLength2(glm::dot(d, d) > 0.0f ? 1.0f / glm::dot(d, d) : 0.0f),
+        zetaA(e.zetaA),
+        dZeta(e.zetaB - e.zetaA) {}
+  EdgePoint nearest(const Vec2& p) const {
+    const Vec2 ap = p - a;
+    const float u = std::clamp(glm::dot(ap, d) * invLength2, 0.0f, 1.0f);
+    return EdgePoint{glm::length(ap - u * d), zetaA + u * dZeta};
+  }
+};
+// One EdgeLine per edge, in the list's order (a ribbon texel's `edge` indexes both), into `out`.
+inline void edgeLines(const std::vector<Edge>& edges, std::vector<EdgeLine>& out) {
+  out.clear();
+  out.reserve(edges.size());
+  for (const Edge& e : edges) out.emplace_back(e);
+}
 
 // The deepest surface along each texel's light ray (the light map's far layer), in zeta; zetaNone
 // where the texel sees nothing. A ribbon texel is only taken where a surface lies below the edge:

@@ -23,13 +23,18 @@
 // around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's penumbra);
 // with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden
 // from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at
-// the texel holding the pixel (no filtering: the 2003 hardware filtered no float textures), then V goes through
-// Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm (sphere,
-// disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels), bias_constant (texels),
-// bias_slope (shadow_map.h), margin (texels added to every strip's width), illumination_table (bool).
+// the texel holding the pixel (no filtering: the 2003 hardware filtered no float textures). With `sub_texel` on (the
+// default) the strip's alpha is then taken at the pixel's own point in the map, from the edge that won the texel (its
+// distance and depth there), so the fade follows the silhouette below a texel; the paper's buffer, alpha at the
+// texel's centre (`sub_texel` off), moves it in whole-texel steps, which pop as the light moves. V goes through
+// Appendix A's table of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. Lights: as plm
+// (sphere, disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels), bias_constant
+// (texels), bias_slope (shadow_map.h), margin (texels added to every strip's width), illumination_table (bool),
+// sub_texel (bool).
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <vector>
 
 #include "core/light_profile.h"
 #include "penumbra/error.h"
@@ -56,8 +61,9 @@ class SmoothiesTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     plm::farthestSurface(map_, space_, farthest_);
-    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_), space_, map_.size,
-                          plm::RibbonSides::Outer, options_.marginTexels,
+    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
+    plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
+    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Outer, options_.marginTexels,
                           plm::RibbonFilter{nullptr, &map_.lsDepth, false}, farthest_, smoothies_);
   }
 
@@ -69,10 +75,15 @@ class SmoothiesTechnique final : public ShadowTechnique {
           if (!r.inMap) return 1.0f;
           if (hardShadow(map_, r) == 0.0f) return 0.0f;
           const plm::RibbonTexel& s = smoothies_(static_cast<int>(std::floor(r.s)), static_cast<int>(std::floor(r.t)));
+          if (!s.covered()) return 1.0f;
+          // The strip's distance and depth at the pixel's own point (sub_texel) move with the silhouette
+          // below a texel; at the texel's centre they step a whole texel at a time.
+          const plm::EdgePoint at = options_.subTexel ? lines_[static_cast<size_t>(s.edge)].nearest(Vec2(r.s, r.t))
+                                                      : plm::EdgePoint{s.w, s.c};
           const float biased = r.lsDepth - r.bias;
-          if (!s.covered() || !(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > s.c)) return 1.0f;
+          if (!(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > at.c)) return 1.0f;
           const float z = space_.zeta(r.lsDepth);
-          const float alpha = std::clamp(s.w * space_.ratePerTexel / (z - s.c), 0.0f, 1.0f);
+          const float alpha = std::clamp(at.distance * space_.ratePerTexel / (z - at.c), 0.0f, 1.0f);
           return options_.illuminationTable ? table_(alpha) : alpha;
         },
         horizonForRows());
@@ -83,8 +94,9 @@ class SmoothiesTechnique final : public ShadowTechnique {
   plm::Space space_;
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> smoothies_;
-  Image<float> farthest_;     //!< prepare()'s working image, kept between calls
-  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges smoothies_ names
+  Image<float> farthest_;             //!< prepare()'s working image, kept between calls
+  plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 
 }  // namespace
