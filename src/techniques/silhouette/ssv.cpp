@@ -87,6 +87,9 @@
 //    cell (bounded with the cell's deepest receiver) and the rings whose hard-shadow box overlaps
 //    it; a pixel combines the rings listed in its cell, less those it finds beyond the reach of
 //    every edge shadow of an uncut ring with its own direction and depth (beyondEdgeShadows).
+//    Within a ring it passes over each chunk of eight edges it finds so (EdgeChunk, stages.h): one
+//    edge to the next chunk stands for it, which winds the same around every point of the light
+//    square; the slicing then has no cuts at the passed-over vertices, which lie outside the square.
 //  - Occluders that are not closed 2-manifolds (our extension; Rouf Section 1.3 assumes simple,
 //    hole-free solids): any mesh becomes a closed oriented surface (mesh_topology.h), solids where
 //    a component is closed, doubled shells (each triangle and its reversed copy) elsewhere. The
@@ -138,7 +141,8 @@ using namespace silhouette;
 
 using Integration = SsvIntegration;  // include/penumbra/techniques/silhouette.h
 
-constexpr int32_t kClosure = -1;  //!< a clipped ring's edge along the clipping plane (no silhouette edge)
+constexpr int32_t kClosure = -1;     //!< a clipped ring's edge along the clipping plane (no silhouette edge)
+constexpr int32_t kPassedOver = -2;  //!< a ring's edge that stands for a chunk of its edges (EdgeChunk)
 
 // One silhouette edge and the fixed part of its edge shadow (light space).
 struct Edge {
@@ -152,6 +156,7 @@ struct Edge {
 
 struct Ring {
   uint32_t first = 0, count = 0;  //!< edges [first, first + count)
+  uint32_t firstChunk = 0;        //!< chunks [firstChunk, firstChunk + ceil(count / kChunkEdges)) of Side::chunks
   bool umbra = false;
   bool sheet = false;
   bool crossesLightPlane = false;  //!< some vertex is not in front of the light
@@ -258,6 +263,7 @@ struct Side {
   LightPlane plane;
   Vec2 squareScale{1.0f};  //!< light plane (x, y) -> light square [0, 1]^2: (q - plane.lower) * squareScale
   std::vector<Edge> edges;
+  std::vector<EdgeChunk> chunks;
   std::vector<Ring> rings;
   std::vector<Group> groups;
   UGrid edgeGrid;  //!< per cell: the rings with an edge whose region of influence reaches it
@@ -484,6 +490,16 @@ class SsvTechnique final : public ShadowTechnique {
         Edge& e = side.edges[ring.first + i];
         e.degenerate = !(glm::length(e.uB - e.uA) > 1e-3f * uDiagonal);
       }
+      ring.firstChunk = static_cast<uint32_t>(side.chunks.size());
+      for (uint32_t i = 0; i < ring.count; i += kChunkEdges) {
+        EdgeChunk c;
+        for (uint32_t j = i; j < std::min(i + kChunkEdges, ring.count); ++j) {
+          const Edge& e = side.edges[ring.first + j];
+          c.add(e.uA, e.a.z);
+          c.add(e.uB, e.b.z);
+        }
+        side.chunks.push_back(c);
+      }
       g.crossesLightPlane = g.crossesLightPlane || ring.crossesLightPlane;
       g.zMin = std::min(g.zMin, ring.zMin);
       g.zMax = std::max(g.zMax, ring.zMax);
@@ -658,13 +674,23 @@ class SsvTechnique final : public ShadowTechnique {
 
   // Ring r as a closed polygon clipped to zNear <= z <= zMax in s.loop (Sutherland-Hodgman against
   // both depth bounds; each vertex keeps in s.loopEdge the edge that leaves it, kClosure along a
-  // cut); whether it was cut.
-  bool clipRing(const Side& side, const Ring& r, float zMax, Scratch& s) const {
+  // cut); whether it was cut. In a ring that is not cut, a chunk of edges beyond every edge shadow
+  // of p is one edge to the next chunk (kPassedOver; EdgeChunk, stages.h, says why the curve stays the same).
+  bool clipRing(const Side& side, const Ring& r, const Vec3& p, float zMax, Scratch& s) const {
     s.loop.clear();
     s.loopEdge.clear();
-    for (uint32_t i = 0; i < r.count; ++i) {
-      s.loop.push_back(side.edges[r.first + i].a);
-      s.loopEdge.push_back(static_cast<int32_t>(r.first + i));
+    const bool uncut = !r.crossesLightPlane && r.zMax <= zMax;
+    const Vec2 u(p.x / p.z, p.y / p.z);
+    for (uint32_t i = 0, k = r.firstChunk; i < r.count; i += kChunkEdges, ++k) {
+      if (uncut && side.chunks[k].beyond(side.plane, u, p.z)) {
+        s.loop.push_back(side.edges[r.first + i].a);
+        s.loopEdge.push_back(kPassedOver);
+        continue;
+      }
+      for (uint32_t j = i; j < std::min(i + kChunkEdges, r.count); ++j) {
+        s.loop.push_back(side.edges[r.first + j].a);
+        s.loopEdge.push_back(static_cast<int32_t>(r.first + j));
+      }
     }
     bool cut = false;
     for (const float bound : {zNear_, zMax}) {
@@ -708,9 +734,10 @@ class SsvTechnique final : public ShadowTechnique {
     for (size_t i = 0; i < n; ++i) {
       const Vec2 b = i + 1 < n ? toSquare(s.loop[i + 1]) : first;
       const int32_t id = s.loopEdge[i];
-      if (id == kClosure) {
-        // Along the clipping plane: its points are at p's depth and project far outside the
-        // light; it never contributes, it only separates chains.
+      if (id == kClosure || id == kPassedOver) {
+        // Along the clipping plane (its points are at p's depth and project far outside the
+        // light), or standing for a chunk that projects outside it: it never contributes, it only
+        // separates chains.
         s.approximants.push_back({0, 0.0f, a, b, false});
       } else if (!side.edges[id].degenerate) {
         const Edge& e = side.edges[id];
@@ -823,7 +850,8 @@ class SsvTechnique final : public ShadowTechnique {
   int appendCurve(const Side& side, uint32_t ringId, const Vec3& p, Scratch& s) const {
     const Ring& r = side.rings[ringId];
     const float zMax = p.z * (1.0f - 1e-4f);
-    const bool cut = clipRing(side, r, zMax, s);
+    const bool cut = clipRing(side, r, p, zMax, s);
+    // Also a loop of passed-over chunks left with fewer vertices: it winds around no point of the square.
     if (s.loop.size() < 3) return 0;
     const bool anyContribution = makeApproximants(side, p, s);
     // A ring cut at p's depth (p on or beside its object) or at the light's plane is closed along

@@ -17,6 +17,7 @@
 // of the cell (none if z_c <= min z_e): conservative, exact in the limit of a small light.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -138,6 +139,28 @@ inline bool beyondEdgeShadows(const LightPlane& plane, const Vec2& uLower, const
   const Vec2 margin = 1e-6f * (glm::abs(lower) + glm::abs(upper));
   return u.x < lower.x - margin.x || u.y < lower.y - margin.y || u.x > upper.x + margin.x || u.y > upper.y + margin.y;
 }
+
+// kChunkEdges consecutive edges of a silhouette ring, with the box of their end points' directions
+// from the light's centre and their least depth. A receiver beyond the edge shadows of a chunk
+// (beyondEdgeShadows) sees all of it, projected, past one side of the light's bounding rectangle
+// (the test bounds every point's projection there): in that half-plane, which holds neither the
+// rectangle nor its centre, the chunk's projected path and the straight segment between its ends
+// wind around no point of the rectangle, so the segment stands for the chunk in the ring's curve
+// (ssv) or fan area (wedges). A pixel then projects one vertex instead of the chunk's; on a real mesh
+// few of a ring's edges reach the light from any one pixel.
+inline constexpr uint32_t kChunkEdges = 8;
+struct EdgeChunk {
+  Vec2 uLower{kInfinity}, uUpper{-kInfinity};
+  float zMin = kInfinity;
+  void add(const Vec2& u, float z) {
+    uLower = glm::min(uLower, u);
+    uUpper = glm::max(uUpper, u);
+    zMin = std::min(zMin, z);
+  }
+  bool beyond(const LightPlane& plane, const Vec2& u, float z) const {
+    return beyondEdgeShadows(plane, uLower, uUpper, zMin, u, z);
+  }
+};
 
 // Clips the convex polygon in[0, count) to the half-plane dot(n, x) <= d (Sutherland-Hodgman) into
 // `out` (room for count + 1 points); returns the number of points left.

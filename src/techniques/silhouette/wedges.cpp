@@ -45,7 +45,8 @@
 // shadow its own pixels; receivers behind the light's plane are
 // handled in the light space of its other face; rings are binned in the light-space grid of stages.h
 // by their regions of influence (their u-space boxes grown by R (1/z_min - 1/z_p), z_p the deepest
-// receiver of a cell).
+// receiver of a cell). Within a ring that lies in front of p, a chunk of eight edges beyond every edge
+// shadow of p is one edge to the next chunk (EdgeChunk, stages.h: the same fan area).
 //
 // Parameters: grid (cells per side of the binning grid).
 #include <algorithm>
@@ -80,6 +81,7 @@ struct WedgeRing {
   float zMin = kInfinity;                      //!< its smallest depth there
   float zMax = -kInfinity;                     //!< its vertices' largest depth
   bool crossesNear = false;                    //!< some vertex lies nearer than zNear (behind this face of the light)
+  uint32_t firstChunk = 0;                     //!< its chunks of edges in Side::chunks (set where !crossesNear)
 };
 
 // One face of the light: its light space and the silhouette seen from its centre.
@@ -87,6 +89,7 @@ struct Side {
   LightPlane plane;
   LightSectors sectors;  //!< the fan area of an edge whose projection passes outside the light
   std::vector<Vec3> vertices;
+  std::vector<EdgeChunk> chunks;
   std::vector<WedgeRing> rings;
   UGrid grid;
   bool binned = false;
@@ -215,6 +218,16 @@ class WedgesTechnique final : public ShadowTechnique {
             side.vertices.resize(ring.first);
             continue;
           }
+          ring.firstChunk = static_cast<uint32_t>(side.chunks.size());
+          if (!ring.crossesNear)
+            for (uint32_t i = 0; i < ring.count; i += kChunkEdges) {
+              EdgeChunk c;
+              for (uint32_t j = i; j <= std::min(i + kChunkEdges, ring.count); ++j) {  // the edges' both ends
+                const Vec3& q = side.vertices[ring.first + j % ring.count];
+                c.add(Vec2(q.x / q.z, q.y / q.z), q.z);
+              }
+              side.chunks.push_back(c);
+            }
           side.rings.push_back(ring);
         }
       }
@@ -249,11 +262,27 @@ class WedgesTechnique final : public ShadowTechnique {
       // the plane just in front of p, whose projection runs far outside the light, as the part of
       // the loop "at infinity" seen from p would; clipping edge by edge would leave the loop open
       // and its winding undefined.
-      // A ring wholly within the depths is used as it is.
+      // A ring wholly within the depths is used as it is, but for its chunks of edges beyond every
+      // edge shadow of p: each is one edge to the next chunk (EdgeChunk, stages.h: the same fan area).
       const Vec3* ring = side.vertices.data() + r.first;
       size_t n = r.count;
       bool cut = false;
-      if (!within) {
+      if (within) {
+        clipped.clear();
+        bool passedOver = false;
+        for (uint32_t i = 0, k = r.firstChunk; i < r.count; i += kChunkEdges, ++k) {
+          if (side.chunks[k].beyond(side.plane, u, p.z)) {
+            clipped.push_back(ring[i]);
+            passedOver = true;
+          } else {
+            clipped.insert(clipped.end(), ring + i, ring + std::min(i + kChunkEdges, r.count));
+          }
+        }
+        if (passedOver) {
+          ring = clipped.data();
+          n = clipped.size();
+        }
+      } else {
         clipped.assign(ring, ring + n);
         for (const float bound : {zNear_, zMax}) {
           const bool low = bound == zNear_;
@@ -277,7 +306,7 @@ class WedgesTechnique final : public ShadowTechnique {
         ring = clipped.data();
         n = clipped.size();
       }
-      if (n < 3) continue;
+      if (n < 3) continue;  // also a ring of passed-over chunks left with fewer vertices: it winds around nothing
       float covered = 0.0f;
       int winding = 0;  // around the light's centre, the origin of the light plane
       if (!(side.sectors.valid() && ringFansBySectors(side.sectors, side.plane.vertices, p, ring, n, covered, winding)))
