@@ -117,9 +117,8 @@ class HybridTechnique final : public ShadowTechnique {
       const auto i = static_cast<size_t>(x);
       w.found[i] = BlockerSearch{};
       w.lit[i] = 1.0f;
-      const ShadowReceiver r = w.receivers[x];
-      if (!r.inMap || !(r.lsDepth > zMin_)) continue;
-      w.radius[i] = std::min(searchScale_ * (r.lsDepth - zMin_) / r.texelWorld, static_cast<float>(map_.size));
+      if (!searchesForBlockers(w.receivers, i, zMin_)) continue;
+      w.radius[i] = std::min(searchRadiusTexels(w.receivers, i, searchScale_, zMin_), static_cast<float>(map_.size));
       w.rotation[i] = rotations_(x, y);
       w.pixels[kept++] = x;
     }

@@ -729,12 +729,12 @@ inline void listSearchingPixelsFrom(int from, const int32_t* ids, const Receiver
                                     float* out, SearchingPixels& result) {
   for (int x = from; x < width; ++x) {
     const auto i = static_cast<size_t>(x);
-    const float r = scale * (receivers.lsDepth[i] - zMin) / receivers.texelWorld[i];
+    const float r = searchRadiusTexels(receivers, i, scale, zMin);
     clamped[i] = r > maxRadius;
     radius[i] = std::min(r, maxRadius);
     out[i] = 1.0f;
     const bool hit = ids[i] != kNoObject;
-    const bool search = hit && receivers.inMap[i] != 0 && receivers.lsDepth[i] > zMin;
+    const bool search = hit && searchesForBlockers(receivers, i, zMin);
     pixels[result.count] = x;  // kept when the pixel searches: no branch
     result.count += search;
     result.hits += hit;

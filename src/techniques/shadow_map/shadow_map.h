@@ -235,6 +235,18 @@ struct BlockerSearch {
   float meanDepth = 0.0f;  //!< mean light-space depth of those blockers (0 when none)
 };
 
+// The blocker search's radius in texels before any cut, scale (z - zMin) / texelWorld: the search
+// disk's world radius at a receiver of depth z over the texel size there (scale = R / zMin for a
+// perspective map, R for an orthographic one); a receiver searches when it lies in the map and behind
+// the map's nearest depth zMin (nothing can block in front of it). Shared by pcss (listSearchingPixels)
+// and hybrid's quad search.
+inline float searchRadiusTexels(const ReceiverRow& receivers, size_t x, float scale, float zMin) {
+  return scale * (receivers.lsDepth[x] - zMin) / receivers.texelWorld[x];
+}
+inline bool searchesForBlockers(const ReceiverRow& receivers, size_t x, float zMin) {
+  return receivers.inMap[x] != 0 && receivers.lsDepth[x] > zMin;
+}
+
 // PCSS's first step over a row of receivers: which pixels search for blockers and how far. A pixel
 // searches when it sees geometry (ids[x] != kNoObject), lies in the map and lies behind the map's
 // nearest depth zMin (nothing can block in front of it); it is listed in `pixels`, in order. Every
