@@ -909,6 +909,9 @@ TEST_F(CliTest, BenchOnAStillSceneSeparatesTheFirstFrame) {
   const nlohmann::json j = nlohmann::json::parse(read("s.json"));
   EXPECT_NE(j["settings"]["statistic"].get<std::string>().find("median over repeats 2 to N"), std::string::npos);
   EXPECT_TRUE(j["settings"].contains("gbuffer_first_ms"));
+  // The G-buffer's storage is made for the image size before any frame, and its time reported apart.
+  EXPECT_TRUE(j["settings"].contains("gbuffer_setup_ms"));
+  EXPECT_NE(r.output.find("its storage made at setup"), std::string::npos) << r.output;
   EXPECT_TRUE(j["settings"].contains("ray_scene_ms"));  // built once before any technique, in none of their times
   EXPECT_NE(r.output.find("Embree scene"), std::string::npos) << r.output;
   ASSERT_EQ(j["techniques"].size(), 2u) << j.dump(2);
