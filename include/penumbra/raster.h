@@ -36,6 +36,13 @@ enum class LightMapFit {
   // Tight's by up to an extent step plus what the quantized axis's tilt costs, and the map looks
   // from up to a texel (at the scene's centre) away from the light's centre sample.
   Stable,
+  // Stable, looking along a world axis (+-x, +-y, +-z) as a cube map's face does, where one lies
+  // within 30 degrees of Stable's axis with the scene well in front of the light (else Stable's): the
+  // window is centred on the scene a whole number of texels off the axis, and the lattice steps a
+  // whole texel at the depth of the scene's far face. The floor under a light above the scene then
+  // lies in the map's plane and keeps its texels while the map steps; only what stands above it moves
+  // against the grid, as its shadow does. A planar light whose normal is a world axis keeps it.
+  Aligned,
 };
 
 // The scene seen from the light's centre sample: a size x size map of light-space depth and object
@@ -47,10 +54,13 @@ struct LightMap {
   Vec3 wsOrigin{0.0f};  //!< light-space origin: the centre sample, snapped when Stable (directional: behind the scene)
   Frame lsFrame;        //!< light-space axes in world space; +z along the light's axis
   // Projection of light-space (x, y) to map coordinates, one of:
-  //  perspective: s = size/2 * (1 + x / (z tanHalfFov)), t = size/2 * (1 - y / (z tanHalfFov))
+  //  perspective: s = size/2 * (1 + (x / (z tanHalfFov) - o_x)), t = size/2 * (1 - (y / (z tanHalfFov) - o_y))
   //  orthographic: s = size/2 * (1 + x / halfWidth),    t = size/2 * (1 - y / halfWidth)
+  // with o = windowOffset: the window is centred on the axis (o = 0) but in an Aligned map, whose
+  // window is centred on the scene, a whole number of texels off the axis.
   float tanHalfFov = 1.0f;          //!< perspective
   float halfWidth = 1.0f;           //!< orthographic, world units
+  Vec2 windowOffset{0.0f};          //!< perspective: the window's centre over tanHalfFov (x / z, y / z)
   float zNear = 0.0f, zFar = 1.0f;  //!< light-space depth range that holds the scene
   Image<float> lsDepth;             //!< light-space depth z (distance along +z); kInfinity where empty
   Image<int32_t> objectId;          //!< kNoObject where empty; empty (0 x 0) with LightMapLayers::NearestDepth
@@ -67,7 +77,8 @@ struct LightMap {
   Vec3 projectLightSpace(const Vec3& lsP) const {
     const float half = 0.5f * static_cast<float>(size);
     const float scale = orthographic ? 1.0f / halfWidth : 1.0f / (lsP.z * tanHalfFov);
-    return Vec3(half * (1.0f + lsP.x * scale), half * (1.0f - lsP.y * scale), lsP.z);
+    return Vec3(half * (1.0f + (lsP.x * scale - windowOffset.x)), half * (1.0f - (lsP.y * scale - windowOffset.y)),
+                lsP.z);
   }
   // World point at map coordinates (s, t) and light-space depth z (the inverse of project).
   Vec3 unproject(float s, float t, float z) const;

@@ -34,6 +34,17 @@
 // A perspective stable map is fitted from its snapped origin and widened a step at a time until it
 // holds every corner of the scene's bounds (light_map_test checks that over a long path).
 //
+// An Aligned fit is a Stable one whose axis is, where it can be, the world axis nearest the quantized
+// one (within kStableWorldAxisDegrees, every corner of the bounds in front of the light), as a cube
+// map's face. Such a map cannot stay centred on its axis: its window is centred on the scene a whole
+// number of texels off the axis (LightMap::windowOffset), and the lattice's reference depth is the
+// bounds' far face along the axis. Why: at a lattice step what lies at depth z moves by zRef / z - 1
+// of a texel against the grid; with the Stable axis tilted a few degrees from a floor, the floor's
+// depth varies across the map, its pixels change texels at some steps while the occluders' images
+// move the other way, and a pixel at a shadow's edge can flip more than once where the exact edge
+// crosses it once. Along the axis the floor has one depth, the reference one, and keeps its texels.
+// A planar light (own axis) along a world axis gets the same window and lattice.
+//
 // With LightMapLayers::NearestAndFarthest the same rasterization also keeps each texel's deepest
 // surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon techniques' far layer costs
 // no second pass over the triangles.
@@ -57,6 +68,9 @@ constexpr float kMaxFovDegrees = 150.0f;
 constexpr float kFitMargin = 1.001f;
 constexpr int kStableAxisCells = 31;    //!< octahedral grid cells per side for the stable axis (odd: see below)
 constexpr int kStableExtentSteps = 16;  //!< stable extents per octave (steps of 2^(1/16), 4.4%)
+// A stable map of a sphere or segment light looks along the world axis nearest its quantized axis
+// when the two are at most this far apart (degrees).
+constexpr float kStableWorldAxisDegrees = 30.0f;
 
 // Octahedral map of a unit direction to [-1, 1]^2 and back (Meyer et al. 2010, "On floating-point
 // normal vectors"): cells of equal size in the square are of similar solid angle on the sphere. The
@@ -117,7 +131,8 @@ Vec3 snapToLattice(const Vec3& p, const Frame& frame, double step, bool alongZ) 
 
 // The perspective frustum from origin o along frame.z that holds the corners.
 struct FrustumFit {
-  float tanHalf = 0.0f;  //!< the corners' largest |x| / z and |y| / z (without margin)
+  float tanHalf = 0.0f;                      //!< the corners' largest |x| / z and |y| / z (without margin)
+  Vec2 lower{kInfinity}, upper{-kInfinity};  //!< the corners' (x / z, y / z) box
   float minZ = kInfinity, maxZ = -kInfinity;
   bool behind = false;  //!< some corner at z <= 0
 };
@@ -128,13 +143,28 @@ FrustumFit fitFrustum(const Frame& frame, const Vec3& o, const std::array<Vec3, 
     const Vec3 l = frame.toLocal(p - o);
     f.minZ = std::min(f.minZ, l.z);
     f.maxZ = std::max(f.maxZ, l.z);
-    if (l.z > 0.0f)
+    if (l.z > 0.0f) {
+      const Vec2 u(l.x / l.z, l.y / l.z);
       f.tanHalf = std::max(f.tanHalf, std::max(std::abs(l.x), std::abs(l.y)) / l.z);
-    else
+      f.lower = glm::min(f.lower, u);
+      f.upper = glm::max(f.upper, u);
+    } else {
       f.behind = true;
+    }
   }
   return f;
 }
+
+// The world axis (+-x, +-y or +-z) nearest to d: the face of a cube map that d points into.
+Vec3 nearestWorldAxis(const Vec3& d) {
+  const Vec3 a = glm::abs(d);
+  const int k = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+  Vec3 axis(0.0f);
+  axis[k] = d[k] < 0.0f ? -1.0f : 1.0f;
+  return axis;
+}
+
+bool isWorldAxis(const Vec3& d) { return (d.x == 0.0f) + (d.y == 0.0f) + (d.z == 0.0f) == 2; }
 
 }  // namespace
 
@@ -142,7 +172,7 @@ Vec3 LightMap::unproject(float s, float t, float z) const {
   const float ndcX = 2.0f * s / static_cast<float>(size) - 1.0f;
   const float ndcY = 1.0f - 2.0f * t / static_cast<float>(size);
   const float scale = orthographic ? halfWidth : z * tanHalfFov;
-  return wsOrigin + lsFrame.fromLocal(Vec3(ndcX * scale, ndcY * scale, z));
+  return wsOrigin + lsFrame.fromLocal(Vec3((ndcX + windowOffset.x) * scale, (ndcY + windowOffset.y) * scale, z));
 }
 
 Frame lightMapFrame(const Light& light, const Bounds3& sceneBounds, LightMapFit fit) {
@@ -150,7 +180,16 @@ Frame lightMapFrame(const Light& light, const Bounds3& sceneBounds, LightMapFit 
   const bool ownAxis = light.isDirectional() || light.shape() == LightShape::Disk ||
                        light.shape() == LightShape::Rect || light.shape() == LightShape::Polygon;
   if (fit == LightMapFit::Tight || ownAxis) return frame;
-  return Frame::fromZ(quantizeDirection(frame.z));
+  const Vec3 cell = quantizeDirection(frame.z);
+  if (fit == LightMapFit::Stable) return Frame::fromZ(cell);
+  // A world axis within kStableWorldAxisDegrees of the cell, with the whole scene well in front of
+  // the light along it (its nearest corner at least a tenth of the scene's diagonal away).
+  const Vec3 axis = nearestWorldAxis(cell);
+  bool inFront = !sceneBounds.empty();
+  for (const Vec3& p : corners(sceneBounds))
+    inFront = inFront && glm::dot(p - light.center(), axis) > 0.2f * sceneBounds.radius();
+  if (inFront && glm::dot(cell, axis) >= std::cos(radians(kStableWorldAxisDegrees))) return Frame::fromZ(axis);
+  return Frame::fromZ(cell);
 }
 
 LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightMapFit fit) {
@@ -186,7 +225,7 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   if (bounds.empty()) return;
 
   const std::array<Vec3, 8> wsCorners = corners(bounds);
-  const bool stable = fit == LightMapFit::Stable;
+  const bool stable = fit != LightMapFit::Tight;
   // A stable extent keeps a texel of margin on each side for the snap of the origin.
   const float snapMargin = 1.0f / (1.0f - 2.0f / static_cast<float>(size));
   // Clip-space z and w from light-space z (see the header comment).
@@ -221,20 +260,43 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   } else {
     const float maxTanHalf = std::tan(0.5f * radians(kMaxFovDegrees));
     FrustumFit f = fitFrustum(m.lsFrame, m.wsOrigin, wsCorners);
-    m.tanHalfFov = f.behind ? maxTanHalf : std::clamp(f.tanHalf * kFitMargin, 1e-6f, maxTanHalf);
+    // Along a world axis (Aligned) the window is centred on the scene, not on the axis: the half-width
+    // it needs about a centre.
+    const bool offAxis = fit == LightMapFit::Aligned && isWorldAxis(m.lsFrame.z);
+    auto halfWidthAbout = [&](const FrustumFit& fit, const Vec2& centre) {
+      return offAxis ? std::max({fit.upper.x - centre.x, centre.x - fit.lower.x, fit.upper.y - centre.y,
+                                 centre.y - fit.lower.y})
+                     : fit.tanHalf;
+    };
+    const float needed = halfWidthAbout(f, offAxis ? 0.5f * (f.lower + f.upper) : Vec2(0.0f));
+    m.tanHalfFov = f.behind ? maxTanHalf : std::clamp(needed * kFitMargin, 1e-6f, maxTanHalf);
     if (stable) {
+      // The lattice steps a whole texel at the reference depth zRef. Along a world axis that is the
+      // depth of the scene's far face (the floor under a light above the scene), which lies in the
+      // map's plane: there the receivers keep their texels while the map steps, and only what stands
+      // above them moves against the grid (its shadow's own motion). Otherwise the scene's centre.
       const float zCentre = m.lsFromWs(bounds.center()).z;
-      const double zRef = quantizeExtentUp(zCentre > 0.0f ? zCentre : std::max(f.maxZ, 1e-6f));
+      const float zFace = offAxis ? f.maxZ : zCentre;
+      const double zRef = quantizeExtentUp(zFace > 0.0f ? zFace : std::max(f.maxZ, 1e-6f));
       if (!f.behind) m.tanHalfFov = std::min(quantizeExtentUp(m.tanHalfFov * snapMargin), maxTanHalf);
       // Widen a step at a time until the frustum from the snapped origin holds the corners (the
       // margin makes that the first try but for corners very near the light).
       for (;;) {
         m.wsOrigin = snapToLattice(light.center(), m.lsFrame, zRef * 2.0 * m.tanHalfFov / size, true);
+        const double texel = 2.0 * m.tanHalfFov / size;  // in x / z
         f = fitFrustum(m.lsFrame, m.wsOrigin, wsCorners);
-        if (f.behind || m.tanHalfFov >= maxTanHalf || f.tanHalf * kFitMargin <= m.tanHalfFov) break;
+        Vec2 centre(0.0f);
+        if (offAxis)  // a whole number of texels off the axis, so the texel grid stays on the lattice
+          for (int k = 0; k < 2; ++k)
+            centre[k] = static_cast<float>(std::round(0.5 * (f.lower[k] + f.upper[k]) / texel) * texel);
+        m.windowOffset = centre / m.tanHalfFov;
+        if (f.behind || m.tanHalfFov >= maxTanHalf || halfWidthAbout(f, centre) * kFitMargin <= m.tanHalfFov) break;
         m.tanHalfFov = std::min(quantizeExtentUp(m.tanHalfFov * 1.001f), maxTanHalf);
       }
-      if (f.behind) m.tanHalfFov = maxTanHalf;
+      if (f.behind) {
+        m.tanHalfFov = maxTanHalf;
+        m.windowOffset = Vec2(0.0f);
+      }
     }
     if (!(f.maxZ > 0.0f)) {  // the whole scene is behind the light: nothing to see
       m.zNear = 0.0f;
@@ -263,6 +325,7 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   }
   lsZ.resize(clip.size());
   const float xyScale = 1.0f / (m.orthographic ? m.halfWidth : m.tanHalfFov);
+  const bool offset = m.windowOffset != Vec2(0.0f);
   size_t base = 0;
   for (const Object& object : scene.objects) {
     const Mesh& mesh = object.mesh;
@@ -270,8 +333,11 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
         tbb::blocked_range<size_t>(0, mesh.positions.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
           for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 l = m.lsFromWs(mesh.positions[i]);
-            clip[base + i] =
-                Vec4(l.x * xyScale, l.y * xyScale, clipZScale * l.z + clipZOffset, clipWScale * l.z + clipWOffset);
+            const float w = clipWScale * l.z + clipWOffset;
+            // The window's offset in clip space (x_clip / w is the map's ndc); none for most maps.
+            const float ox = offset ? m.windowOffset.x * w : 0.0f, oy = offset ? m.windowOffset.y * w : 0.0f;
+            clip[base + i] = Vec4(offset ? l.x * xyScale - ox : l.x * xyScale,
+                                  offset ? l.y * xyScale - oy : l.y * xyScale, clipZScale * l.z + clipZOffset, w);
             lsZ[base + i] = l.z;
           }
         });

@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -137,6 +138,7 @@ void expectSameMap(const LightMap& a, const LightMap& b) {
   EXPECT_EQ(a.lsFrame.z, b.lsFrame.z);
   EXPECT_EQ(a.halfWidth, b.halfWidth);
   EXPECT_EQ(a.tanHalfFov, b.tanHalfFov);
+  EXPECT_EQ(a.windowOffset, b.windowOffset);
   EXPECT_EQ(a.zNear, b.zNear);
   EXPECT_EQ(a.zFar, b.zFar);
   EXPECT_TRUE(std::equal(a.lsDepth.begin(), a.lsDepth.end(), b.lsDepth.begin(), b.lsDepth.end()));
@@ -310,14 +312,15 @@ TEST(LightMap, StableFitHoldsTheSceneAtEveryFrameOfALongPath) {
     // A light that passes over the scene, one whose axis is its own, and a sun that circles the sky
     // (map sizes vary so that the lattice steps do).
     const int size = 64 + 8 * (frame % 7);
-    for (const Light& light : {lightMovedTo(sphere, p), lightMovedTo(rect, p), lightMovedTo(sun, p)}) {
-      const LightMap m = renderLightMap(scene, light, size, LightMapFit::Stable);
-      expectCornersInside(scene, m);
-      // The origin is at most half a lattice diagonal from the centre sample: a texel at the scene.
-      if (!light.isDirectional()) {
-        EXPECT_LT(glm::distance(m.wsOrigin, light.center()), m.texelWorldSize(m.zFar));
+    for (const Light& light : {lightMovedTo(sphere, p), lightMovedTo(rect, p), lightMovedTo(sun, p)})
+      for (const LightMapFit fit : {LightMapFit::Stable, LightMapFit::Aligned}) {
+        const LightMap m = renderLightMap(scene, light, size, fit);
+        expectCornersInside(scene, m);
+        // The origin is at most half a lattice diagonal from the centre sample: a texel at the scene.
+        if (!light.isDirectional()) {
+          EXPECT_LT(glm::distance(m.wsOrigin, light.center()), m.texelWorldSize(m.zFar));
+        }
       }
-    }
     ++frame;
   }
 }
@@ -331,6 +334,63 @@ TEST(LightMap, StableMapMatchesRaysFromItsOrigin) {
       renderLightMap(scene, Light::directional(Vec3(0.4f, 1.0f, -0.3f), 0.01f), 256, LightMapFit::Stable);
   expectCornersInside(scene, sun);
   expectMatchesRays(scene, sun, 26000);  // measured: 28264
+}
+
+// An Aligned map of a light above the scene looks straight down, its window centred on the scene off
+// its axis: the rasterized map agrees with rays through its texels (the window's offset is the same in
+// the rasterizer's clip space and in project/unproject), and it holds the scene.
+TEST(LightMap, AlignedMapLooksAlongAWorldAxisAndMatchesRaysFromItsOrigin) {
+  const Scene scene = rastertest::objectsScene();
+  const LightMap m = renderLightMap(scene, Light::sphere(Vec3(1.3f, 6.1f, 2.2f), 0.3f), 256, LightMapFit::Aligned);
+  EXPECT_EQ(m.lsFrame.z, Vec3(0.0f, -1.0f, 0.0f));
+  EXPECT_NE(m.windowOffset, Vec2(0.0f));  // the light is off the scene's centre
+  expectCornersInside(scene, m);
+  expectMatchesRays(scene, m, 8500);
+  // unproject inverts project, window included.
+  const Vec3 p(0.7f, 0.2f, -1.9f);
+  const Vec3 stz = m.project(p);
+  const Vec3 back = m.unproject(stz.x, stz.y, stz.z);
+  EXPECT_LT(glm::distance(back, p), 1e-4f);
+  // A light far to the side (more than 30 degrees from every world axis) keeps Stable's axis.
+  const Light side = Light::sphere(Vec3(7.0f, 5.0f, 6.5f), 0.3f);
+  EXPECT_EQ(renderLightMap(scene, side, 128, LightMapFit::Aligned).lsFrame.z,
+            renderLightMap(scene, side, 128, LightMapFit::Stable).lsFrame.z);
+}
+
+// Why Aligned: at a lattice step the floor keeps its texels. A floor point's map position moves by whole
+// texels (up to the reference depth's quantization, 2^(1/16) of the floor's depth: 0.044 of a texel)
+// as the light moves across the scene, where a Stable map's tilted axis leaves the floor at depths on
+// both sides of its reference and moves its points by fractions of a texel.
+TEST(LightMap, AlignedMapMovesTheFloorByWholeTexels) {
+  const Scene scene = rastertest::objectsScene();  // its floor: the plane y = 0
+  const Vec3 floorPoints[] = {Vec3(-3.5f, 0.0f, -2.5f), Vec3(0.4f, 0.0f, 1.3f), Vec3(3.8f, 0.0f, 2.9f)};
+  double worstAligned = 0.0, worstStable = 0.0;
+  int stepsAligned = 0;
+  for (const LightMapFit fit : {LightMapFit::Aligned, LightMapFit::Stable}) {
+    std::optional<LightMap> before;
+    for (int k = 0; k <= 60; ++k) {
+      const Light light = Light::sphere(Vec3(0.5f + 0.01f * static_cast<float>(k), 8.0f, -1.0f), 0.8f);
+      LightMap m = renderLightMap(scene, light, 512, fit);
+      if (before && before->wsOrigin != m.wsOrigin && before->tanHalfFov == m.tanHalfFov &&
+          before->lsFrame.z == m.lsFrame.z) {
+        stepsAligned += fit == LightMapFit::Aligned;
+        for (const Vec3& q : floorPoints) {
+          const Vec3 a = before->project(q), b = m.project(q);
+          for (const float d : {b.x - a.x, b.y - a.y}) {
+            const double off = std::abs(d - std::round(d));
+            (fit == LightMapFit::Aligned ? worstAligned : worstStable) =
+                std::max(fit == LightMapFit::Aligned ? worstAligned : worstStable, off);
+          }
+        }
+      }
+      before = std::move(m);
+    }
+  }
+  std::printf("[ measured ] floor's shift off whole texels at a lattice step: aligned %.4f, stable %.4f (%d steps)\n",
+              worstAligned, worstStable, stepsAligned);
+  EXPECT_GT(stepsAligned, 5);
+  EXPECT_LT(worstAligned, 0.05);
+  EXPECT_GT(worstStable, 0.05);
 }
 
 TEST(LightMap, StableExtentAndAxisStayWithinTheirQuantizationOfTheTightFit) {
@@ -355,12 +415,16 @@ TEST(LightMap, StableMapDoesNotChangeWhileTheLightMovesWithinALatticeCell) {
   const Scene scene = rastertest::objectsScene();
   for (const Light& light : {Light::sphere(Vec3(1.3f, 6.1f, 2.2f), 0.3f),
                              Light::rect(Vec3(-1.1f, 5.2f, 0.6f), Vec3(0.5f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, -0.4f))}) {
+    for (const LightMapFit fit : {LightMapFit::Stable, LightMapFit::Aligned}) {
+      const LightMap m = renderLightMap(scene, light, 300, fit);
+      ASSERT_NE(m.wsOrigin, light.center());  // the snap moved it (else the test shows nothing)
+      // A hundredth of the way towards the lattice point the light still rounds to it (and stays
+      // within its cell of axes and extents, which a larger move might cross).
+      const Vec3 moved = light.center() + 0.01f * (m.wsOrigin - light.center());
+      expectSameMap(renderLightMap(scene, lightMovedTo(light, moved), 300, fit), m);
+    }
     const LightMap m = renderLightMap(scene, light, 300, LightMapFit::Stable);
-    ASSERT_NE(m.wsOrigin, light.center());  // the snap moved it (else the test shows nothing)
-    // A hundredth of the way towards the lattice point the light still rounds to it (and stays
-    // within its cell of axes and extents, which a larger move might cross).
     const Vec3 moved = light.center() + 0.01f * (m.wsOrigin - light.center());
-    expectSameMap(renderLightMap(scene, lightMovedTo(light, moved), 300, LightMapFit::Stable), m);
     // The tight fit refits to the moved light: its origin follows it.
     EXPECT_EQ(renderLightMap(scene, lightMovedTo(light, moved), 300).wsOrigin, moved);
   }

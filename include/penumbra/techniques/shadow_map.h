@@ -52,10 +52,12 @@ struct LightMapOptions {
     f.add(&LightMapOptions::fit,
           OptionDecl("map_fit").help(
               "how the light map is fitted to the scene each frame: tight (refitted from the light's centre: finest "
-              "texels, the grid moves with the light) or stable (quantized axis and extent, origin snapped to whole "
+              "texels, the grid moves with the light), stable (quantized axis and extent, origin snapped to whole "
               "texels: the map holds still under small light motion; texels coarser by up to an extent step of 4.4% "
-              "plus what the quantized axis's tilt costs)"),
-          {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}});
+              "plus what the quantized axis's tilt costs) or aligned (stable, along the world axis nearest the light's "
+              "direction to the scene where one lies within 30 degrees, as a cube map's face, the window centred on "
+              "the scene and the grid fixed at its far face: the floor keeps its texels as the light moves)"),
+          {{"tight", LightMapFit::Tight}, {"stable", LightMapFit::Stable}, {"aligned", LightMapFit::Aligned}});
     f.add(&LightMapOptions::horizon,
           OptionDecl("horizon").help(
               "bound V by the receiver's own surface, which a map seen from the light's centre cannot see: off "

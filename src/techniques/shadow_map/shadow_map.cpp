@@ -78,6 +78,7 @@ struct ReceiverRowConstants {
   float xx, xy, xz, yx, yy, yz, zx, zy, zz;  //!< its axes
   float mx, my, mz;                          //!< the map's origin in that frame (0 for the map's own frame)
   float size, half, halfWidth, tanHalfFov, biasConstant, biasSlope;
+  float windowX, windowY;  //!< LightMap::windowOffset
   int mapSize;
 };
 
@@ -110,7 +111,7 @@ inline __attribute__((always_inline)) void receiverRowKernel(
     const float nz = gx * k.zx + gy * k.zy + gz * k.zz;
     const bool inFront = kOrtho | (lz > 0.0f);
     const float scale = kOrtho ? 1.0f / k.halfWidth : 1.0f / (lz * k.tanHalfFov);
-    const float ms = k.half * (1.0f + lx * scale), mt = k.half * (1.0f - ly * scale);
+    const float ms = k.half * (1.0f + (lx * scale - k.windowX)), mt = k.half * (1.0f - (ly * scale - k.windowY));
     const bool inside = inFront & (ms >= 0.0f) & (ms < k.size) & (mt >= 0.0f) & (mt < k.size) &
                         (std::abs(lz) <= std::numeric_limits<float>::max());  // finite
     const float tw = 2.0f * (kOrtho ? k.halfWidth : lz * k.tanHalfFov) / k.size;
@@ -184,6 +185,8 @@ void receiverRow(const LightMap& frame, const Vec3& lsOffset, const LightMap& ma
                                map.tanHalfFov,
                                bias.constantTexels,
                                bias.slope,
+                               map.windowOffset.x,
+                               map.windowOffset.y,
                                map.size};
   static_assert(sizeof(Vec3) == 3 * sizeof(float));
   const auto* position = reinterpret_cast<const float*>(wsPositions);
