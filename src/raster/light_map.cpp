@@ -263,10 +263,10 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     // Along a world axis (Aligned) the window is centred on the scene, not on the axis: the half-width
     // it needs about a centre.
     const bool offAxis = fit == LightMapFit::Aligned && isWorldAxis(m.lsFrame.z);
-    auto halfWidthAbout = [&](const FrustumFit& fit, const Vec2& centre) {
-      return offAxis ? std::max({fit.upper.x - centre.x, centre.x - fit.lower.x, fit.upper.y - centre.y,
-                                 centre.y - fit.lower.y})
-                     : fit.tanHalf;
+    auto halfWidthAbout = [&](const FrustumFit& frustum, const Vec2& centre) {
+      return offAxis ? std::max({frustum.upper.x - centre.x, centre.x - frustum.lower.x, frustum.upper.y - centre.y,
+                                 centre.y - frustum.lower.y})
+                     : frustum.tanHalf;
     };
     const float needed = halfWidthAbout(f, offAxis ? 0.5f * (f.lower + f.upper) : Vec2(0.0f));
     m.tanHalfFov = f.behind ? maxTanHalf : std::clamp(needed * kFitMargin, 1e-6f, maxTanHalf);
