@@ -81,9 +81,9 @@ class KirschTechnique final : public ShadowTechnique {
           const float z = space_.zeta(r.lsDepth);
           // The shadow width at the pixel's own point (sub_texel) moves with the silhouette below a texel;
           // at the texel's centre it steps a whole texel at a time.
-          const float inside =
-              options_.subTexel ? lines_[static_cast<size_t>(width.edge)].nearest(Vec2(r.s, r.t)).distance : -width.w;
-          const float blocked = std::clamp(inside * space_.ratePerTexel / std::max(z - c, 1e-30f), 0.0f, 1.0f);
+          const plm::EdgeLine& line = lines_[static_cast<size_t>(width.edge)];
+          const float inside = options_.subTexel ? line.nearest(Vec2(r.s, r.t)).distance : -width.w;
+          const float blocked = std::clamp(inside * line.rate / std::max(z - c, 1e-30f), 0.0f, 1.0f);
           return options_.illuminationTable ? table_(1.0f - blocked) : 1.0f - blocked;
         },
         horizonForRows());

@@ -123,7 +123,7 @@ float emitterRadius(const Light& light, const char* technique) {
       technique, toString(light.shape()));
 }
 
-Space makeSpace(const LightMap& map, const Light& light, const char* technique) {
+Space makeSpace(const LightMap& map, const Light& light, const char* technique, bool sphereAcrossEdges) {
   Space space;
   const float radius = emitterRadius(light, technique);
   space.orthographic = map.orthographic;
@@ -135,7 +135,23 @@ Space makeSpace(const LightMap& map, const Light& light, const char* technique) 
   space.zetaNone = space.zetaFar + 4.0f * (space.zetaFar - space.zetaNear);
   const float texelSize = 2.0f * (map.orthographic ? map.halfWidth : map.tanHalfFov) / static_cast<float>(map.size);
   space.ratePerTexel = texelSize / radius;
+  space.sphere = sphereAcrossEdges && !map.orthographic && light.shape() == LightShape::Sphere;
+  space.texelU = texelSize;
+  space.windowOffset = map.windowOffset;
+  space.mapSize = map.size;
   return space;
+}
+
+float edgeRate(const Space& space, const Edge& e) {
+  if (!space.sphere) return space.ratePerTexel;
+  // The edge's middle as u = (x / z, y / z) (LightMap::projectLightSpace inverted; t runs down), and
+  // its normal in u (the same scale, t flipped).
+  const Vec2 mid = 0.5f * (e.a + e.b);
+  const float half = 0.5f * static_cast<float>(space.mapSize);
+  const Vec2 u((mid.x / half - 1.0f + space.windowOffset.x) * half * space.texelU,
+               (1.0f - mid.y / half + space.windowOffset.y) * half * space.texelU);
+  const float across = e.outward.x * u.x - e.outward.y * u.y;
+  return space.ratePerTexel / std::sqrt(1.0f + across * across);
 }
 
 // One mesh's silhouette candidates, which depend on its geometry alone, taken from its edge
@@ -280,6 +296,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
         }
         if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
         e.outward = side > 0.0f ? -normal : normal;
+        e.rate = edgeRate(space, e);
         e.zetaA = space.zeta(sa.z);
         e.zetaB = space.zeta(sb.z);
         e.objectId = object.id;
@@ -407,7 +424,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     if (skip[k]) continue;
     const Edge& e = edges[k];
     const float cMin = std::min(e.zetaA, e.zetaB);
-    const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
+    const float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
     // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
     const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
     const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
@@ -453,9 +470,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
         order.clear();
         const float x0 = static_cast<float>(ti * kTile) + 0.5f, x1 = x0 + static_cast<float>(tileWidth - 1);
         const float y0 = static_cast<float>(tj * kTile) + 0.5f, y1 = y0 + static_cast<float>(tileHeight - 1);
-        const float rateFloor = space.ratePerTexel * (1.0f - 1e-5f);
         for (uint32_t k : bin) {
           const Edge& e = edges[k];
+          const float rateFloor = e.rate * (1.0f - 1e-5f);
           const float dx = std::max({0.0f, std::min(e.a.x, e.b.x) - x1, x0 - std::max(e.a.x, e.b.x)});
           const float dy = std::max({0.0f, std::min(e.a.y, e.b.y) - y1, y0 - std::max(e.a.y, e.b.y)});
           const float distance = std::sqrt(dx * dx + dy * dy);
@@ -490,7 +507,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
         // per-texel compare p < priority rejects anyway.
         const float cLeast = std::min(e.zetaA, e.zetaB);
         const float cFloor = cLeast - 1e-5f * std::abs(cLeast);
-        const float rateFloor = space.ratePerTexel * (1.0f - 1e-5f);
+        const float rateFloor = e.rate * (1.0f - 1e-5f);
         const auto least = [&](float dy, float across) {
           const float distance = std::max(dy, std::abs(across));
           return cFloor + std::max(distance - 0.01f - 1e-5f * distance, 0.0f) * rateFloor;
@@ -583,7 +600,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
             const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB),
                          dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
-            const __m128 rate = _mm_set1_ps(space.ratePerTexel), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
+            const __m128 rate = _mm_set1_ps(e.rate), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
             const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
             const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
             const __m128 allOnes = _mm_castsi128_ps(_mm_set1_epi32(-1)), signBit = _mm_set1_ps(-0.0f);
@@ -656,7 +673,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
             const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
             const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
-            const float p = c + distance * space.ratePerTexel;
+            const float p = c + distance * e.rate;
             // The texel's own filters: on the inner side only where the map sees the edge's own
             // object; only where a surface lies below the edge; not where the texel's topmost surface
             // lies above the edge (tested on the outer side only: an inner candidate left here is
@@ -823,7 +840,7 @@ class PlmTechnique final : public ShadowTechnique {
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     const Light& light = *light_;
     setHorizonClamp(options_.lightMap.horizon, light);
-    space_ = plm::makeSpace(map_, light, "plm");
+    space_ = plm::makeSpace(map_, light, "plm", true);
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
@@ -863,9 +880,10 @@ class PlmTechnique final : public ShadowTechnique {
             ribbonAt[i] = 0;
             continue;
           }
-          PlmTexel texel{r.c, gRow[i], space.zetaNone, r.w * space.ratePerTexel, r.edge};
+          const float rate = edges[static_cast<size_t>(r.edge)].rate;
+          PlmTexel texel{r.c, gRow[i], space.zetaNone, r.w * rate, r.edge};
           if (r.w > 0.0f) {  // raise g (step 2; see the file comment)
-            texel.g = std::min(texel.g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * space.ratePerTexel);
+            texel.g = std::min(texel.g, r.c + std::max(r.w - options_.marginTexels, 0.0f) * rate);
             gRow[i] = texel.g;
           }
           covered.push_back(j * n + i);

@@ -14,8 +14,12 @@
 //     l = 1/2 + 1/2 (u_r - u_e) / (R (zeta_r - zeta_c))
 // exactly for a disk emitter of radius R facing the map's axis, i.e. Equation 1 in (u, zeta) with
 // s = the texel's size in u and r = 1 / R. Sphere lights are modelled by the disk of their radius at
-// their centre (their silhouette disk sits slightly nearer the receiver), rect and polygon lights by
-// the disk of equal area; segment lights, which have no width across their axis, are not supported.
+// their centre (their silhouette disk sits slightly nearer the receiver); for plm that disk faces the
+// receiver, not the map's axis: seen along (u, 1) it projects onto the map's plane as an ellipse
+// R sqrt(1 + (n . u)^2) wide across an edge of normal n, and each edge takes its own rate
+// (Edge::rate; smoothies and kirsch keep the disk facing the axis). Rect and polygon lights are
+// modelled by the disk of equal area; segment lights, which have no width across their axis, are not
+// supported.
 //
 // Silhouette edges (Sec. 3.1). Per object, vertices are welded by position; a triangle faces the
 // light when its wound normal points to the light's centre (directional: its direction); the techniques
@@ -72,6 +76,12 @@ struct Space {
   float zetaNear = 0.0f, zetaFar = 1.0f;  //!< zeta of the map's depth range
   float zetaNone = 2.0f;                  //!< stands for "nothing here": deeper than anything in the map, finite
   float ratePerTexel = 1.0f;              //!< s r: zeta of penumbra-limit depth per texel of horizontal distance
+  // A sphere light in a perspective map, measured across each edge (Edge::rate): the map's texel size
+  // in u = x / z and its window, to find an edge's direction u from its map position.
+  bool sphere = false;
+  float texelU = 0.0f;
+  Vec2 windowOffset{0.0f};
+  int mapSize = 0;
   // zeta of a light-space depth: z (orthographic) or -1 / z (perspective).
   float zeta(float lsDepth) const { return orthographic ? lsDepth : -1.0f / lsDepth; }
   float lsDepth(float zeta) const { return orthographic ? zeta : -1.0f / zeta; }
@@ -82,12 +92,21 @@ struct Space {
 // caller in the message.
 float emitterRadius(const Light& light, const char* technique);
 
-Space makeSpace(const LightMap& map, const Light& light, const char* technique);
+// sphereAcrossEdges: a sphere light's width across each edge as a receiver off the map's axis sees it
+// (Edge::rate; plm), else the disk facing the map's axis for every edge (smoothies and kirsch, whose
+// half penumbrae measured against the full truth widened with it: docs/results.md).
+Space makeSpace(const LightMap& map, const Light& light, const char* technique, bool sphereAcrossEdges = false);
 
 struct Edge {
   Vec2 a, b;  //!< projected end points, map texels
   float zetaA = 0.0f, zetaB = 0.0f;
   Vec2 outward{0.0f};  //!< unit normal of the segment in the map, towards the outer side
+  // zeta of penumbra-limit depth per texel of distance across this edge: Space::ratePerTexel, but for
+  // a sphere light, which a receiver off the map's axis sees as a disk turned from the map's plane:
+  // along the receiver's direction (u, 1) that disk projects onto the plane as an ellipse of half-axes
+  // R across u and R sqrt(1 + |u|^2) along it, R sqrt(1 + (n . u)^2) wide across an edge of normal n
+  // (u at the edge's middle), and Equation 1 holds for it as for a disk of that radius.
+  float rate = 0.0f;
   int32_t objectId = kNoObject;
   // Side (+1 outer, -1 inner) of the texels beyond each end, whose nearest point is the end point:
   // +1 at a convex corner of the silhouette, -1 at a concave one (the corner's other edge decides),
@@ -96,6 +115,9 @@ struct Edge {
   // Index (in the list) of the other silhouette edge at each end, where exactly two meet; else -1.
   int32_t neighbourA = -1, neighbourB = -1;
 };
+
+// Edge::rate of an edge whose end points and outward normal are set (plm.cpp).
+float edgeRate(const Space& space, const Edge& e);
 
 // The meshes' welded vertices and edge adjacency (MeshEdgeCache of ../mesh_edges.h, shared with
 // parker's outer objects), which depend on the geometry alone: a technique passes the same cache to
@@ -146,13 +168,15 @@ struct EdgeLine {
   Vec2 a{0.0f}, d{0.0f};    //!< the segment a .. a + d, map texels
   float invLength2 = 0.0f;  //!< 1 / |d|^2; 0 for a segment of one point
   float zetaA = 0.0f, dZeta = 0.0f;
+  float rate = 0.0f;  //!< Edge::rate
 
   explicit EdgeLine(const Edge& e)
       : a(e.a),
         d(e.b - e.a),
         invLength2(glm::dot(d, d) > 0.0f ? 1.0f / glm::dot(d, d) : 0.0f),
         zetaA(e.zetaA),
-        dZeta(e.zetaB - e.zetaA) {}
+        dZeta(e.zetaB - e.zetaA),
+        rate(e.rate) {}
   EdgePoint nearest(const Vec2& p) const {
     const Vec2 ap = p - a;
     const float u = std::clamp(glm::dot(ap, d) * invLength2, 0.0f, 1.0f);

@@ -78,12 +78,12 @@ class SmoothiesTechnique final : public ShadowTechnique {
           if (!s.covered()) return 1.0f;
           // The strip's distance and depth at the pixel's own point (sub_texel) move with the silhouette
           // below a texel; at the texel's centre they step a whole texel at a time.
-          const plm::EdgePoint at = options_.subTexel ? lines_[static_cast<size_t>(s.edge)].nearest(Vec2(r.s, r.t))
-                                                      : plm::EdgePoint{s.w, s.c};
+          const plm::EdgeLine& line = lines_[static_cast<size_t>(s.edge)];
+          const plm::EdgePoint at = options_.subTexel ? line.nearest(Vec2(r.s, r.t)) : plm::EdgePoint{s.w, s.c};
           const float biased = r.lsDepth - r.bias;
           if (!(space_.orthographic || biased > 0.0f) || !(space_.zeta(biased) > at.c)) return 1.0f;
           const float z = space_.zeta(r.lsDepth);
-          const float alpha = std::clamp(at.distance * space_.ratePerTexel / (z - at.c), 0.0f, 1.0f);
+          const float alpha = std::clamp(at.distance * line.rate / (z - at.c), 0.0f, 1.0f);
           return options_.illuminationTable ? table_(alpha) : alpha;
         },
         horizonForRows());

@@ -151,6 +151,37 @@ TEST(Plm, RefusesSegmentLightsNamingTheShape) {
   }
 }
 
+// A sphere light seen from a receiver off the map's axis, along (u, 1), projects onto the map's plane as
+// an ellipse: as wide as the disk across u, sqrt(1 + |u|^2) times wider along it. An edge's rate is the
+// axis rate over that width across the edge: unchanged for an edge on the axis or one whose normal is
+// across u, divided by sqrt(1 + |u|^2) for one whose normal lies along u (plm.h, Edge::rate).
+TEST(PlmEdgeRate, ASphereLightIsAsWideAcrossAnEdgeAsItsEllipseInTheMapsPlane) {
+  plm::Space space;
+  space.ratePerTexel = 0.02f;
+  space.sphere = true;
+  space.mapSize = 200;
+  space.texelU = 0.01f;  // u runs over [-1, 1] across the map (no window offset)
+  auto edgeAt = [](const Vec2& mid, const Vec2& along, const Vec2& outward) {
+    plm::Edge e;
+    e.a = mid - along;
+    e.b = mid + along;
+    e.outward = outward;
+    return e;
+  };
+  // On the axis: the map's centre, u = 0.
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(Vec2(100.0f), Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
+  // At s = 175 (u = (0.75, 0)): normal along u, then across it.
+  const Vec2 mid(175.0f, 100.0f);
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f / 1.25f);
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(3.0f, 0.0f), Vec2(0.0f, 1.0f))), 0.02f);
+  // t runs down the map: at t = 40, u = (0, 0.6), whose normal along u is -t.
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(Vec2(100.0f, 40.0f), Vec2(3.0f, 0.0f), Vec2(0.0f, -1.0f))),
+                  0.02f / std::sqrt(1.36f));
+  // Other lights keep the axis rate.
+  space.sphere = false;
+  EXPECT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
+}
+
 // The ribbons of plm.h by their definition alone: every edge, in list order, at every texel within
 // its width of it, through every filter, the least priority winning (ties to the first edge) — no
 // tiles, no edges reordered or skipped ahead of the texels, no trimmed or skipped rows, no vector pass. The same
@@ -166,7 +197,7 @@ Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, c
   for (size_t k = 0; k < edges.size(); ++k) {
     const plm::Edge& e = edges[k];
     const float cMin = std::min(e.zetaA, e.zetaB);
-    const float width = std::max(0.0f, space.zetaFar - cMin) / space.ratePerTexel;
+    const float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
     const float h = std::min(width + margin + plm::kRibbonBorderTexels, 2.0f * static_cast<float>(n));
     const Vec2 d = e.b - e.a;
     const float invLength2 = 1.0f / glm::dot(d, d);
@@ -185,7 +216,7 @@ Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, c
         const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
         const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
         const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
-        const float p = c + distance * space.ratePerTexel;
+        const float p = c + distance * e.rate;
         if (distance > h || !(outer ? wantOuter : wantInner) || !(p < best(i, j))) continue;
         const bool ownObject = !filter.coverage || (*filter.coverage)(i, j) == e.objectId;
         if (!outer && !ownObject) continue;
