@@ -269,6 +269,24 @@ TEST(LightMap, LightInsideTheSceneClampsTheFieldOfView) {
   expectMatchesRays(scene, m, 25000);
 }
 
+// Where no world axis serves (the light inside the room, below the floor's level, or level with the
+// scene) the aligned fit is the stable one, and every map it makes is finite and holds what it can.
+TEST(LightMap, AlignedFitFallsBackToTheStableOneWhereNoWorldAxisServes) {
+  const Scene room = rastertest::roomScene();
+  const Light inside = Light::sphere(Vec3(-1.0f, 2.0f, 1.0f), 0.2f);
+  const LightMap a = renderLightMap(room, inside, 160, LightMapFit::Aligned);
+  const LightMap b = renderLightMap(room, inside, 160, LightMapFit::Stable);
+  expectSameMap(a, b);
+  const Scene objects = rastertest::objectsScene();
+  for (const Vec3& p :
+       {Vec3(0.3f, 0.5f, 9.0f), Vec3(0.2f, -6.0f, 0.4f), Vec3(8.0f, 1.0f, 0.0f), Vec3(0.0f, 30.0f, 0.0f)}) {
+    SCOPED_TRACE(::testing::Message() << "light at " << p.x << " " << p.y << " " << p.z);
+    const LightMap m = renderLightMap(objects, Light::sphere(p, 0.3f), 128, LightMapFit::Aligned);
+    EXPECT_TRUE(std::isfinite(m.tanHalfFov) && std::isfinite(m.windowOffset.x) && std::isfinite(m.windowOffset.y));
+    expectCornersInside(objects, m);
+  }
+}
+
 TEST(LightMap, ProjectInvertsUnprojectAndTexelSizesAreConsistent) {
   const Scene scene = rastertest::objectsScene();
   std::mt19937 rng(3);
