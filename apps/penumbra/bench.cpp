@@ -21,17 +21,6 @@ namespace penumbra::cli {
 
 namespace {
 
-// Every image of `g` sized width x height and filled with a GBuffer's defaults, in parallel, so that
-// its pages are in place before a frame renders into it.
-void makeGBufferStorage(GBuffer& g, int width, int height) {
-  resetInParallel(g.wsPosition, width, height, Vec3(0.0f));
-  resetInParallel(g.wsNormal, width, height, Vec3(0.0f));
-  resetInParallel(g.wsGeometricNormal, width, height, Vec3(0.0f));
-  resetInParallel(g.objectId, width, height, kNoObject);
-  resetInParallel(g.triangleId, width, height, -1);
-  resetInParallel(g.csDepth, width, height, kInfinity);
-}
-
 struct BenchOptions {
   FrameOptions frame;
   std::vector<std::string> techniques;
@@ -124,7 +113,7 @@ int runBench(const BenchOptions& options) {
     // timed, as a renderer makes its render targets when its window is sized: every frame, the first
     // included, renders into storage that persists. Their making is reported apart (gbuffer_setup_ms).
     const Timer setupTimer;
-    makeGBufferStorage(gbuffer, setup.width, setup.height);
+    resetGBuffer(gbuffer, setup.width, setup.height);
     gbufferSetupMs = setupTimer.elapsedMs();
     for (int r = 0; r < repeat; ++r) {  // into the same G-buffer, as a renderer does frame to frame
       Timer timer;

@@ -17,6 +17,9 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height);
 // The same into `out`, whose images keep their storage where it is large enough: a G-buffer rendered
 // every frame then costs a pass over its memory, not fresh pages.
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& out);
+// `g` made the empty width x height G-buffer of GBuffer(width, height), its six images filled
+// concurrently (their pages touched): storage for renderGBuffer made before the frames that use it.
+void resetGBuffer(GBuffer& g, int width, int height);
 
 // Which surfaces a light map keeps per texel: the nearest surface's depth alone (LightMap::objectId
 // left empty, for the techniques that compare depths only), the nearest with its object id (the

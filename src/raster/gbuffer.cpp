@@ -27,18 +27,6 @@
 namespace penumbra {
 namespace {
 
-// `g` becomes the same empty G-buffer as GBuffer(width, height), its six images filled concurrently:
-// at 1024 x 1024 they are 48 MB, whose fill (and, the first time, page faults: about a fifth of the
-// pass's CPU time in the benchmark, measured with perf) would otherwise run on the calling thread
-// alone. Images keep their storage where it is large enough.
-void resetGBuffer(GBuffer& g, int width, int height) {
-  tbb::parallel_invoke(
-      [&] { g.wsPosition.reset(width, height, Vec3(0.0f)); }, [&] { g.wsNormal.reset(width, height, Vec3(0.0f)); },
-      [&] { g.wsGeometricNormal.reset(width, height, Vec3(0.0f)); },
-      [&] { g.objectId.reset(width, height, kNoObject); }, [&] { g.triangleId.reset(width, height, -1); },
-      [&] { g.csDepth.reset(width, height, kInfinity); });
-}
-
 // The camera's projection fitted to the scene bounds (see the file comment): clipFromCamera's x/y
 // rows with the reversed, infinite-far depth key, times cameraFromWs. Empty when the whole scene
 // lies behind the camera.
@@ -191,6 +179,17 @@ GBuffer renderGBuffer(const Scene& scene, int width, int height) {
   GBuffer g;
   renderGBuffer(scene, width, height, g);
   return g;
+}
+
+// Its six images filled concurrently: at 1024 x 1024 they are 48 MB, whose fill (and, the first time,
+// page faults: about a fifth of the pass's CPU time in the benchmark, measured with perf) would
+// otherwise run on the calling thread alone. Images keep their storage where it is large enough.
+void resetGBuffer(GBuffer& g, int width, int height) {
+  tbb::parallel_invoke(
+      [&] { g.wsPosition.reset(width, height, Vec3(0.0f)); }, [&] { g.wsNormal.reset(width, height, Vec3(0.0f)); },
+      [&] { g.wsGeometricNormal.reset(width, height, Vec3(0.0f)); },
+      [&] { g.objectId.reset(width, height, kNoObject); }, [&] { g.triangleId.reset(width, height, -1); },
+      [&] { g.csDepth.reset(width, height, kInfinity); });
 }
 
 void renderGBuffer(const Scene& scene, int width, int height, GBuffer& g) {
