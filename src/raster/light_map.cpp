@@ -334,10 +334,10 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
           for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 l = m.lsFromWs(mesh.positions[i]);
             const float w = clipWScale * l.z + clipWOffset;
-            // The window's offset in clip space (x_clip / w is the map's ndc); none for most maps.
-            const float ox = offset ? m.windowOffset.x * w : 0.0f, oy = offset ? m.windowOffset.y * w : 0.0f;
-            clip[base + i] = Vec4(offset ? l.x * xyScale - ox : l.x * xyScale,
-                                  offset ? l.y * xyScale - oy : l.y * xyScale, clipZScale * l.z + clipZOffset, w);
+            // The window's offset in clip space (x_clip / w is the map's ndc); none for most maps, where
+            // subtracting 0 leaves x and y as they were, to the bit.
+            const Vec2 o = offset ? m.windowOffset * w : Vec2(0.0f);
+            clip[base + i] = Vec4(l.x * xyScale - o.x, l.y * xyScale - o.y, clipZScale * l.z + clipZOffset, w);
             lsZ[base + i] = l.z;
           }
         });
