@@ -136,20 +136,18 @@ Space makeSpace(const LightMap& map, const Light& light, const char* technique, 
   const float texelSize = 2.0f * (map.orthographic ? map.halfWidth : map.tanHalfFov) / static_cast<float>(map.size);
   space.ratePerTexel = texelSize / radius;
   space.sphere = sphereAcrossEdges && !map.orthographic && light.shape() == LightShape::Sphere;
-  space.texelU = texelSize;
-  space.windowOffset = map.windowOffset;
-  space.mapSize = map.size;
   return space;
 }
 
-float edgeRate(const Space& space, const Edge& e) {
+float edgeRate(const Space& space, const LightMap& map, const Edge& e) {
   if (!space.sphere) return space.ratePerTexel;
   // The edge's middle as u = (x / z, y / z) (LightMap::projectLightSpace inverted; t runs down), and
   // its normal in u (the same scale, t flipped).
   const Vec2 mid = 0.5f * (e.a + e.b);
-  const float half = 0.5f * static_cast<float>(space.mapSize);
-  const Vec2 u((mid.x / half - 1.0f + space.windowOffset.x) * half * space.texelU,
-               (1.0f - mid.y / half + space.windowOffset.y) * half * space.texelU);
+  const float half = 0.5f * static_cast<float>(map.size);
+  const float texelU = 2.0f * map.tanHalfFov / static_cast<float>(map.size);
+  const Vec2 u((mid.x / half - 1.0f + map.windowOffset.x) * half * texelU,
+               (1.0f - mid.y / half + map.windowOffset.y) * half * texelU);
   const float across = e.outward.x * u.x - e.outward.y * u.y;
   return space.ratePerTexel / std::sqrt(1.0f + across * across);
 }
@@ -296,7 +294,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
         }
         if (!(std::abs(side) > 1e-6f * length)) continue;  // the triangles are seen edge-on
         e.outward = side > 0.0f ? -normal : normal;
-        e.rate = edgeRate(space, e);
+        e.rate = edgeRate(space, map, e);
         e.zetaA = space.zeta(sa.z);
         e.zetaB = space.zeta(sb.z);
         e.objectId = object.id;

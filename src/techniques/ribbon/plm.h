@@ -76,12 +76,7 @@ struct Space {
   float zetaNear = 0.0f, zetaFar = 1.0f;  //!< zeta of the map's depth range
   float zetaNone = 2.0f;                  //!< stands for "nothing here": deeper than anything in the map, finite
   float ratePerTexel = 1.0f;              //!< s r: zeta of penumbra-limit depth per texel of horizontal distance
-  // A sphere light in a perspective map, measured across each edge (Edge::rate): the map's texel size
-  // in u = x / z and its window, to find an edge's direction u from its map position.
-  bool sphere = false;
-  float texelU = 0.0f;
-  Vec2 windowOffset{0.0f};
-  int mapSize = 0;
+  bool sphere = false;  //!< a sphere light in a perspective map, measured across each edge (Edge::rate)
   // zeta of a light-space depth: z (orthographic) or -1 / z (perspective).
   float zeta(float lsDepth) const { return orthographic ? lsDepth : -1.0f / lsDepth; }
   float lsDepth(float zeta) const { return orthographic ? zeta : -1.0f / zeta; }
@@ -116,8 +111,8 @@ struct Edge {
   int32_t neighbourA = -1, neighbourB = -1;
 };
 
-// Edge::rate of an edge whose end points and outward normal are set (plm.cpp).
-float edgeRate(const Space& space, const Edge& e);
+// Edge::rate of an edge of `map` whose end points and outward normal are set (plm.cpp).
+float edgeRate(const Space& space, const LightMap& map, const Edge& e);
 
 // The meshes' welded vertices and edge adjacency (MeshEdgeCache of ../mesh_edges.h, shared with
 // parker's outer objects), which depend on the geometry alone: a technique passes the same cache to

@@ -159,8 +159,9 @@ TEST(PlmEdgeRate, ASphereLightIsAsWideAcrossAnEdgeAsItsEllipseInTheMapsPlane) {
   plm::Space space;
   space.ratePerTexel = 0.02f;
   space.sphere = true;
-  space.mapSize = 200;
-  space.texelU = 0.01f;  // u runs over [-1, 1] across the map (no window offset)
+  LightMap map;
+  map.size = 200;
+  map.tanHalfFov = 1.0f;  // u runs over [-1, 1] across the map (no window offset): 0.01 a texel
   auto edgeAt = [](const Vec2& mid, const Vec2& along, const Vec2& outward) {
     plm::Edge e;
     e.a = mid - along;
@@ -169,17 +170,17 @@ TEST(PlmEdgeRate, ASphereLightIsAsWideAcrossAnEdgeAsItsEllipseInTheMapsPlane) {
     return e;
   };
   // On the axis: the map's centre, u = 0.
-  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(Vec2(100.0f), Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, map, edgeAt(Vec2(100.0f), Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
   // At s = 175 (u = (0.75, 0)): normal along u, then across it.
   const Vec2 mid(175.0f, 100.0f);
-  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f / 1.25f);
-  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(3.0f, 0.0f), Vec2(0.0f, 1.0f))), 0.02f);
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, map, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f / 1.25f);
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, map, edgeAt(mid, Vec2(3.0f, 0.0f), Vec2(0.0f, 1.0f))), 0.02f);
   // t runs down the map: at t = 40, u = (0, 0.6), whose normal along u is -t.
-  EXPECT_FLOAT_EQ(plm::edgeRate(space, edgeAt(Vec2(100.0f, 40.0f), Vec2(3.0f, 0.0f), Vec2(0.0f, -1.0f))),
+  EXPECT_FLOAT_EQ(plm::edgeRate(space, map, edgeAt(Vec2(100.0f, 40.0f), Vec2(3.0f, 0.0f), Vec2(0.0f, -1.0f))),
                   0.02f / std::sqrt(1.36f));
   // Other lights keep the axis rate.
   space.sphere = false;
-  EXPECT_EQ(plm::edgeRate(space, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
+  EXPECT_EQ(plm::edgeRate(space, map, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
 }
 
 // The ribbons of plm.h by their definition alone: every edge, in list order, at every texel within
