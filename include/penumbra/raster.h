@@ -24,8 +24,8 @@ void resetGBuffer(GBuffer& g, int width, int height);
 // Which surfaces a light map keeps per texel: the nearest surface's depth alone (LightMap::objectId
 // left empty, for the techniques that compare depths only), the nearest with its object id (the
 // shadow map), or also the deepest (LightMap::lsFarDepth, rasterized in the same pass; the ribbon
-// techniques' far layer).
-enum class LightMapLayers { NearestDepth, Nearest, NearestAndFarthest };
+// techniques' far layer), with the nearest's id or, for a technique that never reads ids, without.
+enum class LightMapLayers { NearestDepth, Nearest, NearestAndFarthest, NearestDepthAndFarthest };
 
 // How a light map is fitted to the scene bounds each time it is rendered (src/raster/light_map.cpp).
 enum class LightMapFit {

@@ -45,9 +45,9 @@
 // crosses it once. Along the axis the floor has one depth, the reference one, and keeps its texels.
 // A planar light (own axis) along a world axis gets the same window and lattice.
 //
-// With LightMapLayers::NearestAndFarthest the same rasterization also keeps each texel's deepest
-// surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon techniques' far layer costs
-// no second pass over the triangles.
+// With LightMapLayers::NearestAndFarthest (or NearestDepthAndFarthest) the same rasterization also keeps each texel's
+// deepest surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon techniques' far layer costs no second
+// pass over the triangles.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -206,8 +206,9 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   LightMap fresh;
   fresh.lsDepth = std::move(out.lsDepth);
   fresh.objectId = std::move(out.objectId);
-  const bool farthest = layers == LightMapLayers::NearestAndFarthest;
-  const bool ids = layers != LightMapLayers::NearestDepth;
+  const bool farthest =
+      layers == LightMapLayers::NearestAndFarthest || layers == LightMapLayers::NearestDepthAndFarthest;
+  const bool ids = layers == LightMapLayers::Nearest || layers == LightMapLayers::NearestAndFarthest;
   if (farthest) fresh.lsFarDepth = std::move(out.lsFarDepth);
   out = std::move(fresh);
   LightMap& m = out;

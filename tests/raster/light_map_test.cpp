@@ -188,6 +188,29 @@ TEST(LightMap, DepthOnlyMapHasTheSameDepthsAndNoIds) {
   }
 }
 
+// LightMapLayers::NearestDepthAndFarthest: both depth layers of NearestAndFarthest, to the bit, and no
+// ids.
+TEST(LightMap, DepthLayersWithoutIdsAreTheDepthsOfTheMapWithIds) {
+  const Scene scene = rastertest::objectsScene();
+  for (const Light& light :
+       {Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f), Light::directional(Vec3(0.4f, 1.0f, -0.3f), radians(0.53f))}) {
+    LightMap withIds, depthsOnly;
+    renderLightMap(scene, light, 200, withIds, LightMapFit::Tight, LightMapLayers::NearestAndFarthest);
+    renderLightMap(scene, light, 200, depthsOnly, LightMapFit::Tight, LightMapLayers::NearestDepthAndFarthest);
+    EXPECT_EQ(depthsOnly.objectId.size(), 0u);
+    ASSERT_EQ(depthsOnly.lsDepth.size(), withIds.lsDepth.size());
+    ASSERT_EQ(depthsOnly.lsFarDepth.size(), withIds.lsFarDepth.size());
+    size_t differing = 0, between = 0;
+    for (size_t i = 0; i < withIds.lsDepth.size(); ++i) {
+      differing += std::memcmp(&depthsOnly.lsDepth[i], &withIds.lsDepth[i], sizeof(float)) != 0;
+      differing += std::memcmp(&depthsOnly.lsFarDepth[i], &withIds.lsFarDepth[i], sizeof(float)) != 0;
+      between += std::isfinite(withIds.lsDepth[i]) && withIds.lsFarDepth[i] > withIds.lsDepth[i];
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(between, 200u) << "the layers must differ at many texels for the comparison to mean something";
+  }
+}
+
 // The far layer (LightMapLayers::NearestAndFarthest) against the last hit along each texel's ray,
 // found by tracing on past every hit; the nearest layer is the same as without it, bit for bit.
 TEST(LightMap, FarLayerMatchesTheLastHitAlongEachTexelsRay) {

@@ -55,7 +55,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
  private:
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "smoothies");
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
+    // Its compares and ribbons read depths only (the ribbons' filter takes no coverage).
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestDepthAndFarthest);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "smoothies");
