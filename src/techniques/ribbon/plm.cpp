@@ -81,6 +81,10 @@
 #if defined(__SSE4_1__)
 #include <smmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define PENUMBRA_RIBBON_AVX512 1  // ribbonSpanAvx512, picked at run time where the CPU has AVX-512F
+#endif
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -357,12 +361,244 @@ void farthestSurface(const LightMap& map, const Space& space, Image<float>& far)
   });
 }
 
+namespace {
+
+// Texels [from, count) of the span, one at a time: the definition the vector passes below follow
+// operation for operation, so that every path gives the same values to the bit.
+void ribbonSpanScalar(const RibbonSpan& s, int from, int count, RibbonSpanTexels& out) {
+  for (int m = from; m < count; ++m) {
+    const float qx = static_cast<float>(s.first + m) + 0.5f;
+    const float aqx = qx - s.ax;
+    const float along = (aqx * s.dx + s.aqy * s.dy) * s.invLength2;
+    const float u = std::min(std::max(along, 0.0f), 1.0f);
+    // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
+    // corner, so they tie there.
+    const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
+    const float ox = beforeA ? aqx : (beyondB ? qx - s.bx : aqx - u * s.dx);
+    const float oy = beforeA ? s.aqy : (beyondB ? s.by : s.aqy - u * s.dy);
+    const float distance = std::sqrt(ox * ox + oy * oy);
+    const float endSide = beforeA ? s.endSideA : (beyondB ? s.endSideB : 0.0f);
+    const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * s.outX + s.aqy * s.outY >= 0.0f;
+    const float c = beforeA ? s.zetaA : (beyondB ? s.zetaB : s.zetaA + u * (s.zetaB - s.zetaA));
+    const float p = c + distance * s.rate;
+    // The texel's own filters: on the inner side only where the map sees the edge's own
+    // object; only where a surface lies below the edge; not where the texel's topmost surface
+    // lies above the edge (tested on the outer side only: an inner candidate left here is
+    // over its own object, which does not hide its shadow).
+    const bool ownObject = !s.coverage || s.coverage[m] == s.objectId;
+    // Space::zeta of the depth
+    const auto above = [&](float depth) {
+      return std::isfinite(depth) && (s.orthographic ? depth : -1.0f / depth) < c;
+    };
+    const bool kept =
+        (outer || ownObject) && s.far[m] > c + kBelowEdge * std::abs(c) && !(s.top && outer && above(s.top[m]));
+    const bool take = !(distance > s.halfWidth) && (s.bothSides || outer == s.wantOuter) &&
+                      (p < s.priority[m] || (s.ties && p == s.priority[m])) && kept;
+    out.u[m] = u;
+    out.c[m] = c;
+    out.distance[m] = distance;
+    out.p[m] = take ? p : kInfinity;
+    out.outer |= static_cast<uint32_t>(outer) << m;
+  }
+}
+
+#if defined(__SSE4_1__)
+// Four texels to an SSE vector, the scalar pass's operations in its order, without branches; returns
+// how many texels it did (a multiple of 4; ribbonSpanScalar does the rest).
+int ribbonSpanSse(const RibbonSpan& s, int count, RibbonSpanTexels& out) {
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
+  const __m128 ax = _mm_set1_ps(s.ax), bx = _mm_set1_ps(s.bx), dx = _mm_set1_ps(s.dx), dy = _mm_set1_ps(s.dy);
+  const __m128 vAqy = _mm_set1_ps(s.aqy), vBy = _mm_set1_ps(s.by), vInvLength2 = _mm_set1_ps(s.invLength2);
+  const __m128 outX = _mm_set1_ps(s.outX), outY = _mm_set1_ps(s.outY);
+  const __m128 endA = _mm_set1_ps(s.endSideA), endB = _mm_set1_ps(s.endSideB);
+  const __m128 zetaA = _mm_set1_ps(s.zetaA), zetaB = _mm_set1_ps(s.zetaB), dZeta = _mm_set1_ps(s.zetaB - s.zetaA);
+  const __m128 rate = _mm_set1_ps(s.rate), vH = _mm_set1_ps(s.halfWidth), inf = _mm_set1_ps(kInfinity);
+  const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(s.bothSides ? -1 : 0));
+  const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(s.wantOuter ? -1 : 0));
+  const __m128 allOnes = _mm_castsi128_ps(_mm_set1_epi32(-1)), signBit = _mm_set1_ps(-0.0f);
+  const __m128 belowEdge = _mm_set1_ps(kBelowEdge), minusOne = _mm_set1_ps(-1.0f);
+  const __m128 orthographic = _mm_castsi128_ps(_mm_set1_epi32(s.orthographic ? -1 : 0));
+  const __m128i objectId = _mm_set1_epi32(s.objectId);
+  const __m128 tiesWanted = _mm_castsi128_ps(_mm_set1_epi32(s.ties ? -1 : 0));
+  int m = 0;
+  for (; m + 4 <= count; m += 4) {
+    const __m128 qx =
+        _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(s.first + m), _mm_setr_epi32(0, 1, 2, 3))), half);
+    const __m128 aqx = _mm_sub_ps(qx, ax);
+    const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
+    const __m128 u = _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
+    const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
+    const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
+    const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
+    const __m128 oy = _mm_blendv_ps(_mm_blendv_ps(sy, vBy, beyondB), vAqy, beforeA);
+    const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
+    const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
+    const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
+    const __m128 outer =
+        _mm_or_ps(_mm_cmpgt_ps(endSide, zero), _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
+    const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
+    const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
+    const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
+    // both sides, or the side wanted (outer == wantOuter)
+    const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, allOnes)));
+    const __m128 ownObject = s.coverage
+                                 ? _mm_castsi128_ps(_mm_cmpeq_epi32(
+                                       _mm_loadu_si128(reinterpret_cast<const __m128i*>(s.coverage + m)), objectId))
+                                 : allOnes;
+    const __m128 outerOrOwn = _mm_or_ps(outer, ownObject);
+    const __m128 somethingBelow =
+        _mm_cmpgt_ps(_mm_loadu_ps(s.far + m), _mm_add_ps(c, _mm_mul_ps(belowEdge, _mm_andnot_ps(signBit, c))));
+    __m128 kept = _mm_and_ps(outerOrOwn, somethingBelow);
+    if (s.top) {
+      const __m128 top = _mm_loadu_ps(s.top + m);
+      const __m128 finite = _mm_cmplt_ps(_mm_andnot_ps(signBit, top), inf);
+      const __m128 topZeta = _mm_blendv_ps(_mm_div_ps(minusOne, top), top, orthographic);
+      const __m128 above = _mm_and_ps(finite, _mm_cmplt_ps(topZeta, c));
+      kept = _mm_andnot_ps(_mm_and_ps(outer, above), kept);
+    }
+    const __m128 prio = _mm_loadu_ps(s.priority + m);
+    const __m128 take =
+        _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
+                              _mm_or_ps(_mm_cmplt_ps(p, prio), _mm_and_ps(tiesWanted, _mm_cmpeq_ps(p, prio)))),
+                   kept);
+    _mm_storeu_ps(out.u + m, u);
+    _mm_storeu_ps(out.c + m, c);
+    _mm_storeu_ps(out.distance + m, distance);
+    _mm_storeu_ps(out.p + m, _mm_blendv_ps(inf, p, take));
+    out.outer |= static_cast<uint32_t>(_mm_movemask_ps(outer)) << m;
+  }
+  return m;
+}
+#endif
+
+#if PENUMBRA_RIBBON_AVX512
+// GCC 12's AVX-512 intrinsics start from a deliberately undefined vector (_mm512_undefined_*), which
+// its own -Wuninitialized reports at every inlined use.
+#if !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+// Sixteen texels to an AVX-512 vector, the scalar pass's operations in its order (the file is built
+// without fused multiply-add, and each compare keeps the SSE one's treatment of NaN); the span's end
+// masked, so a span of up to 32 texels takes at most two steps and no scalar tail.
+[[gnu::target("avx512f")]] void ribbonSpanAvx512(const RibbonSpan& s, int count, RibbonSpanTexels& out) {
+  const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f);
+  const __m512 ax = _mm512_set1_ps(s.ax), bx = _mm512_set1_ps(s.bx), dx = _mm512_set1_ps(s.dx),
+               dy = _mm512_set1_ps(s.dy);
+  const __m512 vAqy = _mm512_set1_ps(s.aqy), vBy = _mm512_set1_ps(s.by), vInvLength2 = _mm512_set1_ps(s.invLength2);
+  const __m512 outX = _mm512_set1_ps(s.outX), outY = _mm512_set1_ps(s.outY);
+  const __m512 endA = _mm512_set1_ps(s.endSideA), endB = _mm512_set1_ps(s.endSideB);
+  const __m512 zetaA = _mm512_set1_ps(s.zetaA), zetaB = _mm512_set1_ps(s.zetaB),
+               dZeta = _mm512_set1_ps(s.zetaB - s.zetaA);
+  const __m512 rate = _mm512_set1_ps(s.rate), vH = _mm512_set1_ps(s.halfWidth), inf = _mm512_set1_ps(kInfinity);
+  const __m512 belowEdge = _mm512_set1_ps(kBelowEdge), minusOne = _mm512_set1_ps(-1.0f);
+  const __m512i objectId = _mm512_set1_epi32(s.objectId);
+  const __m512i lanes = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  for (int m = 0; m < count; m += 16) {
+    const __mmask16 valid = static_cast<__mmask16>(count - m >= 16 ? 0xffff : (1u << (count - m)) - 1u);
+    const __m512 qx = _mm512_add_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(_mm512_set1_epi32(s.first + m), lanes)), half);
+    const __m512 aqx = _mm512_sub_ps(qx, ax);
+    const __m512 along = _mm512_mul_ps(_mm512_add_ps(_mm512_mul_ps(aqx, dx), _mm512_mul_ps(vAqy, dy)), vInvLength2);
+    const __m512 u = _mm512_min_ps(one, _mm512_max_ps(zero, along));
+    const __mmask16 beforeA = _mm512_cmp_ps_mask(along, zero, _CMP_LE_OS),
+                    beyondB = _mm512_cmp_ps_mask(along, one, _CMP_GE_OS);
+    const __m512 sx = _mm512_sub_ps(aqx, _mm512_mul_ps(u, dx)), sy = _mm512_sub_ps(vAqy, _mm512_mul_ps(u, dy));
+    const __m512 ox = _mm512_mask_blend_ps(beforeA, _mm512_mask_blend_ps(beyondB, sx, _mm512_sub_ps(qx, bx)), aqx);
+    const __m512 oy = _mm512_mask_blend_ps(beforeA, _mm512_mask_blend_ps(beyondB, sy, vBy), vAqy);
+    const __m512 distance = _mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(ox, ox), _mm512_mul_ps(oy, oy)));
+    const __m512 endSide = _mm512_mask_blend_ps(beforeA, _mm512_mask_blend_ps(beyondB, zero, endB), endA);
+    const __m512 across = _mm512_add_ps(_mm512_mul_ps(aqx, outX), _mm512_mul_ps(vAqy, outY));
+    const __mmask16 outer =
+        _mm512_cmp_ps_mask(endSide, zero, _CMP_GT_OS) |
+        (_mm512_cmp_ps_mask(endSide, zero, _CMP_EQ_OQ) & _mm512_cmp_ps_mask(across, zero, _CMP_GE_OS));
+    const __m512 cMid = _mm512_add_ps(zetaA, _mm512_mul_ps(u, dZeta));
+    const __m512 c = _mm512_mask_blend_ps(beforeA, _mm512_mask_blend_ps(beyondB, cMid, zetaB), zetaA);
+    const __m512 p = _mm512_add_ps(c, _mm512_mul_ps(distance, rate));
+    const __mmask16 sideWanted =
+        s.bothSides ? static_cast<__mmask16>(0xffff) : static_cast<__mmask16>(s.wantOuter ? outer : ~outer);
+    const __mmask16 ownObject = s.coverage
+                                    ? _mm512_cmpeq_epi32_mask(_mm512_maskz_loadu_epi32(valid, s.coverage + m), objectId)
+                                    : static_cast<__mmask16>(0xffff);
+    const __m512 far = _mm512_maskz_loadu_ps(valid, s.far + m);
+    __mmask16 kept = (outer | ownObject) &
+                     _mm512_cmp_ps_mask(far, _mm512_add_ps(c, _mm512_mul_ps(belowEdge, _mm512_abs_ps(c))), _CMP_GT_OS);
+    if (s.top) {
+      const __m512 top = _mm512_maskz_loadu_ps(valid, s.top + m);
+      const __mmask16 finite = _mm512_cmp_ps_mask(_mm512_abs_ps(top), inf, _CMP_LT_OS);
+      const __m512 topZeta = s.orthographic ? top : _mm512_div_ps(minusOne, top);
+      const __mmask16 above = finite & _mm512_cmp_ps_mask(topZeta, c, _CMP_LT_OS);
+      kept = static_cast<__mmask16>(kept & ~(outer & above));
+    }
+    const __m512 prio = _mm512_maskz_loadu_ps(valid, s.priority + m);
+    const __mmask16 better = _mm512_cmp_ps_mask(p, prio, _CMP_LT_OS) |
+                             (s.ties ? _mm512_cmp_ps_mask(p, prio, _CMP_EQ_OQ) : static_cast<__mmask16>(0));
+    const __mmask16 take = _mm512_cmp_ps_mask(distance, vH, _CMP_NGT_US) & sideWanted & better & kept;
+    _mm512_mask_storeu_ps(out.u + m, valid, u);
+    _mm512_mask_storeu_ps(out.c + m, valid, c);
+    _mm512_mask_storeu_ps(out.distance + m, valid, distance);
+    _mm512_mask_storeu_ps(out.p + m, valid, _mm512_mask_blend_ps(take, inf, p));
+    out.outer |= static_cast<uint32_t>(outer & valid) << m;
+  }
+}
+#if !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#endif
+
+}  // namespace
+
+bool spanPathAvailable(SpanPath path) {
+  switch (path) {
+    case SpanPath::Scalar:
+      return true;
+    case SpanPath::Sse:
+#if defined(__SSE4_1__)
+      return true;
+#else
+      return false;
+#endif
+    case SpanPath::Avx512:
+#if PENUMBRA_RIBBON_AVX512
+      return __builtin_cpu_supports("avx512f");
+#else
+      return false;
+#endif
+  }
+  return false;
+}
+
+namespace {
+
+// ribbonSpan without its check of the path (rasterizeRibbons picks an available one once).
+inline void spanPass(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out) {
+  out.outer = 0;
+  int done = 0;
+#if PENUMBRA_RIBBON_AVX512
+  if (path == SpanPath::Avx512) {
+    ribbonSpanAvx512(s, count, out);
+    done = count;
+  }
+#endif
+#if defined(__SSE4_1__)
+  if (path == SpanPath::Sse) done = ribbonSpanSse(s, count, out);
+#endif
+  ribbonSpanScalar(s, done, count, out);
+}
+
+}  // namespace
+
+void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out) {
+  if (!spanPathAvailable(path)) fail("ribbonSpan: this CPU or build has no such vector path");
+  spanPass(path, s, count, out);
+}
+
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
                       Image<RibbonTexel>& out) {
   // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
   out.resizeForOverwrite(mapSize, mapSize);
-  constexpr int kTile = 32;
+  constexpr int kTile = kRibbonTile;
   const int tiles = (mapSize + kTile - 1) / kTile;
   struct Box {
     int i0, j0, i1, j1;  //!< inclusive texel bounds
@@ -413,6 +649,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     if (!coverage || !filter.footprintBorderOnly || wantOuter) return false;
     return everyProbeTexel(e, [&](int x, int y) { return (*coverage)(x, y) == e.objectId; });
   };
+  static const SpanPath widest = spanPathAvailable(SpanPath::Avx512) ? SpanPath::Avx512
+                                 : spanPathAvailable(SpanPath::Sse)  ? SpanPath::Sse
+                                                                     : SpanPath::Scalar;
   std::vector<uint8_t> skip(edges.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t k = range.begin(); k < range.end(); ++k)
@@ -440,14 +679,19 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     // copied out once when the tile is done, and one span's geometry.
     float priority[kTile * kTile];
     RibbonTexel winners[kTile * kTile];
-    float spanU[kTile], spanC[kTile], spanDistance[kTile], spanP[kTile];
-    uint8_t spanOuter[kTile];
+    RibbonSpanTexels span;
     // Each row's greatest priority (never below it: priorities only fall) and the tile's.
     float rowMax[kTile];
     std::vector<std::pair<float, uint32_t>> order;
     for (int tile = range.begin(); tile < range.end(); ++tile) {
       const int ti = tile % tiles, tj = tile / tiles;
       const int tileWidth = std::min(kTile, mapSize - ti * kTile), tileHeight = std::min(kTile, mapSize - tj * kTile);
+      const std::vector<uint32_t>& bin = bins[static_cast<size_t>(tile)];
+      if (bin.empty()) {  // no ribbon reaches the tile (most of a map): its texels straight to `out`
+        for (int j = tj * kTile; j < tj * kTile + tileHeight; ++j)
+          std::fill_n(out.row(j) + ti * kTile, tileWidth, kNoRibbon);
+        continue;
+      }
       std::fill(priority, priority + kTile * kTile, kInfinity);
       std::fill(winners, winners + kTile * kTile, kNoRibbon);
       std::fill(rowMax, rowMax + kTile, kInfinity);
@@ -462,7 +706,6 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
       // order and its upkeep cost more than they saved: those edges go in index order. Which edge
       // wins a texel does not depend on the order: the least priority, then the lowest index (the
       // compares below).
-      const std::vector<uint32_t>& bin = bins[static_cast<size_t>(tile)];
       const bool ordered = wantOuter;
       if (ordered) {
         order.clear();
@@ -531,11 +774,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           const int si1 = std::min(i1, static_cast<int>(std::ceil(spanHi - 0.5f)) + 1);
           RibbonTexel* row = winners + (j - tj * kTile) * kTile;
           // Two passes over the span: the geometry of every texel and the filters that read the
-          // texel's own row of other images (the object the map sees, the far layer, the topmost
-          // surface), without branches (four texels to an SSE vector, the same operations in the
-          // same order as the scalar tail, so the same values bit for bit); then the candidates that
-          // beat the texel's current winner through the filters that read the texel 1.5 texels
-          // beyond the edge. Every filter only drops candidates.
+          // texel's own row of other images, in vectors (below); then the candidates that beat the
+          // texel's current winner through the filters that read the texel 1.5 texels beyond the
+          // edge. Every filter only drops candidates.
           int count = si1 - si0 + 1;
           if (count <= 0) continue;
           {
@@ -584,118 +825,44 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
             count = hi - lo + 1;
           }
           float* prio = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
-          const float aqy = y - e.a.y, by = y - e.b.y;
-          const float* farRow = farthest.row(j) + si0;
-          const int32_t* coverageRow = filter.coverage ? filter.coverage->row(j) + si0 : nullptr;
-          const float* topRow = filter.topDepth ? filter.topDepth->row(j) + si0 : nullptr;
-          int m = 0;
-#if defined(__SSE4_1__)
-          {
-            const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
-            const __m128 ax = _mm_set1_ps(e.a.x), bx = _mm_set1_ps(e.b.x), dx = _mm_set1_ps(d.x), dy = _mm_set1_ps(d.y);
-            const __m128 vAqy = _mm_set1_ps(aqy), vBy = _mm_set1_ps(by), vInvLength2 = _mm_set1_ps(invLength2);
-            const __m128 outX = _mm_set1_ps(e.outward.x), outY = _mm_set1_ps(e.outward.y);
-            const __m128 endA = _mm_set1_ps(e.endSideA), endB = _mm_set1_ps(e.endSideB);
-            const __m128 zetaA = _mm_set1_ps(e.zetaA), zetaB = _mm_set1_ps(e.zetaB),
-                         dZeta = _mm_set1_ps(e.zetaB - e.zetaA);
-            const __m128 rate = _mm_set1_ps(e.rate), vH = _mm_set1_ps(h), inf = _mm_set1_ps(kInfinity);
-            const __m128 allSides = _mm_castsi128_ps(_mm_set1_epi32(wantOuter && wantInner ? -1 : 0));
-            const __m128 outerWanted = _mm_castsi128_ps(_mm_set1_epi32(wantOuter ? -1 : 0));
-            const __m128 allOnes = _mm_castsi128_ps(_mm_set1_epi32(-1)), signBit = _mm_set1_ps(-0.0f);
-            const __m128 belowEdge = _mm_set1_ps(kBelowEdge), minusOne = _mm_set1_ps(-1.0f);
-            const __m128 orthographic = _mm_castsi128_ps(_mm_set1_epi32(space.orthographic ? -1 : 0));
-            const __m128i objectId = _mm_set1_epi32(e.objectId);
-            const __m128 tiesWanted = _mm_castsi128_ps(_mm_set1_epi32(ordered ? -1 : 0));
-            for (; m + 4 <= count; m += 4) {
-              const __m128 qx =
-                  _mm_add_ps(_mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(si0 + m), _mm_setr_epi32(0, 1, 2, 3))), half);
-              const __m128 aqx = _mm_sub_ps(qx, ax);
-              const __m128 along = _mm_mul_ps(_mm_add_ps(_mm_mul_ps(aqx, dx), _mm_mul_ps(vAqy, dy)), vInvLength2);
-              const __m128 u =
-                  _mm_min_ps(one, _mm_max_ps(zero, along));  // std::min(std::max(along, 0), 1), NaN and -0 included
-              const __m128 beforeA = _mm_cmple_ps(along, zero), beyondB = _mm_cmpge_ps(along, one);
-              const __m128 sx = _mm_sub_ps(aqx, _mm_mul_ps(u, dx)), sy = _mm_sub_ps(vAqy, _mm_mul_ps(u, dy));
-              const __m128 ox = _mm_blendv_ps(_mm_blendv_ps(sx, _mm_sub_ps(qx, bx), beyondB), aqx, beforeA);
-              const __m128 oy = _mm_blendv_ps(_mm_blendv_ps(sy, vBy, beyondB), vAqy, beforeA);
-              const __m128 distance = _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)));
-              const __m128 endSide = _mm_blendv_ps(_mm_blendv_ps(zero, endB, beyondB), endA, beforeA);
-              const __m128 across = _mm_add_ps(_mm_mul_ps(aqx, outX), _mm_mul_ps(vAqy, outY));
-              const __m128 outer = _mm_or_ps(_mm_cmpgt_ps(endSide, zero),
-                                             _mm_and_ps(_mm_cmpeq_ps(endSide, zero), _mm_cmpge_ps(across, zero)));
-              const __m128 cMid = _mm_add_ps(zetaA, _mm_mul_ps(u, dZeta));
-              const __m128 c = _mm_blendv_ps(_mm_blendv_ps(cMid, zetaB, beyondB), zetaA, beforeA);
-              const __m128 p = _mm_add_ps(c, _mm_mul_ps(distance, rate));
-              // outer ? wantOuter : wantInner (one of the two at least is wanted)
-              const __m128 sideWanted = _mm_or_ps(allSides, _mm_xor_ps(outer, _mm_xor_ps(outerWanted, allOnes)));
-              // The texel's own filters (the scalar tail's `kept`).
-              const __m128 ownObject =
-                  coverageRow ? _mm_castsi128_ps(_mm_cmpeq_epi32(
-                                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(coverageRow + m)), objectId))
-                              : allOnes;
-              const __m128 outerOrOwn = _mm_or_ps(outer, ownObject);
-              const __m128 somethingBelow = _mm_cmpgt_ps(
-                  _mm_loadu_ps(farRow + m), _mm_add_ps(c, _mm_mul_ps(belowEdge, _mm_andnot_ps(signBit, c))));
-              __m128 kept = _mm_and_ps(outerOrOwn, somethingBelow);
-              if (topRow) {
-                const __m128 top = _mm_loadu_ps(topRow + m);
-                const __m128 finite = _mm_cmplt_ps(_mm_andnot_ps(signBit, top), inf);
-                const __m128 topZeta = _mm_blendv_ps(_mm_div_ps(minusOne, top), top, orthographic);
-                const __m128 above = _mm_and_ps(finite, _mm_cmplt_ps(topZeta, c));
-                kept = _mm_andnot_ps(_mm_and_ps(outer, above), kept);
-              }
-              const __m128 take =
-                  _mm_and_ps(_mm_and_ps(_mm_and_ps(_mm_cmpngt_ps(distance, vH), sideWanted),
-                                        _mm_or_ps(_mm_cmplt_ps(p, _mm_loadu_ps(prio + m)),
-                                                  _mm_and_ps(tiesWanted, _mm_cmpeq_ps(p, _mm_loadu_ps(prio + m))))),
-                             kept);
-              _mm_storeu_ps(spanU + m, u);
-              _mm_storeu_ps(spanC + m, c);
-              _mm_storeu_ps(spanDistance + m, distance);
-              _mm_storeu_ps(spanP + m, _mm_blendv_ps(inf, p, take));
-              const int outerBits = _mm_movemask_ps(outer);
-              for (int lane = 0; lane < 4; ++lane) spanOuter[m + lane] = static_cast<uint8_t>((outerBits >> lane) & 1);
-            }
-          }
-#endif
-          for (; m < count; ++m) {
-            const float qx = static_cast<float>(si0 + m) + 0.5f;
-            const float aqx = qx - e.a.x;
-            const float along = (aqx * d.x + aqy * d.y) * invLength2;
-            const float u = std::min(std::max(along, 0.0f), 1.0f);
-            // Beyond an end, the distance to the end point itself: bit-identical for both edges of a
-            // corner, so they tie there.
-            const bool beforeA = along <= 0.0f, beyondB = along >= 1.0f;
-            const float ox = beforeA ? aqx : (beyondB ? qx - e.b.x : aqx - u * d.x);
-            const float oy = beforeA ? aqy : (beyondB ? by : aqy - u * d.y);
-            const float distance = std::sqrt(ox * ox + oy * oy);
-            const float endSide = beforeA ? e.endSideA : (beyondB ? e.endSideB : 0.0f);
-            const bool outer = endSide != 0.0f ? endSide > 0.0f : aqx * e.outward.x + aqy * e.outward.y >= 0.0f;
-            const float c = beforeA ? e.zetaA : (beyondB ? e.zetaB : e.zetaA + u * (e.zetaB - e.zetaA));
-            const float p = c + distance * e.rate;
-            // The texel's own filters: on the inner side only where the map sees the edge's own
-            // object; only where a surface lies below the edge; not where the texel's topmost surface
-            // lies above the edge (tested on the outer side only: an inner candidate left here is
-            // over its own object, which does not hide its shadow).
-            const bool ownObject = !coverageRow || coverageRow[m] == e.objectId;
-            const auto above = [&](float depth) { return std::isfinite(depth) && space.zeta(depth) < c; };
-            const bool kept = (outer || ownObject) && farRow[m] > c + kBelowEdge * std::abs(c) &&
-                              !(topRow && outer && above(topRow[m]));
-            const bool take = !(distance > h) && (outer ? wantOuter : wantInner) &&
-                              (p < prio[m] || (ordered && p == prio[m])) && kept;
-            spanU[m] = u;
-            spanC[m] = c;
-            spanDistance[m] = distance;
-            spanP[m] = take ? p : kInfinity;
-            spanOuter[m] = outer ? 1 : 0;
-          }
+          // The geometry of every texel of the span and the filters that read the texel's own row of
+          // other images (the object the map sees, the far layer, the topmost surface), without branches,
+          // 16 or 4 texels to a vector (ribbonSpanScalar says how; the same values at every width).
+          RibbonSpan input;
+          input.ax = e.a.x;
+          input.bx = e.b.x;
+          input.dx = d.x;
+          input.dy = d.y;
+          input.aqy = y - e.a.y;
+          input.by = y - e.b.y;
+          input.invLength2 = invLength2;
+          input.outX = e.outward.x;
+          input.outY = e.outward.y;
+          input.endSideA = e.endSideA;
+          input.endSideB = e.endSideB;
+          input.zetaA = e.zetaA;
+          input.zetaB = e.zetaB;
+          input.rate = e.rate;
+          input.halfWidth = h;
+          input.objectId = e.objectId;
+          input.first = si0;
+          input.bothSides = wantOuter && wantInner;
+          input.wantOuter = wantOuter;
+          input.ties = ordered;
+          input.orthographic = space.orthographic;
+          input.far = farthest.row(j) + si0;
+          input.coverage = filter.coverage ? filter.coverage->row(j) + si0 : nullptr;
+          input.top = filter.topDepth ? filter.topDepth->row(j) + si0 : nullptr;
+          input.priority = prio;
+          spanPass(widest, input, count, span);
           bool took = false;
           for (int m = 0; m < count; ++m) {
             const int i = si0 + m;
-            if (!(spanP[m] < kInfinity)) continue;  // not taken by the pass above
+            if (!(span.p[m] < kInfinity)) continue;  // not taken by the pass above
             // A tie goes to the lower index, as in index order, where the first to come keeps it.
-            if (spanP[m] == prio[m] && static_cast<int32_t>(k) > row[i - ti * kTile].edge) continue;
-            const float u = spanU[m], c = spanC[m], distance = spanDistance[m], p = spanP[m];
-            const bool outer = spanOuter[m] != 0;
+            if (span.p[m] == prio[m] && static_cast<int32_t>(k) > row[i - ti * kTile].edge) continue;
+            const float u = span.u[m], c = span.c[m], distance = span.distance[m], p = span.p[m];
+            const bool outer = (span.outer >> m) & 1u;
             const Image<int32_t>* coverage = filter.coverage;
             // The texel kHiddenProbeTexels beyond the edge's nearest point; outside the map nothing is seen.
             const Vec2 probe = e.a + u * d + kHiddenProbeTexels * e.outward;

@@ -222,6 +222,47 @@ inline constexpr float kHiddenProbeTexels = 1.5f;
 // inside it.
 inline constexpr float kBelowEdge = 1e-5f;
 
+// The ribbons' tiles (rasterizeRibbons): a span lies within one row of one tile.
+inline constexpr int kRibbonTile = 32;
+
+// One span of rasterizeRibbons: the texels [first, first + count) of one row (at most kRibbonTile)
+// that an edge may still take, and what its pass reads there.
+struct RibbonSpan {
+  float ax, bx, dx, dy;      //!< the x of the edge's ends a and b, and b - a (texels)
+  float aqy, by;             //!< the row's y - a.y and y - b.y
+  float invLength2;          //!< 1 / |b - a|^2
+  float outX, outY;          //!< Edge::outward
+  float endSideA, endSideB;  //!< Edge::endSideA, endSideB
+  float zetaA, zetaB, rate;  //!< Edge::zetaA, zetaB, rate
+  float halfWidth;           //!< the ribbon's half width, texels
+  int32_t objectId;
+  int first;       //!< the span's first texel (column)
+  bool bothSides;  //!< both sides wanted; else the outer one where wantOuter, the inner one where not
+  bool wantOuter;
+  bool ties;                //!< a priority equal to the texel's winner's takes it (the caller breaks the tie)
+  bool orthographic;        //!< Space::orthographic
+  const float* far;         //!< the far layer (zeta) from `first`
+  const int32_t* coverage;  //!< the object the map sees from `first`; null: not filtered by it
+  const float* top;         //!< the topmost surface's depth from `first`; null: not filtered by it
+  const float* priority;    //!< the tile's priorities from `first`
+};
+
+// What the pass writes for each texel m of a span: the nearest point's parameter u along the edge,
+// c there, the distance, the priority p where the edge takes the texel (else infinity), and bit m
+// of `outer` where the texel lies on the edge's outer side.
+struct RibbonSpanTexels {
+  float u[kRibbonTile], c[kRibbonTile], distance[kRibbonTile], p[kRibbonTile];
+  uint32_t outer;
+};
+
+// The implementations of the span pass: one texel at a time (the definition), four to an SSE vector,
+// sixteen to an AVX-512 one. rasterizeRibbons takes the widest the CPU has; all give the same values to
+// the bit.
+enum class SpanPath { Scalar, Sse, Avx512 };
+bool spanPathAvailable(SpanPath path);
+// The span's texels [0, count) (count at most kRibbonTile) into `out` through `path` (available).
+void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out);
+
 // Into `out`, which keeps its storage where it is large enough.
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,

@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include <cmath>
+#include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -282,6 +283,94 @@ TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilte
       EXPECT_GT(covered, 50) << edges.size() << " silhouette edges: the scene must exercise the ribbons";
     }
   }
+}
+
+// The span pass of rasterizeRibbons through each vector path this CPU has, against the scalar
+// definition, to the bit: random edges and rows around a tile, spans of every length up to a tile's
+// row, ends beyond the edge on either side, both map kinds, every filter present or not, and
+// priorities that tie the edge's own (taken through the scalar pass first) on some texels.
+TEST(PlmRibbons, SpanPathsGiveTheScalarPassToTheBit) {
+  uint32_t state = 2024u;
+  const auto uniform = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  };
+  constexpr int kTile = plm::kRibbonTile;
+  float far[kTile], top[kTile], priority[kTile];
+  int32_t coverage[kTile];
+  int compared = 0, taken = 0, outer = 0, ties = 0;
+  for (const plm::SpanPath path : {plm::SpanPath::Sse, plm::SpanPath::Avx512}) {
+    if (!plm::spanPathAvailable(path)) continue;
+    for (int trial = 0; trial < 20000; ++trial) {
+      const Vec2 a(64.0f * uniform(), 64.0f * uniform());
+      const Vec2 b = trial % 97 == 0 ? a : Vec2(64.0f * uniform(), 64.0f * uniform());  // some degenerate
+      const Vec2 d = b - a;
+      const float y = std::floor(64.0f * uniform()) + 0.5f;
+      const bool orthographic = trial % 2 == 0;
+      plm::RibbonSpan s{};
+      s.ax = a.x;
+      s.bx = b.x;
+      s.dx = d.x;
+      s.dy = d.y;
+      s.aqy = y - a.y;
+      s.by = y - b.y;
+      s.invLength2 = 1.0f / glm::dot(d, d);
+      const Vec2 n = glm::length(d) > 0.0f ? glm::normalize(Vec2(d.y, -d.x)) : Vec2(1.0f, 0.0f);
+      s.outX = n.x;
+      s.outY = n.y;
+      const float sides[3] = {-1.0f, 0.0f, 1.0f};
+      s.endSideA = sides[trial % 3];
+      s.endSideB = sides[(trial / 3) % 3];
+      s.zetaA = orthographic ? 2.0f + 3.0f * uniform() : -1.0f / (2.0f + 3.0f * uniform());
+      s.zetaB = orthographic ? 2.0f + 3.0f * uniform() : -1.0f / (2.0f + 3.0f * uniform());
+      s.rate = 0.001f + 0.05f * uniform();
+      s.halfWidth = 40.0f * uniform();
+      s.objectId = trial % 4;
+      s.first = static_cast<int>(64.0f * uniform());
+      s.bothSides = trial % 5 == 0;
+      s.wantOuter = trial % 7 < 4;
+      s.ties = trial % 3 != 0;
+      s.orthographic = orthographic;
+      const int count = 1 + trial % kTile;
+      for (int m = 0; m < kTile; ++m) {
+        const float depth = 1.0f + 5.0f * uniform();
+        far[m] = uniform() < 0.1f ? 2.0f : (orthographic ? depth : -1.0f / depth);  // zetaNone on some
+        top[m] = uniform() < 0.15f ? kInfinity : (uniform() < 0.05f ? -0.0f : depth * uniform());
+        coverage[m] = static_cast<int32_t>(4.0f * uniform());
+        priority[m] = uniform() < 0.3f ? kInfinity : (orthographic ? 6.0f : 0.0f) * uniform();
+      }
+      s.far = far;
+      s.coverage = trial % 11 == 0 ? nullptr : coverage;
+      s.top = trial % 13 == 0 ? nullptr : top;
+      s.priority = priority;
+      plm::RibbonSpanTexels want{}, got{};
+      plm::ribbonSpan(plm::SpanPath::Scalar, s, count, want);
+      // Ties: the edge's own priority at every third taken texel, then both passes again.
+      for (int m = 0; m < count; m += 3)
+        if (want.p[m] < kInfinity) {
+          priority[m] = want.p[m];
+          ++ties;
+        }
+      plm::ribbonSpan(plm::SpanPath::Scalar, s, count, want);
+      plm::ribbonSpan(path, s, count, got);
+      ASSERT_EQ(got.outer, want.outer) << "trial " << trial;
+      for (int m = 0; m < count; ++m) {
+        ASSERT_EQ(std::memcmp(&got.u[m], &want.u[m], sizeof(float)), 0) << "trial " << trial << ", texel " << m;
+        ASSERT_EQ(std::memcmp(&got.c[m], &want.c[m], sizeof(float)), 0) << "trial " << trial << ", texel " << m;
+        ASSERT_EQ(std::memcmp(&got.distance[m], &want.distance[m], sizeof(float)), 0) << "trial " << trial;
+        ASSERT_EQ(std::memcmp(&got.p[m], &want.p[m], sizeof(float)), 0) << "trial " << trial << ", texel " << m;
+        taken += want.p[m] < kInfinity;
+        outer += (want.outer >> m) & 1u;
+        ++compared;
+      }
+    }
+  }
+  if (compared == 0) GTEST_SKIP() << "no vector path on this CPU";
+  // The cases must reach every outcome for the comparison to mean something.
+  EXPECT_GT(taken, compared / 50);
+  EXPECT_GT(outer, compared / 10);
+  EXPECT_LT(outer, compared - compared / 10);
+  EXPECT_GT(ties, 1000);
 }
 
 }  // namespace
