@@ -399,6 +399,7 @@ void ribbonSpanScalar(const RibbonSpan& s, int from, int count, RibbonSpanTexels
     out.distance[m] = distance;
     out.p[m] = take ? p : kInfinity;
     out.outer |= static_cast<uint32_t>(outer) << m;
+    out.taken |= static_cast<uint32_t>(take) << m;
   }
 }
 
@@ -466,6 +467,7 @@ int ribbonSpanSse(const RibbonSpan& s, int count, RibbonSpanTexels& out) {
     _mm_storeu_ps(out.distance + m, distance);
     _mm_storeu_ps(out.p + m, _mm_blendv_ps(inf, p, take));
     out.outer |= static_cast<uint32_t>(_mm_movemask_ps(outer)) << m;
+    out.taken |= static_cast<uint32_t>(_mm_movemask_ps(take)) << m;
   }
   return m;
 }
@@ -539,6 +541,7 @@ int ribbonSpanSse(const RibbonSpan& s, int count, RibbonSpanTexels& out) {
     _mm512_mask_storeu_ps(out.distance + m, valid, distance);
     _mm512_mask_storeu_ps(out.p + m, valid, _mm512_mask_blend_ps(take, inf, p));
     out.outer |= static_cast<uint32_t>(outer & valid) << m;
+    out.taken |= static_cast<uint32_t>(take & valid) << m;
   }
 }
 #if !defined(__clang__)
@@ -573,6 +576,7 @@ namespace {
 // ribbonSpan without its check of the path (rasterizeRibbons picks an available one once).
 inline void spanPass(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out) {
   out.outer = 0;
+  out.taken = 0;
   int done = 0;
 #if PENUMBRA_RIBBON_AVX512
   if (path == SpanPath::Avx512) {
@@ -779,7 +783,10 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           // edge. Every filter only drops candidates.
           int count = si1 - si0 + 1;
           if (count <= 0) continue;
-          {
+          // Trimmed for the narrower paths; the AVX-512 pass takes a whole span in at most two steps,
+          // where trimming cost more than the texels it saved (what it drops, p >= priority, the pass
+          // rejects anyway).
+          if (widest != SpanPath::Avx512) {
             const float* rowPriority = priority + (j - tj * kTile) * kTile + (si0 - ti * kTile);
             const float across0 = (static_cast<float>(si0) + 0.5f - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y;
             int lo = 0, hi = count - 1;
@@ -856,9 +863,8 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           input.priority = prio;
           spanPass(widest, input, count, span);
           bool took = false;
-          for (int m = 0; m < count; ++m) {
-            const int i = si0 + m;
-            if (!(span.p[m] < kInfinity)) continue;  // not taken by the pass above
+          for (uint32_t candidates = span.taken; candidates != 0; candidates &= candidates - 1) {
+            const int m = __builtin_ctz(candidates), i = si0 + m;
             // A tie goes to the lower index, as in index order, where the first to come keeps it.
             if (span.p[m] == prio[m] && static_cast<int32_t>(k) > row[i - ti * kTile].edge) continue;
             const float u = span.u[m], c = span.c[m], distance = span.distance[m], p = span.p[m];

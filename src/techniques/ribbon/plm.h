@@ -248,11 +248,11 @@ struct RibbonSpan {
 };
 
 // What the pass writes for each texel m of a span: the nearest point's parameter u along the edge,
-// c there, the distance, the priority p where the edge takes the texel (else infinity), and bit m
-// of `outer` where the texel lies on the edge's outer side.
+// c there, the distance, the priority p where the edge takes the texel (else infinity), bit m of
+// `outer` where the texel lies on the edge's outer side and bit m of `taken` where p is finite.
 struct RibbonSpanTexels {
   float u[kRibbonTile], c[kRibbonTile], distance[kRibbonTile], p[kRibbonTile];
-  uint32_t outer;
+  uint32_t outer, taken;
 };
 
 // The implementations of the span pass: one texel at a time (the definition), four to an SSE vector,

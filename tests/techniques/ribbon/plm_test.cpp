@@ -354,6 +354,7 @@ TEST(PlmRibbons, SpanPathsGiveTheScalarPassToTheBit) {
       plm::ribbonSpan(plm::SpanPath::Scalar, s, count, want);
       plm::ribbonSpan(path, s, count, got);
       ASSERT_EQ(got.outer, want.outer) << "trial " << trial;
+      ASSERT_EQ(got.taken, want.taken) << "trial " << trial;
       for (int m = 0; m < count; ++m) {
         ASSERT_EQ(std::memcmp(&got.u[m], &want.u[m], sizeof(float)), 0) << "trial " << trial << ", texel " << m;
         ASSERT_EQ(std::memcmp(&got.c[m], &want.c[m], sizeof(float)), 0) << "trial " << trial << ", texel " << m;
