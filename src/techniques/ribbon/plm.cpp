@@ -757,6 +757,25 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           const float distance = std::max(dy, std::abs(across));
           return cFloor + std::max(distance - 0.01f - 1e-5f * distance, 0.0f) * rateFloor;
         };
+        // The span pass's view of the edge; each row adds its own (RibbonSpan).
+        const RibbonSpan edgeSpan{.ax = e.a.x,
+                                  .bx = e.b.x,
+                                  .dx = d.x,
+                                  .dy = d.y,
+                                  .invLength2 = invLength2,
+                                  .outX = e.outward.x,
+                                  .outY = e.outward.y,
+                                  .endSideA = e.endSideA,
+                                  .endSideB = e.endSideB,
+                                  .zetaA = e.zetaA,
+                                  .zetaB = e.zetaB,
+                                  .rate = e.rate,
+                                  .halfWidth = h,
+                                  .objectId = e.objectId,
+                                  .bothSides = wantOuter && wantInner,
+                                  .wantOuter = wantOuter,
+                                  .ties = ordered,
+                                  .orthographic = space.orthographic};
         for (int j = j0; j <= j1; ++j) {
           // The texels of the row within h of the segment lie within h of its bounding box and
           // within h of its line: only that span is visited (widened by a texel against rounding;
@@ -835,28 +854,10 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           // The geometry of every texel of the span and the filters that read the texel's own row of
           // other images (the object the map sees, the far layer, the topmost surface), without branches,
           // 16 or 4 texels to a vector (ribbonSpanScalar says how; the same values at every width).
-          RibbonSpan input;
-          input.ax = e.a.x;
-          input.bx = e.b.x;
-          input.dx = d.x;
-          input.dy = d.y;
+          RibbonSpan input = edgeSpan;
           input.aqy = y - e.a.y;
           input.by = y - e.b.y;
-          input.invLength2 = invLength2;
-          input.outX = e.outward.x;
-          input.outY = e.outward.y;
-          input.endSideA = e.endSideA;
-          input.endSideB = e.endSideB;
-          input.zetaA = e.zetaA;
-          input.zetaB = e.zetaB;
-          input.rate = e.rate;
-          input.halfWidth = h;
-          input.objectId = e.objectId;
           input.first = si0;
-          input.bothSides = wantOuter && wantInner;
-          input.wantOuter = wantOuter;
-          input.ties = ordered;
-          input.orthographic = space.orthographic;
           input.far = farthest.row(j) + si0;
           input.coverage = filter.coverage ? filter.coverage->row(j) + si0 : nullptr;
           input.top = filter.topDepth ? filter.topDepth->row(j) + si0 : nullptr;

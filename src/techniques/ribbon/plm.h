@@ -228,23 +228,23 @@ inline constexpr int kRibbonTile = 32;
 // One span of rasterizeRibbons: the texels [first, first + count) of one row (at most kRibbonTile)
 // that an edge may still take, and what its pass reads there.
 struct RibbonSpan {
-  float ax, bx, dx, dy;      //!< the x of the edge's ends a and b, and b - a (texels)
-  float aqy, by;             //!< the row's y - a.y and y - b.y
-  float invLength2;          //!< 1 / |b - a|^2
-  float outX, outY;          //!< Edge::outward
-  float endSideA, endSideB;  //!< Edge::endSideA, endSideB
-  float zetaA, zetaB, rate;  //!< Edge::zetaA, zetaB, rate
-  float halfWidth;           //!< the ribbon's half width, texels
-  int32_t objectId;
-  int first;       //!< the span's first texel (column)
-  bool bothSides;  //!< both sides wanted; else the outer one where wantOuter, the inner one where not
-  bool wantOuter;
-  bool ties;                //!< a priority equal to the texel's winner's takes it (the caller breaks the tie)
-  bool orthographic;        //!< Space::orthographic
-  const float* far;         //!< the far layer (zeta) from `first`
-  const int32_t* coverage;  //!< the object the map sees from `first`; null: not filtered by it
-  const float* top;         //!< the topmost surface's depth from `first`; null: not filtered by it
-  const float* priority;    //!< the tile's priorities from `first`
+  float ax = 0.0f, bx = 0.0f, dx = 0.0f, dy = 0.0f;  //!< the x of the edge's ends a and b, and b - a (texels)
+  float aqy = 0.0f, by = 0.0f;                       //!< the row's y - a.y and y - b.y
+  float invLength2 = 0.0f;                           //!< 1 / |b - a|^2
+  float outX = 0.0f, outY = 0.0f;                    //!< Edge::outward
+  float endSideA = 0.0f, endSideB = 0.0f;            //!< Edge::endSideA, endSideB
+  float zetaA = 0.0f, zetaB = 0.0f, rate = 0.0f;     //!< Edge::zetaA, zetaB, rate
+  float halfWidth = 0.0f;                            //!< the ribbon's half width, texels
+  int32_t objectId = kNoObject;
+  int first = 0;           //!< the span's first texel (column)
+  bool bothSides = false;  //!< both sides wanted; else the outer one where wantOuter, the inner one where not
+  bool wantOuter = false;
+  bool ties = false;                  //!< a priority equal to the texel's winner's takes it (the caller breaks the tie)
+  bool orthographic = false;          //!< Space::orthographic
+  const float* far = nullptr;         //!< the far layer (zeta) from `first`
+  const int32_t* coverage = nullptr;  //!< the object the map sees from `first`; null: not filtered by it
+  const float* top = nullptr;         //!< the topmost surface's depth from `first`; null: not filtered by it
+  const float* priority = nullptr;    //!< the tile's priorities from `first`
 };
 
 // What the pass writes for each texel m of a span: the nearest point's parameter u along the edge,
