@@ -220,8 +220,13 @@ PYBIND11_MODULE(_penumbra, m) {
       .def("__repr__", [](const Scene& s) { return "<penumbra.Scene " + s.name + " (" + s.source + ")>"; });
 
   m.def(
-      "load_scene", [](const std::string& nameOrPath) { return loadScene(nameOrPath); }, py::arg("name_or_path"),
-      "A built-in scene by name (scenes()) or a JSON scene file");
+      "load_scene",
+      [](const std::string& nameOrPath) {
+        Scene scene = loadScene(nameOrPath);
+        scene.declareGeometry();  // Python reads a scene's meshes and never changes them
+        return scene;
+      },
+      py::arg("name_or_path"), "A built-in scene by name (scenes()) or a JSON scene file");
   m.def(
       "scenes",
       [] {

@@ -66,6 +66,9 @@ Setup loadSetup(const FrameOptions& options) {
   SceneLoadOptions load;
   if (options.maxMeshMiB) load.maxMeshBytes = static_cast<uint64_t>(*options.maxMeshMiB * 1024.0 * 1024.0);
   setup.scene = loadScene(options.scene, load);
+  // The command's meshes stay as loaded (a sequence moves lights and the camera only): declared, so
+  // that no frame hashes them again to prove it (Scene::geometryRevision).
+  setup.scene.declareGeometry();
   if (setup.scene.source.rfind("built-in:", 0) != 0) setup.sceneFile = setup.scene.source;
   const Scene& scene = setup.scene;
   // Check the scene file's "techniques" section whole, including techniques not run now: a typo in

@@ -31,6 +31,15 @@ Vec3 Mesh::faceNormal(size_t i) const {
 
 std::shared_ptr<SceneCaches> makeSceneCaches() { return std::make_shared<SceneCaches>(); }
 
+void Scene::declareGeometry() {
+  if (!caches) {
+    geometryRevision = 0;
+    return;
+  }
+  std::lock_guard lock(caches->mutex);
+  geometryRevision = caches->nextRevision++;
+}
+
 Bounds3 Scene::bounds() const {
   Bounds3 b;
   for (const Object& o : objects) b.extend(o.mesh.bounds());

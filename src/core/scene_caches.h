@@ -18,6 +18,8 @@ struct SceneCaches {
   std::vector<uint64_t> rayKey;          //!< the geometry rayScene was built from (RaySceneCache's key)
   std::shared_ptr<const void> rayScene;  //!< a RayScene
   Bounds3 rayBounds;                     //!< the bounds of that geometry
+  uint64_t rayRevision = 0;              //!< Scene::geometryRevision of that geometry (0: undeclared)
+  uint64_t nextRevision = 1;             //!< the next number Scene::declareGeometry gives
 };
 
 }  // namespace penumbra

@@ -213,6 +213,18 @@ RayPacket16::RayPacket16() {
 
 RayScene::~RayScene() = default;
 const RayScene& RaySceneCache::get(const Scene& scene) {
+  if (scene.caches && scene.geometryRevision != 0) {
+    // Declared geometry that the shared scene was built from (or proved equal to): nothing to hash.
+    SceneCaches& caches = *scene.caches;
+    std::lock_guard lock(caches.mutex);
+    if (caches.rayScene && caches.rayRevision == scene.geometryRevision) {
+      rebuilt_ = false;
+      rays_ = std::static_pointer_cast<const RayScene>(caches.rayScene);
+      bounds_ = caches.rayBounds;
+      key_ = caches.rayKey;
+      return *rays_;
+    }
+  }
   std::vector<uint64_t> key;
   key.reserve(3 * scene.objects.size());
   for (const Object& object : scene.objects) {
@@ -234,6 +246,7 @@ const RayScene& RaySceneCache::get(const Scene& scene) {
     caches.rayKey = key;
     caches.rayBounds = scene.bounds();
   }
+  caches.rayRevision = scene.geometryRevision;  // built from, or proved equal to, this revision
   rays_ = std::static_pointer_cast<const RayScene>(caches.rayScene);
   bounds_ = caches.rayBounds;
   key_ = std::move(key);

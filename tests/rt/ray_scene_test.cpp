@@ -343,6 +343,50 @@ TEST(RaySceneCache, TechniquesOnOneSceneOrItsCopiesShareOneRayScene) {
   EXPECT_FALSE(own.rebuilt());
 }
 
+// Declared geometry (Scene::declareGeometry): kept without being hashed, so a mesh changed without
+// declaring again is traced as declared (the owner's promise, which this shows is taken); declaring
+// again rebuilds; a copy that changes its mesh and declares gets a revision of its own, and each is
+// traced as it is; undeclared again (0), a change is found by the hash.
+TEST(RaySceneCache, DeclaredGeometryIsKeptWithoutProofAndRebuiltWhenDeclaredAgain) {
+  Scene scene = twoQuads();
+  scene.declareGeometry();
+  const uint64_t declared = scene.geometryRevision;
+  EXPECT_NE(declared, 0u);
+  RaySceneCache cache;
+  const Ray down = makeRay(Vec3(0.5f, -0.25f, 5.0f), Vec3(0, 0, -1));
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f);
+  EXPECT_TRUE(cache.rebuilt());
+  cache.get(scene);
+  EXPECT_FALSE(cache.rebuilt());
+  for (Vec3& p : scene.objects[1].mesh.positions) p.z += 1.0f;
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f) << "a declared revision is not proved again";
+  EXPECT_FALSE(cache.rebuilt());
+  scene.declareGeometry();
+  EXPECT_NE(scene.geometryRevision, declared);
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 3.0f);
+  EXPECT_TRUE(cache.rebuilt());
+  EXPECT_FLOAT_EQ(cache.bounds().upper.z, 2.0f);
+  Scene copy = scene;  // shares the caches and, until it declares, the revision
+  for (Vec3& p : copy.objects[1].mesh.positions) p.z += 1.0f;
+  copy.declareGeometry();
+  EXPECT_NE(copy.geometryRevision, scene.geometryRevision);
+  EXPECT_NE(copy.geometryRevision, declared);
+  RaySceneCache other;
+  EXPECT_FLOAT_EQ(other.get(copy).intersect(down)->t, 2.0f);
+  EXPECT_TRUE(other.rebuilt());
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 3.0f);
+  EXPECT_TRUE(cache.rebuilt()) << "the caches held the copy's geometry";
+  scene.geometryRevision = 0;
+  for (Vec3& p : scene.objects[1].mesh.positions) p.z += 0.5f;
+  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 2.5f);
+  EXPECT_TRUE(cache.rebuilt());
+  // A scene without caches has nothing to declare against: undeclared, hashed as before.
+  Scene alone = twoQuads();
+  alone.caches = nullptr;
+  alone.declareGeometry();
+  EXPECT_EQ(alone.geometryRevision, 0u);
+}
+
 TEST(ShadowRayEpsilon, ScalesWithTheSceneAndItsDistanceFromTheOrigin) {
   Bounds3 unit;
   unit.extend(Vec3(-1.0f));
