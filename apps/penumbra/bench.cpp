@@ -126,6 +126,7 @@ int runBench(const BenchOptions& options) {
   }
 
   const std::optional<double> raySceneMs = buildSharedRayScene(setup.scene, names);
+  const std::optional<double> meshEdgesMs = buildSharedMeshEdges(setup.scene, names);
   Report report = beginReport("bench", setup, baseline);
   // The G-buffer's time is reported once all runs are in (over a sequence, every frame renders its own).
   report.settings = {{motion ? "frames" : "repeat", fmt::format("{}", repeat)},
@@ -161,15 +162,18 @@ int runBench(const BenchOptions& options) {
   }
   report.settings.emplace_back("gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs)));
   if (raySceneMs) report.settings.emplace_back("ray_scene_ms", fmt::format("{:.3f}", *raySceneMs));
+  if (meshEdgesMs) report.settings.emplace_back("mesh_edges_ms", fmt::format("{:.3f}", *meshEdgesMs));
   if (!motion) {
     report.settings.emplace_back("gbuffer_first_ms", fmt::format("{:.3f}", gbufferFirstMs));
     report.settings.emplace_back("gbuffer_setup_ms", fmt::format("{:.3f}", gbufferSetupMs));
   }
   addFrameSettings(report.settings, options.frame);
   fillBaselineRatios(report);
-  // The Embree scene is built once for the scene before any technique (buildSharedRayScene).
+  // The Embree scene and the meshes' edge adjacency are built once for the scene before any technique
+  // (buildSharedRayScene, buildSharedMeshEdges).
   const std::string rayScene =
-      raySceneMs ? fmt::format("; Embree scene {:.2f} ms, built once, shared", *raySceneMs) : std::string();
+      (raySceneMs ? fmt::format("; Embree scene {:.2f} ms, built once, shared", *raySceneMs) : std::string()) +
+      (meshEdgesMs ? fmt::format("; mesh edges {:.2f} ms, built once, shared", *meshEdgesMs) : std::string());
   if (motion)
     fmt::print("G-buffer raster {:.2f} ms (median of {}){}\n\n{}", median(gbufferMs), gbufferMs.size(), rayScene,
                reportToText(report));

@@ -213,6 +213,9 @@ class OutputLock {
 // (whichever ran first would otherwise pay for all). Reports show it apart, as the G-buffer's time.
 // Nothing is built (nullopt) when none of `techniques` traces rays (TechniqueInfo::tracesRays).
 std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<std::string>& techniques);
+// The same for the meshes' edge adjacency (sharedMeshEdges), which the silhouette-finding techniques
+// share (TechniqueInfo::usesMeshEdges); nullopt when none of `techniques` uses it.
+std::optional<double> buildSharedMeshEdges(const Scene& scene, const std::vector<std::string>& techniques);
 
 // Every technique name if `names` is empty; otherwise the names, checked against the registry.
 std::vector<std::string> techniqueList(const std::vector<std::string>& names);

@@ -22,6 +22,7 @@
 #include "penumbra/error.h"
 #include "penumbra/scene_io.h"
 #include "rt/ray_scene.h"
+#include "techniques/mesh_edges.h"
 
 namespace penumbra::cli {
 
@@ -189,6 +190,15 @@ std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<
   Timer timer;
   RaySceneCache cache;
   cache.get(scene);  // kept in scene.caches after this holder goes
+  return timer.elapsedMs();
+}
+
+std::optional<double> buildSharedMeshEdges(const Scene& scene, const std::vector<std::string>& techniques) {
+  if (std::none_of(techniques.begin(), techniques.end(),
+                   [](const std::string& name) { return findTechnique(name).usesMeshEdges; }))
+    return std::nullopt;
+  Timer timer;
+  for (size_t i = 0; i < scene.objects.size(); ++i) sharedMeshEdges(scene, i);  // kept in scene.caches
   return timer.elapsedMs();
 }
 

@@ -24,11 +24,12 @@ struct ResourceEstimate {
 };
 
 struct TechniqueInfo {
-  std::string name;         //!< "reference", "hard", ...
-  std::string summary;      //!< one line
-  std::string source;       //!< paper or "baseline"
-  std::string lights;       //!< the light shapes it takes and how it treats them, a concave polygon included
-  bool tracesRays = false;  //!< its prepare uses the scene's shared Embree scene (Scene::caches)
+  std::string name;            //!< "reference", "hard", ...
+  std::string summary;         //!< one line
+  std::string source;          //!< paper or "baseline"
+  std::string lights;          //!< the light shapes it takes and how it treats them, a concave polygon included
+  bool tracesRays = false;     //!< its prepare uses the scene's shared Embree scene (Scene::caches)
+  bool usesMeshEdges = false;  //!< its prepare uses the meshes' shared edge adjacency (Scene::caches)
   std::vector<ParamSpec> params;
   std::function<std::unique_ptr<ShadowTechnique>(const Params&)> create;
   std::function<ResourceEstimate(const Params&, int width, int height)>

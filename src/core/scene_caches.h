@@ -8,6 +8,7 @@
 #include <mutex>
 #include <vector>
 
+#include "core/mesh_fingerprint.h"
 #include "penumbra/math.h"
 #include "penumbra/scene.h"
 
@@ -20,6 +21,14 @@ struct SceneCaches {
   Bounds3 rayBounds;                     //!< the bounds of that geometry
   uint64_t rayRevision = 0;              //!< Scene::geometryRevision of that geometry (0: undeclared)
   uint64_t nextRevision = 1;             //!< the next number Scene::declareGeometry gives
+  // Per object index, the edge adjacency of its mesh (a MeshEdges of src/techniques/mesh_edges.h,
+  // sharedMeshEdges), the mesh's fingerprint and the revision it was built from or proved equal to.
+  struct MeshEdgesEntry {
+    MeshFingerprint fingerprint;
+    uint64_t revision = 0;
+    std::shared_ptr<const void> edges;
+  };
+  std::vector<MeshEdgesEntry> meshEdges;
 };
 
 }  // namespace penumbra

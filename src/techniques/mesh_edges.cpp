@@ -3,10 +3,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 #include <tbb/parallel_sort.h>
 
+#include "core/scene_caches.h"
 #include "penumbra/math.h"
 #include "techniques/silhouette/mesh_topology.h"
 
@@ -62,10 +65,35 @@ void MeshEdges::build(const Mesh& mesh) {
   firstUse.push_back(static_cast<uint32_t>(half.size()));
 }
 
+std::shared_ptr<const MeshEdges> sharedMeshEdges(const Scene& scene, size_t objectIndex) {
+  const Mesh& mesh = scene.objects.at(objectIndex).mesh;
+  if (!scene.caches) {
+    auto edges = std::make_shared<MeshEdges>();
+    edges->build(mesh);
+    return edges;
+  }
+  SceneCaches& caches = *scene.caches;
+  std::lock_guard lock(caches.mutex);
+  if (caches.meshEdges.size() < scene.objects.size()) caches.meshEdges.resize(scene.objects.size());
+  SceneCaches::MeshEdgesEntry& entry = caches.meshEdges[objectIndex];
+  // Declared geometry they were built from (or proved equal to): nothing to hash.
+  if (entry.edges && scene.geometryRevision != 0 && entry.revision == scene.geometryRevision)
+    return std::static_pointer_cast<const MeshEdges>(entry.edges);
+  const MeshFingerprint fingerprint = meshFingerprint(mesh);
+  if (!entry.edges || !(entry.fingerprint == fingerprint)) {
+    auto edges = std::make_shared<MeshEdges>();
+    edges->build(mesh);
+    entry.edges = std::move(edges);
+    entry.fingerprint = fingerprint;
+  }
+  entry.revision = scene.geometryRevision;
+  return std::static_pointer_cast<const MeshEdges>(entry.edges);
+}
+
 struct MeshEdgeCache::Impl {
   struct Entry {
-    MeshFingerprint key;
-    std::optional<MeshEdges> edges;
+    MeshFingerprint key;                     //!< without scene caches: the geometry `edges` is of
+    std::shared_ptr<const MeshEdges> edges;  //!< the edges last given for the index
   };
   std::vector<Entry> entries;  //!< per object index
   size_t matches = 0;
@@ -76,14 +104,24 @@ MeshEdgeCache::~MeshEdgeCache() = default;
 
 void MeshEdgeCache::resize(size_t objectCount) { impl_->entries.resize(objectCount); }
 
-const MeshEdges& MeshEdgeCache::edges(size_t objectIndex, const Mesh& mesh, bool* rebuilt) {
+const MeshEdges& MeshEdgeCache::edges(const Scene& scene, size_t objectIndex, bool* rebuilt) {
   if (objectIndex >= impl_->entries.size()) impl_->entries.resize(objectIndex + 1);
   Impl::Entry& entry = impl_->entries[objectIndex];
+  if (scene.caches) {
+    std::shared_ptr<const MeshEdges> shared = sharedMeshEdges(scene, objectIndex);
+    const bool anew = shared != entry.edges;
+    impl_->matches += anew ? 1 : 0;
+    if (rebuilt) *rebuilt = anew;
+    entry.edges = std::move(shared);
+    return *entry.edges;
+  }
+  const Mesh& mesh = scene.objects.at(objectIndex).mesh;
   const MeshFingerprint key = meshFingerprint(mesh);
   const bool build = !entry.edges || !(entry.key == key);
   if (build) {
-    entry.edges.emplace();
-    entry.edges->build(mesh);
+    auto edges = std::make_shared<MeshEdges>();
+    edges->build(mesh);
+    entry.edges = std::move(edges);
     entry.key = key;
     ++impl_->matches;
   }

@@ -1,6 +1,6 @@
 // A mesh's edge adjacency, shared by the techniques that find silhouette edges seen from the light
 // (plm, smoothies, kirsch: techniques/ribbon/plm.h; parker's outer objects:
-// techniques/parker/outer_objects.h), and the cache that keeps it while a mesh's geometry is the same.
+// techniques/parker/outer_objects.h), kept in the scene's caches while a mesh's geometry is the same.
 //
 // Vertices are welded by bit-identical position (-0 and +0 alike; each vertex maps to the first at
 // its position, firstVertexAtSamePosition of techniques/silhouette/mesh_topology.h). The triangles
@@ -33,8 +33,16 @@ struct MeshEdges {
   void build(const Mesh& mesh);
 };
 
-// Per object index, the MeshEdges of the object's mesh, built again only where the mesh's
-// fingerprint differs from the one it was last built for.
+// The MeshEdges of object `objectIndex` of `scene`, kept in the scene's caches (Scene::caches) and
+// shared by every technique prepared on the scene or its copies: built again only where the mesh's
+// geometry differs from the one they were built from, proved as the Embree scene's is (by the mesh's
+// fingerprint, or by the scene's declared revision: Scene::geometryRevision). Without caches, built
+// afresh.
+std::shared_ptr<const MeshEdges> sharedMeshEdges(const Scene& scene, size_t objectIndex);
+
+// Per object index, the MeshEdges of the object's mesh for one technique: the scene's shared ones
+// (sharedMeshEdges), or, for a scene without caches, its own, built again only where the mesh's
+// fingerprint differs from the one they were last built for.
 class MeshEdgeCache {
  public:
   MeshEdgeCache();
@@ -44,9 +52,10 @@ class MeshEdgeCache {
 
   // Sizes the cache to a scene's objects (entries of objects beyond it are dropped).
   void resize(size_t objectCount);
-  // The edges of object `objectIndex`'s mesh; `rebuilt` (optional) tells whether they were built now.
-  const MeshEdges& edges(size_t objectIndex, const Mesh& mesh, bool* rebuilt = nullptr);
-  size_t matchCount() const;  //!< meshes built so far (the others were found in the cache)
+  // The edges of the mesh of object `objectIndex` of `scene`; `rebuilt` (optional) tells whether they
+  // are others than this cache gave for that index last time (built now, by this or another cache).
+  const MeshEdges& edges(const Scene& scene, size_t objectIndex, bool* rebuilt = nullptr);
+  size_t matchCount() const;  //!< edge sets it was given anew so far (edges() with `rebuilt` true)
 
  private:
   struct Impl;

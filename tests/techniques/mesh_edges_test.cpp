@@ -73,25 +73,73 @@ TEST(MeshEdges, ClosedMeshEdgesAreUsedTwiceInOppositeDirections) {
   }
 }
 
+// A scene of the two meshes, objects 0 and 1.
+Scene twoMeshScene(const Mesh& a, const Mesh& b) {
+  Scene scene;
+  scene.objects.push_back(Object{});
+  scene.objects.back().id = 1;
+  scene.objects.back().mesh = a;
+  scene.objects.push_back(Object{});
+  scene.objects.back().id = 2;
+  scene.objects.back().mesh = b;
+  return scene;
+}
+
+// A scene without caches: the technique's own edges, built again only where a mesh changed.
 TEST(MeshEdgeCache, BuildsAMeshAgainOnlyWhenItChanged) {
-  Mesh a = seamSquare(), b = makeBox(Vec3(1.0f, 2.0f, 3.0f));
+  Scene scene = twoMeshScene(seamSquare(), makeBox(Vec3(1.0f, 2.0f, 3.0f)));
+  scene.caches = nullptr;
   MeshEdgeCache cache;
   cache.resize(2);
   bool rebuilt = false;
-  cache.edges(0, a, &rebuilt);
+  cache.edges(scene, 0, &rebuilt);
   EXPECT_TRUE(rebuilt);
-  cache.edges(1, b, &rebuilt);
+  cache.edges(scene, 1, &rebuilt);
   EXPECT_TRUE(rebuilt);
-  const MeshEdges& again = cache.edges(0, a, &rebuilt);
+  const MeshEdges& again = cache.edges(scene, 0, &rebuilt);
   EXPECT_FALSE(rebuilt);
   EXPECT_EQ(again.edgeCount(), 5u);
   EXPECT_EQ(cache.matchCount(), 2u);
-  a.positions[5].x = 0.5f;  // moved: built again
-  cache.edges(0, a, &rebuilt);
+  scene.objects[0].mesh.positions[5].x = 0.5f;  // moved: built again
+  cache.edges(scene, 0, &rebuilt);
   EXPECT_TRUE(rebuilt);
   EXPECT_EQ(cache.matchCount(), 3u);
-  EXPECT_FALSE(meshFingerprint(a) == meshFingerprint(seamSquare()));
-  EXPECT_TRUE(meshFingerprint(b) == meshFingerprint(makeBox(Vec3(1.0f, 2.0f, 3.0f))));
+  EXPECT_FALSE(meshFingerprint(scene.objects[0].mesh) == meshFingerprint(seamSquare()));
+  EXPECT_TRUE(meshFingerprint(scene.objects[1].mesh) == meshFingerprint(makeBox(Vec3(1.0f, 2.0f, 3.0f))));
+}
+
+// With the scene's caches: one build per mesh for every technique on the scene or its copies; a
+// changed mesh built again, found by its fingerprint, or, declared, by the revision alone (a change
+// not declared again is not seen: the owner's promise is taken).
+TEST(MeshEdgeCache, TechniquesOnOneSceneShareTheEdgesOfItsCaches) {
+  Scene scene = twoMeshScene(seamSquare(), makeBox(Vec3(1.0f, 2.0f, 3.0f)));
+  MeshEdgeCache first, second;
+  bool rebuilt = false;
+  const MeshEdges& a = first.edges(scene, 0, &rebuilt);
+  EXPECT_TRUE(rebuilt);
+  const Scene copy = scene;
+  const MeshEdges& b = second.edges(copy, 0, &rebuilt);
+  EXPECT_TRUE(rebuilt) << "new to this cache";
+  EXPECT_EQ(&a, &b) << "built twice";
+  first.edges(scene, 0, &rebuilt);
+  EXPECT_FALSE(rebuilt);
+  EXPECT_EQ(first.matchCount(), 1u);
+  EXPECT_EQ(second.matchCount(), 1u);
+  scene.objects[0].mesh.positions[5].x = 0.5f;
+  const MeshEdges& moved = first.edges(scene, 0, &rebuilt);
+  EXPECT_TRUE(rebuilt);
+  EXPECT_NE(&moved, &a);
+  scene.declareGeometry();
+  const MeshEdges& declared = first.edges(scene, 0, &rebuilt);
+  EXPECT_FALSE(rebuilt) << "proved equal, now under the revision";
+  EXPECT_EQ(&declared, &moved);
+  scene.objects[0].mesh.positions[5].x = 0.25f;
+  EXPECT_EQ(&first.edges(scene, 0, &rebuilt), &moved) << "a declared revision is not proved again";
+  EXPECT_FALSE(rebuilt);
+  scene.declareGeometry();
+  EXPECT_NE(&first.edges(scene, 0, &rebuilt), &moved);
+  EXPECT_TRUE(rebuilt);
+  EXPECT_EQ(sharedMeshEdges(scene, 1)->edgeCount(), 18u);  // a box, its 8 corners welded: 12 triangles, 18 edges
 }
 
 }  // namespace

@@ -892,7 +892,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
     }
     // Per edge (its vertices welded by position: split normals or UV seams make duplicates) the
     // faces that share it, matched again only where the mesh changed since the cache's last use.
-    const MeshEdges& edges = edgeCache.edges(objectIndex, mesh);
+    const MeshEdges& edges = edgeCache.edges(scene, objectIndex);
     forEachKept(
         edges, mesh,
         [&](const Vec3& p0, const Vec3& n) {

@@ -84,10 +84,10 @@ using penumbra::meshFingerprint;
 
 class OuterObjects {
  public:
-  // The meshes' edge adjacency (techniques/mesh_edges.h), which depends on the geometry alone: a
-  // caller that builds the outer objects again for the same objects under another light passes the
-  // same cache, and a mesh whose positions and triangles are the same to the bit as at the cache's
-  // last use is not matched again.
+  // The meshes' edge adjacency (techniques/mesh_edges.h, kept in the scene's caches and shared with
+  // the ribbon techniques), which depends on the geometry alone: a caller that builds the outer
+  // objects again for the same objects under another light passes the same cache, and a mesh whose
+  // geometry is unchanged is not matched again.
   using EdgeCache = MeshEdgeCache;
 
   // Builds the capsules of every object of `scene` (silhouettes seen from light.center(), or along

@@ -262,6 +262,7 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const ParkerOptions& o) {
 TechniqueInfo parkerTechniqueInfo() {
   TechniqueInfo info;
   info.name = "parker";
+  info.usesMeshEdges = true;
   info.summary =
       "one shadow ray per pixel to the light's centre; soft-edged outer objects (R + b, b = D t0 / |l - o|) give the "
       "penumbra";

@@ -109,6 +109,7 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const KirschOptions& o) {
 TechniqueInfo kirschTechniqueInfo() {
   TechniqueInfo info;
   info.name = "kirsch";
+  info.usesMeshEdges = true;
   info.summary = "hard shadow map plus a shadow-width map that fades the shadow inwards (inner penumbra only)";
   info.source = "Kirsch & Döllner 2003, Real-time soft shadows using a single light sample (baseline in Lawlor 2006)";
   info.setOptions<KirschOptions>([](const KirschOptions& o) { return makeTechnique(o); });

@@ -244,7 +244,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
     std::vector<std::pair<uint32_t, uint32_t>> ends;  // welded vertex ids of each edge's a and b
     std::optional<SilhouetteMesh>& cached = edgeCache.impl_->meshes[objectIndex];
     bool rebuilt = false;
-    const MeshEdges& adjacency = edgeCache.impl_->adjacency.edges(objectIndex, object.mesh, &rebuilt);
+    const MeshEdges& adjacency = edgeCache.impl_->adjacency.edges(scene, objectIndex, &rebuilt);
     if (!cached || rebuilt) {
       cached.emplace();
       cached->build(object.mesh, adjacency);
@@ -1404,6 +1404,7 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const PlmOptions& o) {
 TechniqueInfo plmTechniqueInfo() {
   TechniqueInfo info;
   info.name = "plm";
+  info.usesMeshEdges = true;
   info.summary =
       "penumbra limit map: occluder depth, geometry limits and a planar signed penumbra limit, one bilinear fetch";
   info.source = "Lawlor 2006, Interpolation-friendly soft shadow maps";

@@ -114,10 +114,11 @@ struct Edge {
 // Edge::rate of an edge of `map` whose end points and outward normal are set (plm.cpp).
 float edgeRate(const Space& space, const LightMap& map, const Edge& e);
 
-// The meshes' welded vertices and edge adjacency (MeshEdgeCache of ../mesh_edges.h, shared with
-// parker's outer objects), which depend on the geometry alone: a technique passes the same cache to
-// every prepare, and a mesh whose positions and triangles are the same to the bit (meshFingerprint)
-// as at the cache's last use is not welded and matched again; only the faces' orientation to the
+// The meshes' welded vertices and edge adjacency (MeshEdgeCache of ../mesh_edges.h: kept in the
+// scene's caches and shared with every technique on the scene, parker's outer objects included) and
+// what this technique builds from them, which depend on the geometry alone: a technique passes the
+// same cache to every prepare, and a mesh whose geometry is unchanged (its fingerprint, or the
+// scene's declared revision) is not welded and matched again; only the faces' orientation to the
 // light and the silhouettes are found again.
 class EdgeCache {
  public:

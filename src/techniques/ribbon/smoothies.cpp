@@ -111,6 +111,7 @@ std::unique_ptr<ShadowTechnique> makeTechnique(const SmoothiesOptions& o) {
 TechniqueInfo smoothiesTechniqueInfo() {
   TechniqueInfo info;
   info.name = "smoothies";
+  info.usesMeshEdges = true;
   info.summary = "hard shadow map plus silhouette strips that fade the shadow outwards (outer penumbra only)";
   info.source = "Chan & Durand 2003, Rendering fake soft shadows with smoothies (baseline in Lawlor 2006)";
   info.setOptions<SmoothiesOptions>([](const SmoothiesOptions& o) { return makeTechnique(o); });
