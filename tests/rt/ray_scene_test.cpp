@@ -349,15 +349,15 @@ TEST(RaySceneCache, TechniquesOnOneSceneOrItsCopiesShareOneRayScene) {
 // traced as it is; undeclared again (0), a change is found by the hash.
 TEST(RaySceneCache, DeclaredGeometryIsKeptWithoutProofAndRebuiltWhenDeclaredAgain) {
   Scene scene = twoQuads();
+  const Ray down = makeRay(Vec3(0.5f, -0.25f, 5.0f), Vec3(0, 0, -1));  // onto quad B, at z = 1
+  RaySceneCache cache;
   scene.declareGeometry();
   const uint64_t declared = scene.geometryRevision;
   EXPECT_NE(declared, 0u);
-  RaySceneCache cache;
-  const Ray down = makeRay(Vec3(0.5f, -0.25f, 5.0f), Vec3(0, 0, -1));
-  EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f);
-  EXPECT_TRUE(cache.rebuilt());
-  cache.get(scene);
-  EXPECT_FALSE(cache.rebuilt());
+  for (const bool first : {true, false}) {
+    EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f);
+    EXPECT_EQ(cache.rebuilt(), first);
+  }
   for (Vec3& p : scene.objects[1].mesh.positions) p.z += 1.0f;
   EXPECT_FLOAT_EQ(cache.get(scene).intersect(down)->t, 4.0f) << "a declared revision is not proved again";
   EXPECT_FALSE(cache.rebuilt());
