@@ -65,6 +65,22 @@ void MeshEdges::build(const Mesh& mesh) {
   firstUse.push_back(static_cast<uint32_t>(half.size()));
 }
 
+namespace {
+
+// `edges` made the edge adjacency of `mesh`, whose fingerprint is `fingerprint`, unless `builtFrom`
+// says they already are; whether they were built now.
+template <typename Pointer>
+bool keepOrBuild(Pointer& edges, MeshFingerprint& builtFrom, const Mesh& mesh, const MeshFingerprint& fingerprint) {
+  if (edges && builtFrom == fingerprint) return false;
+  auto built = std::make_shared<MeshEdges>();
+  built->build(mesh);
+  edges = std::move(built);
+  builtFrom = fingerprint;
+  return true;
+}
+
+}  // namespace
+
 std::shared_ptr<const MeshEdges> sharedMeshEdges(const Scene& scene, size_t objectIndex) {
   const Mesh& mesh = scene.objects.at(objectIndex).mesh;
   if (!scene.caches) {
@@ -77,16 +93,10 @@ std::shared_ptr<const MeshEdges> sharedMeshEdges(const Scene& scene, size_t obje
   if (caches.meshEdges.size() < scene.objects.size()) caches.meshEdges.resize(scene.objects.size());
   SceneCaches::MeshEdgesEntry& entry = caches.meshEdges[objectIndex];
   // Declared geometry they were built from (or proved equal to): nothing to hash.
-  if (entry.edges && scene.geometryRevision != 0 && entry.revision == scene.geometryRevision)
-    return std::static_pointer_cast<const MeshEdges>(entry.edges);
-  const MeshFingerprint fingerprint = meshFingerprint(mesh);
-  if (!entry.edges || !(entry.fingerprint == fingerprint)) {
-    auto edges = std::make_shared<MeshEdges>();
-    edges->build(mesh);
-    entry.edges = std::move(edges);
-    entry.fingerprint = fingerprint;
+  if (!(entry.edges && scene.geometryRevision != 0 && entry.revision == scene.geometryRevision)) {
+    keepOrBuild(entry.edges, entry.fingerprint, mesh, meshFingerprint(mesh));
+    entry.revision = scene.geometryRevision;
   }
-  entry.revision = scene.geometryRevision;
   return std::static_pointer_cast<const MeshEdges>(entry.edges);
 }
 
@@ -116,15 +126,8 @@ const MeshEdges& MeshEdgeCache::edges(const Scene& scene, size_t objectIndex, bo
     return *entry.edges;
   }
   const Mesh& mesh = scene.objects.at(objectIndex).mesh;
-  const MeshFingerprint key = meshFingerprint(mesh);
-  const bool build = !entry.edges || !(entry.key == key);
-  if (build) {
-    auto edges = std::make_shared<MeshEdges>();
-    edges->build(mesh);
-    entry.edges = std::move(edges);
-    entry.key = key;
-    ++impl_->matches;
-  }
+  const bool build = keepOrBuild(entry.edges, entry.key, mesh, meshFingerprint(mesh));
+  impl_->matches += build ? 1 : 0;
   if (rebuilt) *rebuilt = build;
   return *entry.edges;
 }
