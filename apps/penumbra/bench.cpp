@@ -125,8 +125,7 @@ int runBench(const BenchOptions& options) {
     if (gbufferMs.size() > 1) gbufferMs.erase(gbufferMs.begin());
   }
 
-  const std::optional<double> raySceneMs = buildSharedRayScene(setup.scene, names);
-  const std::optional<double> meshEdgesMs = buildSharedMeshEdges(setup.scene, names);
+  const SharedBuildMs shared = buildSharedCaches(setup.scene, names);
   Report report = beginReport("bench", setup, baseline);
   // The G-buffer's time is reported once all runs are in (over a sequence, every frame renders its own).
   report.settings = {{motion ? "frames" : "repeat", fmt::format("{}", repeat)},
@@ -161,8 +160,8 @@ int runBench(const BenchOptions& options) {
     report.rows.push_back(std::move(row));
   }
   report.settings.emplace_back("gbuffer_ms", fmt::format("{:.3f}", median(gbufferMs)));
-  if (raySceneMs) report.settings.emplace_back("ray_scene_ms", fmt::format("{:.3f}", *raySceneMs));
-  if (meshEdgesMs) report.settings.emplace_back("mesh_edges_ms", fmt::format("{:.3f}", *meshEdgesMs));
+  if (shared.rayScene) report.settings.emplace_back("ray_scene_ms", fmt::format("{:.3f}", *shared.rayScene));
+  if (shared.meshEdges) report.settings.emplace_back("mesh_edges_ms", fmt::format("{:.3f}", *shared.meshEdges));
   if (!motion) {
     report.settings.emplace_back("gbuffer_first_ms", fmt::format("{:.3f}", gbufferFirstMs));
     report.settings.emplace_back("gbuffer_setup_ms", fmt::format("{:.3f}", gbufferSetupMs));
@@ -170,17 +169,18 @@ int runBench(const BenchOptions& options) {
   addFrameSettings(report.settings, options.frame);
   fillBaselineRatios(report);
   // The Embree scene and the meshes' edge adjacency are built once for the scene before any technique
-  // (buildSharedRayScene, buildSharedMeshEdges).
-  const std::string rayScene =
-      (raySceneMs ? fmt::format("; Embree scene {:.2f} ms, built once, shared", *raySceneMs) : std::string()) +
-      (meshEdgesMs ? fmt::format("; mesh edges {:.2f} ms, built once, shared", *meshEdgesMs) : std::string());
+  // (buildSharedCaches).
+  const std::string sharedBuilt =
+      (shared.rayScene ? fmt::format("; Embree scene {:.2f} ms, built once, shared", *shared.rayScene)
+                       : std::string()) +
+      (shared.meshEdges ? fmt::format("; mesh edges {:.2f} ms, built once, shared", *shared.meshEdges) : std::string());
   if (motion)
-    fmt::print("G-buffer raster {:.2f} ms (median of {}){}\n\n{}", median(gbufferMs), gbufferMs.size(), rayScene,
+    fmt::print("G-buffer raster {:.2f} ms (median of {}){}\n\n{}", median(gbufferMs), gbufferMs.size(), sharedBuilt,
                reportToText(report));
   else
     fmt::print(
         "G-buffer raster {:.2f} ms steady (median of {}), {:.2f} ms first; its storage made at setup {:.2f} ms{}\n\n{}",
-        median(gbufferMs), gbufferMs.size(), gbufferFirstMs, gbufferSetupMs, rayScene, reportToText(report));
+        median(gbufferMs), gbufferMs.size(), gbufferFirstMs, gbufferSetupMs, sharedBuilt, reportToText(report));
   if (!options.jsonPath.empty()) {
     writeTextFile(options.jsonPath, reportToJson(report));
     fmt::print("wrote {}\n", options.jsonPath);

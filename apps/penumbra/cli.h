@@ -208,14 +208,16 @@ class OutputLock {
   int fd_ = -1;
 };
 
-// Builds the scene's shared Embree scene (Scene::caches) before any technique is timed and returns the
-// milliseconds it took: the ray-traced techniques then share it, and none of their times includes it
-// (whichever ran first would otherwise pay for all). Reports show it apart, as the G-buffer's time.
-// Nothing is built (nullopt) when none of `techniques` traces rays (TechniqueInfo::tracesRays).
-std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<std::string>& techniques);
-// The same for the meshes' edge adjacency (sharedMeshEdges), which the silhouette-finding techniques
-// share (TechniqueInfo::usesMeshEdges); nullopt when none of `techniques` uses it.
-std::optional<double> buildSharedMeshEdges(const Scene& scene, const std::vector<std::string>& techniques);
+// Builds what the techniques share from the scene's geometry (Scene::caches) before any technique is
+// timed and returns the milliseconds each took: the Embree scene, used by the ray-traced techniques
+// (TechniqueInfo::tracesRays), and the meshes' edge adjacency (sharedMeshEdges), used by the
+// silhouette-finding ones (TechniqueInfo::usesMeshEdges). None of their times then includes them
+// (whichever ran first would otherwise pay for all); reports show them apart, as the G-buffer's time.
+// Each is built (and its time set) only when one of `techniques` uses it.
+struct SharedBuildMs {
+  std::optional<double> rayScene, meshEdges;
+};
+SharedBuildMs buildSharedCaches(const Scene& scene, const std::vector<std::string>& techniques);
 
 // Every technique name if `names` is empty; otherwise the names, checked against the registry.
 std::vector<std::string> techniqueList(const std::vector<std::string>& names);

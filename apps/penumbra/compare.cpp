@@ -450,12 +450,11 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
   fmt::print("{}\n{} frames: {}\n", describeSetup(setup), motion.frames, describeMotion(motion));
   std::vector<std::string> runHere = names;
   runHere.push_back(kReference);  // the truth, unless its cache has it
-  const double raySceneMs = buildSharedRayScene(setup.scene, runHere).value_or(0.0);
-  const double meshEdgesMs = buildSharedMeshEdges(setup.scene, runHere).value_or(0.0);
+  const SharedBuildMs shared = buildSharedCaches(setup.scene, runHere);
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"frames", fmt::format("{}", motion.frames)},
-                     {"ray_scene_ms", fmt::format("{:.2f}", raySceneMs)},
-                     {"mesh_edges_ms", fmt::format("{:.2f}", meshEdgesMs)},
+                     {"ray_scene_ms", fmt::format("{:.2f}", shared.rayScene.value_or(0.0))},
+                     {"mesh_edges_ms", fmt::format("{:.2f}", shared.meshEdges.value_or(0.0))},
                      {"timings",
                       "median over the frames of one technique instance (the first frame builds what "
                       "later ones reuse); the scene's Embree scene and its meshes' edge adjacency are built once "
@@ -583,12 +582,11 @@ int runCompare(const CompareOptions& options) {
 
   std::vector<std::string> runHere = names;
   runHere.push_back(kReference);  // the truth, unless its cache has it
-  const double raySceneMs = buildSharedRayScene(setup.scene, runHere).value_or(0.0);
-  const double meshEdgesMs = buildSharedMeshEdges(setup.scene, runHere).value_or(0.0);
+  const SharedBuildMs shared = buildSharedCaches(setup.scene, runHere);
   Report report = beginReport("compare", setup, baseline);
   report.settings = {{"gbuffer_ms", fmt::format("{:.2f}", gbufferMs)},
-                     {"ray_scene_ms", fmt::format("{:.2f}", raySceneMs)},
-                     {"mesh_edges_ms", fmt::format("{:.2f}", meshEdgesMs)},
+                     {"ray_scene_ms", fmt::format("{:.2f}", shared.rayScene.value_or(0.0))},
+                     {"mesh_edges_ms", fmt::format("{:.2f}", shared.meshEdges.value_or(0.0))},
                      {"timings",
                       "one frame per technique, its first: it builds its maps and caches and faults in fresh "
                       "memory (penumbra bench gives steady frames apart); the scene's Embree scene and its "

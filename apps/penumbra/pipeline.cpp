@@ -183,23 +183,24 @@ void addFrameSettings(KeyValues& settings, const FrameOptions& options) {
 
 const Light& setupLight(const Setup& setup) { return setup.scene.lights[static_cast<size_t>(setup.lightIndex)]; }
 
-std::optional<double> buildSharedRayScene(const Scene& scene, const std::vector<std::string>& techniques) {
-  if (std::none_of(techniques.begin(), techniques.end(),
-                   [](const std::string& name) { return findTechnique(name).tracesRays; }))
-    return std::nullopt;
-  Timer timer;
-  RaySceneCache cache;
-  cache.get(scene);  // kept in scene.caches after this holder goes
-  return timer.elapsedMs();
-}
-
-std::optional<double> buildSharedMeshEdges(const Scene& scene, const std::vector<std::string>& techniques) {
-  if (std::none_of(techniques.begin(), techniques.end(),
-                   [](const std::string& name) { return findTechnique(name).usesMeshEdges; }))
-    return std::nullopt;
-  Timer timer;
-  for (size_t i = 0; i < scene.objects.size(); ++i) sharedMeshEdges(scene, i);  // kept in scene.caches
-  return timer.elapsedMs();
+SharedBuildMs buildSharedCaches(const Scene& scene, const std::vector<std::string>& techniques) {
+  const auto anyUses = [&](bool TechniqueInfo::*what) {
+    return std::any_of(techniques.begin(), techniques.end(),
+                       [&](const std::string& name) { return findTechnique(name).*what; });
+  };
+  SharedBuildMs ms;
+  if (anyUses(&TechniqueInfo::tracesRays)) {
+    Timer timer;
+    RaySceneCache cache;
+    cache.get(scene);  // kept in scene.caches after this holder goes
+    ms.rayScene = timer.elapsedMs();
+  }
+  if (anyUses(&TechniqueInfo::usesMeshEdges)) {
+    Timer timer;
+    for (size_t i = 0; i < scene.objects.size(); ++i) sharedMeshEdges(scene, i);  // kept in scene.caches
+    ms.meshEdges = timer.elapsedMs();
+  }
+  return ms;
 }
 
 void checkPrefixedParams(const std::vector<std::string>& params, const std::vector<std::string>& techniques) {
