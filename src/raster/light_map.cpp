@@ -45,9 +45,9 @@
 // crosses it once. Along the axis the floor has one depth, the reference one, and keeps its texels.
 // A planar light (own axis) along a world axis gets the same window and lattice.
 //
-// With LightMapLayers::NearestAndFarthest (or NearestDepthAndFarthest) the same rasterization also keeps each texel's
-// deepest surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon techniques' far layer costs no second
-// pass over the triangles.
+// With LightMapLayers::NearestAndFarthest (or NearestDepthAndFarthest) the same rasterization also
+// keeps each texel's deepest surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon
+// techniques' far layer costs no second pass over the triangles.
 #include <algorithm>
 #include <array>
 #include <cmath>
