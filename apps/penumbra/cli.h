@@ -122,12 +122,14 @@ struct TechniqueRun {
   Params params;
   Image<float> v;
   PassTimings timings;
+  double setupMs = 0.0;       //!< reserve() of the instance this call built (0 for one given in `instance`)
   double firstFrameMs = 0.0;  //!< prepare + visibility of the first run
   std::vector<std::pair<std::string, double>> stats;
 };
 // Builds the technique from `given` and runs prepare + visibility `repeat` times (timings: median of
 // each pass over the runs after the first when there are several, the first run alone otherwise;
-// firstFrameMs: the first run's total; V and stats: the last run). With `instance`, the technique object is
+// setupMs: the new instance's reserve() for the G-buffer's size; firstFrameMs: the first run's total;
+// V and stats: the last run). With `instance`, the technique object is
 // kept there and the next call with it reuses it instead of building another (a sequence's frames,
 // where a frame's prepare may reuse what the previous one built, as a renderer's would); `given`
 // must then be the same at every call. With `target`, V is written there instead of into run.v: the

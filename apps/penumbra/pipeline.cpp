@@ -332,7 +332,15 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
   run.name = info.name;
   run.params = resolveParams(info.name, info.params, given);
   std::unique_ptr<ShadowTechnique> fresh;
-  if (!instance || !*instance) fresh = info.create(run.params);
+  if (!instance || !*instance) {
+    fresh = info.create(run.params);
+    // Its frames' storage made before the first frame, as an engine makes its render targets when its
+    // window is sized (ShadowTechnique::reserve): the first frame then measures a frame, and the making
+    // of the memory is reported apart (setupMs).
+    const Timer timer;
+    fresh->reserve(gbuffer.width(), gbuffer.height());
+    run.setupMs = timer.elapsedMs();
+  }
   ShadowTechnique* technique = fresh ? fresh.get() : instance->get();
   ProgressBar bar(info.name);
   technique->setProgressCallback(bar.callback());

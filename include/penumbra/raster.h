@@ -100,5 +100,8 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
 // every frame then costs a pass over its memory, not fresh pages.
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out,
                     LightMapFit fit = LightMapFit::Tight, LightMapLayers layers = LightMapLayers::Nearest);
+// The storage of a size x size map of these layers made in `out` and its pages touched, for
+// ShadowTechnique::reserve: a later renderLightMap into it of that size allocates nothing.
+void reserveLightMap(LightMap& out, int size, LightMapLayers layers = LightMapLayers::Nearest);
 
 }  // namespace penumbra

@@ -65,6 +65,12 @@ class ShadowTechnique {
   void prepare(const Scene& scene, const Light& light);
   // v is resized to the G-buffer's size by the technique.
   void visibility(const GBuffer& gbuffer, Image<float>& v);
+  // Makes the storage that frames of a width x height image reuse (its light maps at its map size,
+  // its per-pixel buffers) and touches its pages, as an engine makes its render targets when its
+  // window is sized, so that the first frame faults in no fresh memory for them. Optional: a frame
+  // makes whatever is missing and remakes what another size needs; V does not depend on it. The
+  // caller times it apart (penumbra bench's setup_ms).
+  void reserve(int width, int height);
   // The passes of the last prepare() followed by those of the last visibility(): each call's finer
   // passes (endPass) and then its own, "prepare" or "visibility", which is the rest of the call.
   // Virtual only for a technique run as several instances of another (convex_parts.h), which adds
@@ -105,6 +111,8 @@ class ShadowTechnique {
     return horizonLight_ ? HorizonBound{horizonMode_, &*horizonLight_} : HorizonBound{};
   }
   virtual void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) = 0;
+  // A technique whose frames need more than a few MiB of storage makes it here; none by default.
+  virtual void reserveImpl(int width, int height) {}
 
   ProgressCallback progress_;
   PassTimings timings_;

@@ -2,6 +2,7 @@
 #include "penumbra/technique.h"
 
 #include "core/horizon.h"
+#include "penumbra/error.h"
 
 namespace penumbra {
 
@@ -23,6 +24,11 @@ void ShadowTechnique::visibility(const GBuffer& gbuffer, Image<float>& v) {
   visibilityImpl(gbuffer, v);
   if (horizonLight_ && !horizonInRows_) clampToHorizon(gbuffer, horizonBound(), v);
   timings_.add("visibility", passTimer_.elapsedMs());
+}
+
+void ShadowTechnique::reserve(int width, int height) {
+  if (width < 1 || height < 1) fail("{}: reserve({}, {}): expected an image of at least 1 x 1", name(), width, height);
+  reserveImpl(width, height);
 }
 
 void ShadowTechnique::endPass(std::string name) {

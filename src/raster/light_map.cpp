@@ -198,6 +198,17 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
   return m;
 }
 
+void reserveLightMap(LightMap& out, int size, LightMapLayers layers) {
+  if (size < 1 || size > raster::kMaxImageSize)
+    fail("reserveLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
+  // The fills renderLightMap starts from, so the pages are touched by the threads that fill them.
+  resetInParallel(out.lsDepth, size, size, kInfinity);
+  if (layers == LightMapLayers::Nearest || layers == LightMapLayers::NearestAndFarthest)
+    resetInParallel(out.objectId, size, size, kNoObject);
+  if (layers == LightMapLayers::NearestAndFarthest || layers == LightMapLayers::NearestDepthAndFarthest)
+    resetInParallel(out.lsFarDepth, size, size, kInfinity);
+}
+
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit,
                     LightMapLayers layers) {
   if (size < 1 || size > raster::kMaxImageSize)

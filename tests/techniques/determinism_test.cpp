@@ -5,6 +5,8 @@
 // set with tbb::global_control (which also bounds any pool Embree's BVH builds use) around a
 // tbb::task_arena of that many threads.
 //
+// Storage reserved before the first frame (ShadowTechnique::reserve) changes no V.
+//
 // Over a sequence (include/penumbra/motion.h), one instance carried from frame to frame, as compare
 // and bench run it, gives each frame the V a fresh instance gives (stable light maps included).
 //
@@ -155,6 +157,27 @@ TEST(Determinism, OneInstanceAcrossTheFramesOfASequenceGivesEachFrameAFreshInsta
           << info.name << " on " << s->scene.name << ", frame " << frame
           << ": the instance carried from the previous frames differs from a fresh one, first at pixel " << first;
     }
+  }
+}
+
+// ShadowTechnique::reserve makes storage only: an instance whose frames' storage was made before its
+// first frame, for the G-buffer's size or for another one (which the frame then remakes), gives the V
+// of one without; a size below 1 x 1 is refused.
+TEST(Determinism, StorageReservedBeforeTheFirstFrameChangesNoV) {
+  for (const TechniqueInfo& info : techniqueRegistry()) {
+    const TestScene* s = acceptedScene(info);
+    if (s == nullptr) continue;
+    const Image<float> plain = runWithThreads(*create(info), *s, 2);
+    for (const auto& [width, height] : {std::pair{kImageSize, kImageSize}, std::pair{40, 24}}) {
+      auto reserved = create(info);
+      reserved->reserve(width, height);
+      const Image<float> v = runWithThreads(*reserved, *s, 2);
+      size_t first = 0;
+      EXPECT_EQ(differingPixels(plain, v, first), 0u)
+          << info.name << " on " << s->scene.name << ", storage reserved for " << width << " x " << height
+          << ": differs from an instance without, first at pixel " << first;
+    }
+    EXPECT_THROW(create(info)->reserve(0, kImageSize), Error) << info.name;
   }
 }
 

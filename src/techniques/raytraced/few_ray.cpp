@@ -54,6 +54,11 @@ void FewRayFrame::reset(int w, int h) {
   penumbra.assign(tiles.size(), 0);
 }
 
+void FewRayFrame::reserve(int w, int h) {
+  reset(w, h);  // sums, as std::vector makes them: zeroed
+  for (Image<float>* image : {&noisy, &radius, &reach, &scratch}) resetInParallel(*image, w, h, 0.0f);
+}
+
 TileRayTracer::TileRayTracer(const RayScene& scene, const Light& light, float epsilon, int samplesPerPixel,
                              uint64_t seed)
     : scene_(scene), light_(light), epsilon_(epsilon), seed_(seed) {

@@ -72,6 +72,8 @@ struct FewRayFrame {
   Image<float> noisy, radius, reach, scratch;
 
   void reset(int w, int h);
+  // reset, with every per-pixel buffer made at w x h and its pages touched (ShadowTechnique::reserve).
+  void reserve(int w, int h);
   RaySums& at(int x, int y) { return sums[static_cast<size_t>(y) * width + x]; }
   const RaySums& at(int x, int y) const { return sums[static_cast<size_t>(y) * width + x]; }
   int tileOf(int x, int y) const { return (y / kTile) * tilesX + x / kTile; }

@@ -54,8 +54,15 @@ class HybridTechnique final : public ShadowTechnique {
   std::vector<std::pair<std::string, double>> stats() const override { return state_.stats("classify"); }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestDepth;  // compares depths only
+
+  void reserveImpl(int width, int height) override {
+    reserveShadowMap(options_.lightMap, map_, kLayers);
+    state_.frame.reserve(width, height);
+  }
+
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    createShadowMap(scene, light, options_.lightMap, map_, kLayers);
     // The rays and the clamp look from the map's origin too (shadow_map.h): under map_fit=stable a light
     // moving within one lattice cell then changes nothing, as for every light-map technique.
     const Light atOrigin = lightAtMapOrigin(light, map_);

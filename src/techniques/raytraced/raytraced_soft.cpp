@@ -44,6 +44,7 @@ class RaytracedSoftTechnique final : public ShadowTechnique {
   std::vector<std::pair<std::string, double>> stats() const override { return state_.stats("probe"); }
 
  private:
+  void reserveImpl(int width, int height) override { state_.frame.reserve(width, height); }
   void prepareImpl(const Scene& scene, const Light& light) override { state_.prepare(scene, light); }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;

@@ -54,9 +54,16 @@ class KirschTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "kirsch"; }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestAndFarthest;
+
+  void reserveImpl(int, int) override {
+    reserveShadowMap(options_.lightMap, map_, kLayers);
+    plm::reserveRibbons(options_.lightMap.size, farthest_, widths_);
+  }
+
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "kirsch");
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "kirsch");

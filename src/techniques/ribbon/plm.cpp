@@ -347,6 +347,11 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   return edges;
 }
 
+void reserveRibbons(int mapSize, Image<float>& far, Image<RibbonTexel>& ribbons) {
+  resetInParallel(far, mapSize, mapSize, kInfinity);
+  resetInParallel(ribbons, mapSize, mapSize, kNoRibbon);
+}
+
 void farthestSurface(const LightMap& map, const Space& space, Image<float>& far) {
   if (map.lsFarDepth.size() != map.lsDepth.size())
     fail("farthestSurface: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest)");
@@ -1006,9 +1011,21 @@ class PlmTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "plm"; }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestAndFarthest;
+
+  void reserveImpl(int, int) override {
+    const int n = options_.lightMap.size;
+    reserveShadowMap(options_.lightMap, map_, kLayers);
+    plm::reserveRibbons(n, farthest_, ribbons_);
+    resetInParallel(limits_, n, n, PlmTexel{});
+    resetInParallel(g_, n, n, 0.0f);
+    resetInParallel(ribbonAt_, n, n, uint8_t{0});
+    resetInParallel(footprint2x2_, n, n, uint8_t{0});
+  }
+
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestAndFarthest);
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     const Light& light = *light_;
     setHorizonClamp(options_.lightMap.horizon, light);

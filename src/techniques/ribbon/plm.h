@@ -194,6 +194,9 @@ inline void edgeLines(const std::vector<Edge>& edges, std::vector<EdgeLine>& out
 // From the light map's far layer (rendered with LightMapLayers::NearestAndFarthest; Error without
 // it), into `far`, which keeps its storage where it is large enough.
 void farthestSurface(const LightMap& map, const Space& space, Image<float>& far);
+// The storage farthestSurface and rasterizeRibbons fill for a mapSize x mapSize map made in `far`
+// and `ribbons`, their pages touched (ShadowTechnique::reserve).
+void reserveRibbons(int mapSize, Image<float>& far, Image<RibbonTexel>& ribbons);
 
 // Which candidate texels of a ribbon may compete for a texel at all (before the priority decides
 // among them); every test is made per edge and texel, so a dropped candidate leaves the texel to the

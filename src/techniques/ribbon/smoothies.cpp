@@ -53,10 +53,17 @@ class SmoothiesTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "smoothies"; }
 
  private:
+  // Its compares and ribbons read depths only (the ribbons' filter takes no coverage).
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestDepthAndFarthest;
+
+  void reserveImpl(int, int) override {
+    reserveShadowMap(options_.lightMap, map_, kLayers);
+    plm::reserveRibbons(options_.lightMap.size, farthest_, smoothies_);
+  }
+
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "smoothies");
-    // Its compares and ribbons read depths only (the ribbons' filter takes no coverage).
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, LightMapLayers::NearestDepthAndFarthest);
+    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "smoothies");

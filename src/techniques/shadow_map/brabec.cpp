@@ -733,6 +733,16 @@ BrabecTechnique::BrabecTechnique(const BrabecOptions& options) : options_(option
     fail("brabec: jitter = {} is not valid: expected a float in [0, 0.5] (texels)", options.jitter);
 }
 
+void BrabecTechnique::reserveImpl(int width, int height) {
+  reserveShadowMap(options_.lightMap, map_);
+  if (!options_.interpolate) return;  // the interpolation's per-pixel buffers (visibilityImpl)
+  const size_t count = static_cast<size_t>(width) * height;
+  scratchClass_.resize(count);
+  scratchKey_.resize(count);
+  scratchKnown_.resize(count);
+  scratchDirection_.resize(2 * count);
+}
+
 void BrabecTechnique::prepareImpl(const Scene& scene, const Light& sceneLight) {
   createShadowMap(scene, sceneLight, options_.lightMap, map_);
   light_ = lightAtMapOrigin(sceneLight, map_);  // a receiver's facing is told from the map's origin

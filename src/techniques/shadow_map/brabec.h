@@ -275,6 +275,7 @@ class BrabecTechnique final : public ShadowTechnique {
 
  private:
   friend struct BrabecTestAccess;  // tests hold classifyRow to classify, pixel for pixel
+  void reserveImpl(int width, int height) override;
   void prepareImpl(const Scene& scene, const Light& light) override;
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
   // What the hard test found for one camera pixel, and the warped point the searches start from.

@@ -23,8 +23,12 @@ class HardShadowTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "hard"; }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestDepth;  // compares depths only
+
+  void reserveImpl(int, int) override { reserveShadowMap(options_.lightMap, map_, kLayers); }
+
   void prepareImpl(const Scene& scene, const Light& light) override {
-    createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    createShadowMap(scene, light, options_.lightMap, map_, kLayers);
     setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
   }
 

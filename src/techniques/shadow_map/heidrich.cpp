@@ -317,6 +317,11 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
   return skin;
 }
 
+void clearBehindLayer(int size, Image<Vec2>& behind, std::vector<uint8_t>& behindRows) {
+  resetInParallel(behind, size, size, Vec2(kUncovered, kInfinity));
+  behindRows.assign(static_cast<size_t>(size), 0);
+}
+
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
                             std::vector<uint8_t>& behindRows, Image<float>& frontDepth,
                             std::vector<uint8_t>& skinRows) {
@@ -325,8 +330,7 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
   // them when the size changed). Most rows of a map never hold a skin.
   const auto n = static_cast<size_t>(view.size);
   if (behind.width() != view.size || behind.height() != view.size || behindRows.size() != n) {
-    resetInParallel(behind, view.size, view.size, noSkin);
-    behindRows.assign(n, 0);
+    clearBehindLayer(view.size, behind, behindRows);
   } else {
     tbb::parallel_for(tbb::blocked_range<int>(0, view.size, 16), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
@@ -508,6 +512,8 @@ ShadowReceiver receiverInMap(const LightMap& map, const Vec3& lsP, const Vec3& l
 
 namespace {
 
+// The sample points' maps: their compares and skins read depths only.
+constexpr LightMapLayers kMapLayers = LightMapLayers::NearestDepth;
 constexpr float kLitShare = 0.5f;  // an uncovered texel: each end point's share of its sub-segment
 // Largest spread of the second channel over a lookup's 2x2 texels that is read as one skin.
 constexpr float kMaxBehindSpread = 0.25f;
@@ -625,6 +631,26 @@ HeidrichTechnique::HeidrichTechnique(const HeidrichOptions& options) : options_(
          options.edgeThreshold);
 }
 
+void HeidrichTechnique::reserveImpl(int, int) {
+  const auto samples = static_cast<size_t>(options_.subdivisions) + 1;
+  const size_t ends = 2 * static_cast<size_t>(options_.subdivisions);
+  const int n = options_.lightMap.size;
+  maps_.resize(samples);
+  for (LightMap& map : maps_) reserveShadowMap(options_.lightMap, map, kMapLayers);
+  visibility_.resize(ends);
+  behind_.resize(ends);
+  behindRows_.resize(ends);
+  for (size_t slot = 0; slot < ends; ++slot) {
+    resetInParallel(visibility_[slot], n, n, TwoChannelTexel{kInfinity, heidrich::kUncovered});
+    heidrich::clearBehindLayer(n, behind_[slot], behindRows_[slot]);
+  }
+  Scratch& w = scratch_;
+  resetInParallel(w.edges, n, n, uint8_t{0});
+  resetInParallel(w.front, n, n, heidrich::kUncovered);
+  resetInParallel(w.frontDepth, n, n, kInfinity);
+  resetInParallel(w.coverage, n, n, uint8_t{0});
+}
+
 void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   setHorizonClamp(options_.lightMap.horizon, light);  // its maps look from several points: the light itself
   prepared_ = false;                                  // a failed prepare() leaves nothing for visibility() to use
@@ -646,8 +672,7 @@ void HeidrichTechnique::prepareImpl(const Scene& scene, const Light& light) {
   for (size_t j = 0; j < samples; ++j) {
     const float u = static_cast<float>(j) / static_cast<float>(k);
     const Vec3 wsSample = light.a() + u * (light.b() - light.a());
-    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.lightMap, maps_[j],
-                    LightMapLayers::NearestDepth);  // its compares and skins read depths only
+    createShadowMap(scene, Light::disk(wsSample, frame.z, tiny), options_.lightMap, maps_[j], kMapLayers);
     // The point the map looks from: the sample itself, or its lattice point in a stable map, so that
     // the facing test and the map agree.
     wsSamples_.push_back(maps_[j].wsOrigin);

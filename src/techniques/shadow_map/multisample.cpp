@@ -67,6 +67,14 @@ class MultisampleTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "multisample"; }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestDepth;
+
+  void reserveImpl(int, int) override {
+    maps_.resize(CmjSampler(static_cast<uint32_t>(options_.samples)).count());
+    for (LightMap& map : maps_) reserveShadowMap(options_.lightMap, map, kLayers);
+    reserveShadowMap(options_.lightMap, scratch_, kLayers);
+  }
+
   void prepareImpl(const Scene& scene, const Light& light) override {
     setHorizonClamp(options_.lightMap.horizon, light);  // one map per sample point: the light itself
     weights_.clear();
@@ -79,7 +87,7 @@ class MultisampleTechnique final : public ShadowTechnique {
       // Depths only (only depths are compared: half the memory of N maps with ids), rendered into the
       // scratch map, whose depth storage goes to the sample in exchange for the storage the sample had
       // before: a steady prepare touches no fresh page.
-      createShadowMap(scene, pointLight, options_.lightMap, scratch_, LightMapLayers::NearestDepth);
+      createShadowMap(scene, pointLight, options_.lightMap, scratch_, kLayers);
       LightMap& map = maps_[k];
       Image<float> previousDepth = std::move(map.lsDepth);
       map = std::move(scratch_);

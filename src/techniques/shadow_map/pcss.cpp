@@ -73,9 +73,13 @@ class PcssTechnique final : public ShadowTechnique {
   std::string_view name() const override { return "pcss"; }
 
  private:
+  static constexpr LightMapLayers kLayers = LightMapLayers::NearestDepth;  // compares depths only
+
+  void reserveImpl(int, int) override { reserveShadowMap(options_.lightMap, map_, kLayers); }
+
   void prepareImpl(const Scene& scene, const Light& light) override {
     lightSize_ = options_.lightSize ? *options_.lightSize : light.extent();
-    createShadowMap(scene, light, options_.lightMap, map_, LightMapLayers::NearestDepth);  // compares depths only
+    createShadowMap(scene, light, options_.lightMap, map_, kLayers);
     setHorizonClamp(options_.lightMap.horizon, lightAtMapOrigin(light, map_));
     // Segment and rect lights: the taps lie on the light's own image in the map (see the file
     // comment), not on the disk that circumscribes it.

@@ -36,6 +36,10 @@ void createShadowMap(const Scene& scene, const Light& light, const LightMapOptio
   renderLightMap(scene, light, options.size, out, options.fit, layers);
 }
 
+void reserveShadowMap(const LightMapOptions& options, LightMap& out, LightMapLayers layers) {
+  reserveLightMap(out, options.size, layers);
+}
+
 Light lightAtMapOrigin(const Light& light, const LightMap& map) {
   if (light.isDirectional() || map.wsOrigin == light.center()) return light;
   return lightMovedTo(light, map.wsOrigin);

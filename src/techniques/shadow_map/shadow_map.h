@@ -62,6 +62,9 @@ LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapO
 // The same into `out`, reusing its storage (renderLightMap); `out` is untouched when the size is refused.
 void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
                      LightMapLayers layers = LightMapLayers::Nearest);
+// The storage createShadowMap fills at the options' map size made in `out` (reserveLightMap), for a
+// technique's reserveImpl.
+void reserveShadowMap(const LightMapOptions& options, LightMap& out, LightMapLayers layers = LightMapLayers::Nearest);
 
 // The light as `map` sees it: moved so that its centre sample is the map's origin. A stable fit
 // (LightMapFit::Stable) snaps that origin to a world lattice, so whatever a technique takes from the
