@@ -457,7 +457,8 @@ int runCompareSequence(const CompareOptions& options, const Setup& setup, const 
                      {"mesh_edges_ms", fmt::format("{:.2f}", shared.meshEdges.value_or(0.0))},
                      {"timings",
                       "median over the frames of one technique instance (the first frame builds what "
-                      "later ones reuse); the scene's Embree scene and its meshes' edge adjacency are built once "
+                      "later ones reuse, into storage made before it: reserve, in none of its times); the scene's "
+                      "Embree scene and its meshes' edge adjacency are built once "
                       "before any technique runs (ray_scene_ms, mesh_edges_ms) and shared by the techniques that "
                       "use them, in none of their times"}};
   addFrameSettings(report.settings, options.frame);
@@ -588,8 +589,9 @@ int runCompare(const CompareOptions& options) {
                      {"ray_scene_ms", fmt::format("{:.2f}", shared.rayScene.value_or(0.0))},
                      {"mesh_edges_ms", fmt::format("{:.2f}", shared.meshEdges.value_or(0.0))},
                      {"timings",
-                      "one frame per technique, its first: it builds its maps and caches and faults in fresh "
-                      "memory (penumbra bench gives steady frames apart); the scene's Embree scene and its "
+                      "one frame per technique, its first: it builds its maps and caches into storage made "
+                      "for it before the frame (reserve, in none of its times; penumbra bench gives that "
+                      "setup and steady frames apart); the scene's Embree scene and its "
                       "meshes' edge adjacency are built once before any technique runs (ray_scene_ms, "
                       "mesh_edges_ms) and shared by the techniques that use them, in none of their times"}};
   addFrameSettings(report.settings, options.frame);

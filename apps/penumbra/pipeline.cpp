@@ -351,7 +351,7 @@ TechniqueRun runTechnique(const Setup& setup, const GBuffer& gbuffer, const Tech
     technique->prepare(setup.scene, setupLight(setup));
     technique->visibility(gbuffer, v);
     if (r == 0) run.firstFrameMs = technique->timings().total();
-    // The first run builds what the later ones reuse and faults in fresh memory: with more than one
+    // The first run builds what the later ones reuse and faults in what reserve did not make: with more than one
     // run, the medians are over the steady runs after it.
     if (r == 0 && runs > 1) continue;
     for (const auto& [pass, ms] : technique->timings().passes) {
