@@ -1094,13 +1094,22 @@ class PlmTechnique final : public ShadowTechnique {
         const int j1 = std::min(j + 1, n - 1);
         const uint8_t *ribbonAt0 = ribbonAt_.row(j), *ribbonAt1 = ribbonAt_.row(j1);
         uint8_t* footprint = footprint2x2_.row(j);
+        // No texel's c below zetaNone: the ribbon-free class, without reading the texels, in a loop the
+        // compiler vectorizes (the last column's right neighbours are itself, clamped as in the fetch);
+        // the rest are classed below, in the few rows and runs that have them.
+        const int last = n - 1;
+        uint8_t anyRibbon = 0;
+        for (int i = 0; i < last; ++i) {
+          const uint8_t below = (ribbonAt0[i] | ribbonAt0[i + 1] | ribbonAt1[i] | ribbonAt1[i + 1]) & kRibbonBelowNone;
+          footprint[i] = below ? kFootprintMixed : kFootprintRibbonFree;
+          anyRibbon |= below;
+        }
+        const uint8_t belowLast = (ribbonAt0[last] | ribbonAt1[last]) & kRibbonBelowNone;
+        footprint[last] = belowLast ? kFootprintMixed : kFootprintRibbonFree;
+        if (!(anyRibbon | belowLast)) continue;
         for (int i = 0; i < n; ++i) {
-          const int i1 = std::min(i + 1, n - 1);
-          // No texel's c below zetaNone: the ribbon-free class, without reading the texels.
-          if (((ribbonAt0[i] | ribbonAt0[i1] | ribbonAt1[i] | ribbonAt1[i1]) & kRibbonBelowNone) == 0) {
-            footprint[i] = kFootprintRibbonFree;
-            continue;
-          }
+          if (footprint[i] == kFootprintRibbonFree) continue;
+          const int i1 = std::min(i + 1, last);
           footprint[i] = continuousRibbon(texelAt(i, j), texelAt(i1, j), texelAt(i, j1), texelAt(i1, j1))
                              ? kFootprintOneRibbon
                              : kFootprintMixed;
