@@ -49,6 +49,15 @@ struct LightSample {
   float weight;      //!< radiance-profile weight, mean 1 over the emitting area (1 when uniform)
 };
 
+// What of a sample (Light::sample) depends on u alone, for a pattern of u used from many points: the
+// point on the emitter (disk, rect, segment, polygon), the unscaled concentric-disk point (sphere) or
+// the whole sample (directional). Light::sampleFrom(p, light.patternPoint(u)) is sample(p, u) to the bit.
+struct LightPatternPoint {
+  Vec3 onLight{0.0f};  //!< the emitter's point; a directional light's direction
+  Vec2 disk{0.0f};     //!< a sphere's concentric-disk point of u
+  float weight = 1.0f;
+};
+
 class Light {
  public:
   // Factories validate their input and throw Error for a degenerate light (zero or non-finite
@@ -106,6 +115,10 @@ class Light {
   // A point of the emitting area for u in [0,1)^2, as seen from p (see the conventions above).
   // For a segment only u.x is used. Stratified u gives stratified samples.
   LightSample sample(const Vec3& wsP, const Vec2& u) const;
+  // sample() in two halves, for a fixed pattern of u seen from many points (the half that depends on u
+  // alone made once per u): sampleFrom(p, patternPoint(u)) == sample(p, u), bit for bit.
+  LightPatternPoint patternPoint(const Vec2& u) const;
+  LightSample sampleFrom(const Vec3& wsP, const LightPatternPoint& point) const;
 
   // Unshadowed irradiance at p with unit normal n (only for shading; never for V).
   float irradiance(const Vec3& wsP, const Vec3& wsN) const;

@@ -308,8 +308,55 @@ float Light::apparentRadius(const Vec3& wsP) const {
   return std::asin(r / d);
 }
 
-LightSample Light::sample(const Vec3& wsP, const Vec2& u) const {
-  Vec3 x;
+LightSample Light::sample(const Vec3& wsP, const Vec2& u) const { return sampleFrom(wsP, patternPoint(u)); }
+
+LightPatternPoint Light::patternPoint(const Vec2& u) const {
+  LightPatternPoint point;
+  switch (shape_) {
+    case LightShape::Sphere:
+      point.disk = concentricDisk(u);
+      break;
+    case LightShape::Disk: {
+      const Frame f = Frame::fromZ(normal_);
+      const Vec2 q = concentricDisk(u) * radius_;
+      point.onLight = center_ + q.x * f.x + q.y * f.y;
+      break;
+    }
+    case LightShape::Rect:
+      point.onLight = center_ + (2.0f * u.x - 1.0f) * u_ + (2.0f * u.y - 1.0f) * v_;
+      break;
+    case LightShape::Segment:
+      point.onLight = a_ + u.x * (b_ - a_);
+      break;
+    case LightShape::Polygon: {
+      // Pick a triangle by area with u.x, reuse the remainder of u.x inside it: stratified u stays
+      // stratified within each triangle.
+      size_t i = 0;
+      while (i + 1 < triangleCdf_.size() && u.x >= triangleCdf_[i]) ++i;
+      const float lo = i == 0 ? 0.0f : triangleCdf_[i - 1];
+      const float ux = std::min((u.x - lo) / (triangleCdf_[i] - lo), 0x1.fffffep-1f);
+      const Vec2 bc = uniformTriangle(Vec2(ux, u.y));
+      const auto& t = triangles_[i];
+      point.onLight = bc.x * vertices_[t[0]] + bc.y * vertices_[t[1]] + (1.0f - bc.x - bc.y) * vertices_[t[2]];
+      break;
+    }
+    case LightShape::Directional: {
+      const Frame f = Frame::fromZ(direction_);
+      const Vec2 q = concentricDisk(u);
+      const Vec2 offset = q * std::tan(0.5f * angularDiameter_);
+      if (profile_ == LightProfile::LimbDarkened) {
+        const float mu = std::sqrt(std::max(0.0f, 1.0f - glm::dot(q, q)));
+        // Divide by the law's mean over the disk, 1 - u/3, so the weights average to 1.
+        point.weight = (1.0f - kLimbDarkeningU * (1.0f - mu)) / (1.0f - kLimbDarkeningU / 3.0f);
+      }
+      point.onLight = glm::normalize(direction_ + offset.x * f.x + offset.y * f.y);
+      break;
+    }
+  }
+  return point;
+}
+
+LightSample Light::sampleFrom(const Vec3& wsP, const LightPatternPoint& point) const {
   switch (shape_) {
     case LightShape::Sphere: {
       const Vec3 toCenter = center_ - wsP;
@@ -321,51 +368,19 @@ LightSample Light::sample(const Vec3& wsP, const Vec2& u) const {
       const Frame f = Frame::fromZ(w);
       // The silhouette disk seen from p: centre at (d^2 - R^2)/d along w, radius R sqrt(d^2 - R^2)/d.
       const float h = std::sqrt(d2 - r2);
-      const Vec2 q = concentricDisk(u) * (radius_ * h / d);
+      const Vec2 q = point.disk * (radius_ * h / d);
       const Vec3 dir = glm::normalize((d2 - r2) / d * w + q.x * f.x + q.y * f.y);
       // The ray reaches the light at its front surface: the nearer root of |p + t dir - c| = R.
       const float b = glm::dot(dir, toCenter);
       const float t = b - std::sqrt(std::max(0.0f, b * b - (d2 - r2)));
       return {dir, t, 1.0f};
     }
-    case LightShape::Disk: {
-      const Frame f = Frame::fromZ(normal_);
-      const Vec2 q = concentricDisk(u) * radius_;
-      x = center_ + q.x * f.x + q.y * f.y;
+    case LightShape::Directional:
+      return {point.onLight, kInfinity, point.weight};
+    default:
       break;
-    }
-    case LightShape::Rect:
-      x = center_ + (2.0f * u.x - 1.0f) * u_ + (2.0f * u.y - 1.0f) * v_;
-      break;
-    case LightShape::Segment:
-      x = a_ + u.x * (b_ - a_);
-      break;
-    case LightShape::Polygon: {
-      // Pick a triangle by area with u.x, reuse the remainder of u.x inside it: stratified u stays
-      // stratified within each triangle.
-      size_t i = 0;
-      while (i + 1 < triangleCdf_.size() && u.x >= triangleCdf_[i]) ++i;
-      const float lo = i == 0 ? 0.0f : triangleCdf_[i - 1];
-      const float ux = std::min((u.x - lo) / (triangleCdf_[i] - lo), 0x1.fffffep-1f);
-      const Vec2 bc = uniformTriangle(Vec2(ux, u.y));
-      const auto& t = triangles_[i];
-      x = bc.x * vertices_[t[0]] + bc.y * vertices_[t[1]] + (1.0f - bc.x - bc.y) * vertices_[t[2]];
-      break;
-    }
-    case LightShape::Directional: {
-      const Frame f = Frame::fromZ(direction_);
-      const Vec2 q = concentricDisk(u);
-      const Vec2 offset = q * std::tan(0.5f * angularDiameter_);
-      float weight = 1.0f;
-      if (profile_ == LightProfile::LimbDarkened) {
-        const float mu = std::sqrt(std::max(0.0f, 1.0f - glm::dot(q, q)));
-        // Divide by the law's mean over the disk, 1 - u/3, so the weights average to 1.
-        weight = (1.0f - kLimbDarkeningU * (1.0f - mu)) / (1.0f - kLimbDarkeningU / 3.0f);
-      }
-      return {glm::normalize(direction_ + offset.x * f.x + offset.y * f.y), kInfinity, weight};
-    }
   }
-  const Vec3 d = x - wsP;
+  const Vec3 d = point.onLight - wsP;
   const float len = glm::length(d);
   if (!(len > 0.0f)) return {directionToCenter(wsP), 0.0f, 1.0f};
   return {d / len, len, 1.0f};

@@ -229,6 +229,36 @@ TEST(LightSample, SphereSamplesLieOnItsSilhouetteDisk) {
   EXPECT_EQ(light.sample(c, Vec2(0.3f, 0.7f)).distance, 0.0f);
 }
 
+// A pattern's u-only halves (Light::patternPoint), made once and used from many points as plm's probes
+// use them, give every point the sample that sample() gives it, on every shape; a sphere's samples from
+// a point inside it keep sample()'s distance 0.
+TEST(LightSample, PatternPointsMadeOnceGiveEveryPointItsSample) {
+  const std::vector<Light> lights = {
+      Light::sphere(Vec3(0, 1, 3), 1.2f),
+      Light::disk(Vec3(0, 0, 2), Vec3(0.2f, 0.1f, -1.0f), 0.75f),
+      Light::rect(Vec3(0, 0, 2), Vec3(0.6f, 0, 0), Vec3(0, 0.4f, 0.1f)),
+      Light::segment(Vec3(-1, 0, 2), Vec3(1, 0.5f, 2)),
+      Light::polygon({Vec3(0, 0, 2), Vec3(2, 0, 2), Vec3(2, 1, 2), Vec3(1, 1, 2), Vec3(1, 2, 2), Vec3(0, 2, 2)}),
+      Light::directional(Vec3(0, 1, 1), radians(8.0f), LightProfile::LimbDarkened)};
+  const CmjSampler sampler(16);
+  for (const Light& light : lights) {
+    std::vector<Vec2> us;
+    std::vector<LightPatternPoint> pattern;
+    for (uint32_t i = 0; i < sampler.count(); ++i) {
+      us.push_back(sampler.sample(i, 5));
+      pattern.push_back(light.patternPoint(us.back()));
+    }
+    for (const Vec3& p : {kP, Vec3(1.5f, 0.5f, -3.0f), Vec3(-2.0f, 0.0f, 0.5f), Vec3(0.0f, 1.0f, 3.0f)})
+      for (size_t k = 0; k < us.size(); ++k) {
+        const LightSample a = light.sampleFrom(p, pattern[k]), b = light.sample(p, us[k]);
+        EXPECT_EQ(a.wsDirection, b.wsDirection) << toString(light.shape()) << " sample " << k;
+        EXPECT_EQ(a.distance, b.distance) << toString(light.shape()) << " sample " << k;
+        EXPECT_EQ(a.weight, b.weight) << toString(light.shape()) << " sample " << k;
+      }
+  }
+  EXPECT_EQ(lights[0].sampleFrom(Vec3(0, 1, 3), lights[0].patternPoint(Vec2(0.3f, 0.7f))).distance, 0.0f);
+}
+
 TEST(LightSample, DirectionalSamplesStayWithinHalfTheAngularDiameter) {
   const Vec3 dir = glm::normalize(Vec3(0.3f, 1.0f, -0.4f));
   const float theta = radians(8.0f);

@@ -1276,10 +1276,11 @@ class PlmTechnique final : public ShadowTechnique {
     // positions and triangles are the same to the bit (a static scene under a moving light).
     const RayScene& rays = raysCache_.get(scene);
     const int n = map_.size;
-    Vec2 pattern[kProfileSamples];
+    // The grid's half of each sample, made once (Light::patternPoint; every probe sees the same grid).
+    LightPatternPoint pattern[kProfileSamples];
     for (int q = 0; q < kProfileSamples; ++q)
-      pattern[q] = Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
-                        (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid);
+      pattern[q] = light.patternPoint(Vec2((static_cast<float>(q % kProfileGrid) + 0.5f) / kProfileGrid,
+                                           (static_cast<float>(q / kProfileGrid) + 0.5f) / kProfileGrid));
     // The packets are fixed sixteens of the list, not cut from the threads' ranges: a texel's packet
     // neighbours are the same at any thread count, so V never rests on a lane's hit being the same
     // whatever else its packet holds.
@@ -1377,13 +1378,13 @@ class PlmTechnique final : public ShadowTechnique {
 
   // Probes a receiver with kProfileSamples rays to the light and, where it sees too little, puts b
   // just above it (true: the walk ends).
-  bool probe(const Light& light, const Vec2* pattern, const RayScene& rays, const LowerLimitWalk& w,
+  bool probe(const Light& light, const LightPatternPoint* pattern, const RayScene& rays, const LowerLimitWalk& w,
              const ProfileReceiver& receiver) {
     const Vec3 probe = receiver.wsHit - receiver.lift * w.ray.direction;
     Ray toLight[kProfileSamples];
     bool blocked[kProfileSamples];
     for (int q = 0; q < kProfileSamples; ++q) {
-      const LightSample sample = light.sample(probe, pattern[q]);
+      const LightSample sample = light.sampleFrom(probe, pattern[q]);
       toLight[q].origin = probe;
       toLight[q].direction = sample.wsDirection;
       toLight[q].tMax = sample.distance;  // kInfinity for a directional light
