@@ -58,7 +58,7 @@ class KirschTechnique final : public ShadowTechnique {
 
   void reserveImpl(int, int) override {
     reserveShadowMap(options_.lightMap, map_, kLayers);
-    plm::reserveRibbons(options_.lightMap.size, farthest_, widths_);
+    plm::reserveRibbons(options_.lightMap.size, widths_);
   }
 
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
@@ -68,11 +68,10 @@ class KirschTechnique final : public ShadowTechnique {
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
-    plm::farthestSurface(map_, space_, farthest_);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
-    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Inner, options_.marginTexels,
-                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, farthest_, widths_);
+    plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Inner, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, widths_);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
@@ -102,7 +101,6 @@ class KirschTechnique final : public ShadowTechnique {
   VisibilityToIllumination table_;
   Image<plm::RibbonTexel> widths_;
   std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges widths_ names
-  Image<float> farthest_;             //!< prepare()'s working image, kept between calls
   plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
 };
 

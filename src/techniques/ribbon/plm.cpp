@@ -29,7 +29,7 @@
 // Generation (Sec. 3.1): g is the light map of the light's centre sample (renderLightMap: the
 // topmost surface, which faces the light); the silhouette ribbons of plm.h give c and p_i with
 // "highest penumbra limit wins", taken only where a surface lies below the edge (plm.h's
-// farthestSurface) and, on an edge's inner side, only where the light map sees the edge's object
+// farthestZeta) and, on an edge's inner side, only where the light map sees the edge's object
 // (the inner side of one edge's line must not reach past a thin occluder's other edges). Deviation
 // (the clamp of Fig. 7 C, applied before the priority): a ribbon whose shadow is hidden from the
 // light's centre does not compete for the texel — on its outer side (or its inner side over another
@@ -347,24 +347,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   return edges;
 }
 
-void reserveRibbons(int mapSize, Image<float>& far, Image<RibbonTexel>& ribbons) {
-  resetInParallel(far, mapSize, mapSize, kInfinity);
-  resetInParallel(ribbons, mapSize, mapSize, kNoRibbon);
-}
-
-void farthestSurface(const LightMap& map, const Space& space, Image<float>& far) {
-  if (map.lsFarDepth.size() != map.lsDepth.size())
-    fail("farthestSurface: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest)");
-  far.resizeForOverwrite(map.size, map.size);  // every texel written below
-  tbb::parallel_for(tbb::blocked_range<int>(0, map.size, 16), [&](const tbb::blocked_range<int>& rows) {
-    for (int j = rows.begin(); j < rows.end(); ++j) {
-      const float* z = map.lsFarDepth.row(j);
-      float* row = far.row(j);
-      for (int i = 0; i < map.size; ++i)
-        row[i] = z[i] < kInfinity && (map.orthographic || z[i] > 0.0f) ? space.zeta(z[i]) : space.zetaNone;
-    }
-  });
-}
+void reserveRibbons(int mapSize, Image<RibbonTexel>& ribbons) { resetInParallel(ribbons, mapSize, mapSize, kNoRibbon); }
 
 namespace {
 
@@ -602,9 +585,11 @@ void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels&
   spanPass(path, s, count, out);
 }
 
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
-                      Image<RibbonTexel>& out) {
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
+                      float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out) {
+  const int mapSize = map.size;
+  if (map.lsFarDepth.width() != mapSize || map.lsFarDepth.height() != mapSize)
+    fail("rasterizeRibbons: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest)");
   // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
   out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = kRibbonTile;
@@ -688,6 +673,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
     // copied out once when the tile is done, and one span's geometry.
     float priority[kTile * kTile];
     RibbonTexel winners[kTile * kTile];
+    float far[kTile * kTile];  // the tile's far layer in zeta, taken where a ribbon reaches only
     RibbonSpanTexels span;
     // Each row's greatest priority (never below it: priorities only fall) and the tile's.
     float rowMax[kTile];
@@ -701,6 +687,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           std::fill_n(out.row(j) + ti * kTile, tileWidth, kNoRibbon);
         continue;
       }
+      for (int j = 0; j < tileHeight; ++j)
+        for (int i = 0; i < tileWidth; ++i)
+          far[j * kTile + i] = farthestZeta(map, space, ti * kTile + i, tj * kTile + j);
       std::fill(priority, priority + kTile * kTile, kInfinity);
       std::fill(winners, winners + kTile * kTile, kNoRibbon);
       std::fill(rowMax, rowMax + kTile, kInfinity);
@@ -863,7 +852,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int ma
           input.aqy = y - e.a.y;
           input.by = y - e.b.y;
           input.first = si0;
-          input.far = farthest.row(j) + si0;
+          input.far = far + (j - tj * kTile) * kTile + (si0 - ti * kTile);
           input.coverage = filter.coverage ? filter.coverage->row(j) + si0 : nullptr;
           input.top = filter.topDepth ? filter.topDepth->row(j) + si0 : nullptr;
           input.priority = prio;
@@ -1016,7 +1005,7 @@ class PlmTechnique final : public ShadowTechnique {
   void reserveImpl(int, int) override {
     const int n = options_.lightMap.size;
     reserveShadowMap(options_.lightMap, map_, kLayers);
-    plm::reserveRibbons(n, farthest_, ribbons_);
+    plm::reserveRibbons(n, ribbons_);
     resetInParallel(limits_, n, n, PlmTexel{});
     resetInParallel(g_, n, n, 0.0f);
     resetInParallel(ribbonAt_, n, n, uint8_t{0});
@@ -1033,9 +1022,8 @@ class PlmTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
-    plm::farthestSurface(map_, space_, farthest_);
-    plm::rasterizeRibbons(edges, space_, map_.size, plm::RibbonSides::Both, options_.marginTexels,
-                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, farthest_, ribbons_);
+    plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Both, options_.marginTexels,
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
     const int n = map_.size;
     limits_.resizeForOverwrite(n, n);
@@ -1293,7 +1281,8 @@ class PlmTechnique final : public ShadowTechnique {
           const int i = texels[k] % n, j = texels[k] / n;
           // Only receivers below the surface the map sees are probed: none where that is the deepest.
           const float seenDepth = map_.lsDepth(i, j);
-          if (!(space_.lsDepth(farthest_(i, j)) > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
+          const float farthest = space_.lsDepth(plm::farthestZeta(map_, space_, i, j));
+          if (!(farthest > seenDepth + 2.0f * map_.texelWorldSize(seenDepth))) continue;
           const float s = static_cast<float>(i) + 0.5f, t = static_cast<float>(j) + 0.5f;
           const float cDepth = space_.lsDepth(limits_(i, j).c);
           const float start = cDepth + map_.texelWorldSize(cDepth);
@@ -1413,7 +1402,6 @@ class PlmTechnique final : public ShadowTechnique {
   Image<uint8_t> ribbonAt_;                     //!< kRibbonHere | kRibbonBelowNone where a ribbon holds the texel
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
-  Image<float> farthest_;
   Image<plm::RibbonTexel> ribbons_;
   std::vector<plm::Edge> edges_;  //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;

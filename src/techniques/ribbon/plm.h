@@ -186,17 +186,19 @@ inline void edgeLines(const std::vector<Edge>& edges, std::vector<EdgeLine>& out
   for (const Edge& e : edges) out.emplace_back(e);
 }
 
-// The deepest surface along each texel's light ray (the light map's far layer), in zeta; zetaNone
-// where the texel sees nothing. A ribbon texel is only taken where a surface lies below the edge:
-// elsewhere there is nothing to receive its shadow (the border of a ground plane, seen from above,
-// would otherwise lay an inner ribbon over the ground itself, whose texels then interpolate with
-// the ribbons of the occluders above it).
-// From the light map's far layer (rendered with LightMapLayers::NearestAndFarthest; Error without
-// it), into `far`, which keeps its storage where it is large enough.
-void farthestSurface(const LightMap& map, const Space& space, Image<float>& far);
-// The storage farthestSurface and rasterizeRibbons fill for a mapSize x mapSize map made in `far`
-// and `ribbons`, their pages touched (ShadowTechnique::reserve).
-void reserveRibbons(int mapSize, Image<float>& far, Image<RibbonTexel>& ribbons);
+// The deepest surface along texel (i, j)'s light ray (the light map's far layer, rendered with
+// LightMapLayers::NearestAndFarthest or NearestDepthAndFarthest), in zeta; zetaNone where the texel
+// sees nothing. A ribbon texel is only taken where a surface lies below the edge: elsewhere there is
+// nothing to receive its shadow (the border of a ground plane, seen from above, would otherwise lay an
+// inner ribbon over the ground itself, whose texels then interpolate with the ribbons of the occluders
+// above it). rasterizeRibbons takes it where a ribbon reaches, not over the whole map.
+inline float farthestZeta(const LightMap& map, const Space& space, int i, int j) {
+  const float z = map.lsFarDepth(i, j);
+  return z < kInfinity && (map.orthographic || z > 0.0f) ? space.zeta(z) : space.zetaNone;
+}
+// The storage rasterizeRibbons fills for a mapSize x mapSize map made in `ribbons`, its pages touched
+// (ShadowTechnique::reserve).
+void reserveRibbons(int mapSize, Image<RibbonTexel>& ribbons);
 
 // Which candidate texels of a ribbon may compete for a texel at all (before the priority decides
 // among them); every test is made per edge and texel, so a dropped candidate leaves the texel to the
@@ -245,7 +247,7 @@ struct RibbonSpan {
   bool wantOuter = false;
   bool ties = false;                  //!< a priority equal to the texel's winner's takes it (the caller breaks the tie)
   bool orthographic = false;          //!< Space::orthographic
-  const float* far = nullptr;         //!< the far layer (zeta) from `first`
+  const float* far = nullptr;         //!< the far layer in zeta (farthestZeta) from `first`
   const int32_t* coverage = nullptr;  //!< the object the map sees from `first`; null: not filtered by it
   const float* top = nullptr;         //!< the topmost surface's depth from `first`; null: not filtered by it
   const float* priority = nullptr;    //!< the tile's priorities from `first`
@@ -268,8 +270,8 @@ bool spanPathAvailable(SpanPath path);
 void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out);
 
 // Into `out`, which keeps its storage where it is large enough.
-void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, const Image<float>& farthest,
-                      Image<RibbonTexel>& out);
+// `map` gives the far layer (farthestZeta; Error without it) and the size.
+void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
+                      float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out);
 
 }  // namespace penumbra::plm

@@ -250,8 +250,9 @@ TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilte
     const Light light = lightAtMapOrigin(sceneLight, map);
     const plm::Space space = plm::makeSpace(map, light, "test");
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map, space);
-    Image<float> farthest;
-    plm::farthestSurface(map, space, farthest);
+    Image<float> farthest(size, size);
+    for (int j = 0; j < size; ++j)
+      for (int i = 0; i < size; ++i) farthest(i, j) = plm::farthestZeta(map, space, i, j);
     struct Filter {
       const char* technique;
       plm::RibbonSides sides;
@@ -266,7 +267,7 @@ TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilte
       SCOPED_TRACE(std::string(name) + ", " + f.technique + "'s filter");
       constexpr float kMargin = 2.0f;
       Image<plm::RibbonTexel> ribbons;
-      plm::rasterizeRibbons(edges, space, size, f.sides, kMargin, f.filter, farthest, ribbons);
+      plm::rasterizeRibbons(edges, space, map, f.sides, kMargin, f.filter, ribbons);
       const Image<plm::RibbonTexel> expected =
           bruteForceRibbons(edges, space, size, f.sides, kMargin, f.filter, farthest);
       int covered = 0, mismatched = 0;
