@@ -166,6 +166,19 @@ Vec3 nearestWorldAxis(const Vec3& d) {
 
 bool isWorldAxis(const Vec3& d) { return (d.x == 0.0f) + (d.y == 0.0f) + (d.z == 0.0f) == 2; }
 
+void checkMapSize(int size, const char* caller) {
+  if (size < 1 || size > raster::kMaxImageSize)
+    fail("{}: map size must be within 1..{} texels (got {})", caller, raster::kMaxImageSize, size);
+}
+
+// Which of a map's optional layers `layers` asks for.
+bool keepsIds(LightMapLayers layers) {
+  return layers == LightMapLayers::Nearest || layers == LightMapLayers::NearestAndFarthest;
+}
+bool keepsFarthest(LightMapLayers layers) {
+  return layers == LightMapLayers::NearestAndFarthest || layers == LightMapLayers::NearestDepthAndFarthest;
+}
+
 }  // namespace
 
 Vec3 LightMap::unproject(float s, float t, float z) const {
@@ -199,27 +212,21 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
 }
 
 void reserveLightMap(LightMap& out, int size, LightMapLayers layers) {
-  if (size < 1 || size > raster::kMaxImageSize)
-    fail("reserveLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
+  checkMapSize(size, "reserveLightMap");
   // The fills renderLightMap starts from, so the pages are touched by the threads that fill them.
   resetInParallel(out.lsDepth, size, size, kInfinity);
-  if (layers == LightMapLayers::Nearest || layers == LightMapLayers::NearestAndFarthest)
-    resetInParallel(out.objectId, size, size, kNoObject);
-  if (layers == LightMapLayers::NearestAndFarthest || layers == LightMapLayers::NearestDepthAndFarthest)
-    resetInParallel(out.lsFarDepth, size, size, kInfinity);
+  if (keepsIds(layers)) resetInParallel(out.objectId, size, size, kNoObject);
+  if (keepsFarthest(layers)) resetInParallel(out.lsFarDepth, size, size, kInfinity);
 }
 
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit,
                     LightMapLayers layers) {
-  if (size < 1 || size > raster::kMaxImageSize)
-    fail("renderLightMap: map size must be within 1..{} texels (got {})", raster::kMaxImageSize, size);
+  checkMapSize(size, "renderLightMap");
   // Every field from its default, the images' storage from `out`.
   LightMap fresh;
   fresh.lsDepth = std::move(out.lsDepth);
   fresh.objectId = std::move(out.objectId);
-  const bool farthest =
-      layers == LightMapLayers::NearestAndFarthest || layers == LightMapLayers::NearestDepthAndFarthest;
-  const bool ids = layers == LightMapLayers::Nearest || layers == LightMapLayers::NearestAndFarthest;
+  const bool farthest = keepsFarthest(layers), ids = keepsIds(layers);
   if (farthest) fresh.lsFarDepth = std::move(out.lsFarDepth);
   out = std::move(fresh);
   LightMap& m = out;

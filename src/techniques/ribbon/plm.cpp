@@ -589,7 +589,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
                       float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out) {
   const int mapSize = map.size;
   if (map.lsFarDepth.width() != mapSize || map.lsFarDepth.height() != mapSize)
-    fail("rasterizeRibbons: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest)");
+    fail(
+        "rasterizeRibbons: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest or "
+        "NearestDepthAndFarthest)");
   // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
   out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = kRibbonTile;

@@ -318,14 +318,13 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
 }
 
 void clearBehindLayer(int size, Image<Vec2>& behind, std::vector<uint8_t>& behindRows) {
-  resetInParallel(behind, size, size, Vec2(kUncovered, kInfinity));
+  resetInParallel(behind, size, size, kNoSkinBehind);
   behindRows.assign(static_cast<size_t>(size), 0);
 }
 
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
                             std::vector<uint8_t>& behindRows, Image<float>& frontDepth,
                             std::vector<uint8_t>& skinRows) {
-  const Vec2 noSkin(kUncovered, kInfinity);
   // `behind` keeps its pixels from the last call: only the rows a skin reached then are cleared (all of
   // them when the size changed). Most rows of a map never hold a skin.
   const auto n = static_cast<size_t>(view.size);
@@ -334,7 +333,7 @@ void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<fl
   } else {
     tbb::parallel_for(tbb::blocked_range<int>(0, view.size, 16), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
-        if (behindRows[static_cast<size_t>(j)]) std::fill(behind.row(j), behind.row(j) + view.size, noSkin);
+        if (behindRows[static_cast<size_t>(j)]) std::fill(behind.row(j), behind.row(j) + view.size, kNoSkinBehind);
     });
   }
   // `front` and `frontDepth` are filled below on the rows a skin may reach only, and makeTwoChannelMap

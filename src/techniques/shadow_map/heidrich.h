@@ -64,8 +64,10 @@ SkinMesh buildSkin(const LightMap& map, const Image<uint8_t>& edges, float edgeT
 // lands there). Every image keeps its storage where it is large enough.
 void renderVisibilityLayers(const SkinMesh& skin, const LightMap& view, Image<float>& front, Image<Vec2>& behind,
                             std::vector<uint8_t>& behindRows, Image<float>& frontDepth, std::vector<uint8_t>& skinRows);
+// A texel of `behind` where no skin lands: value kUncovered, infinite depth.
+inline const Vec2 kNoSkinBehind{kUncovered, kInfinity};
 // `behind` and `behindRows` as renderVisibilityLayers leaves them for a size x size view where no
-// skin landed: (kUncovered, infinite depth) everywhere, no row marked.
+// skin landed: kNoSkinBehind everywhere, no row marked.
 void clearBehindLayer(int size, Image<Vec2>& behind, std::vector<uint8_t>& behindRows);
 
 // One texel of a sample point's two-channel shadow map (slides, "Visibility Map": "additional shadow
@@ -111,10 +113,10 @@ class HeidrichTechnique final : public ShadowTechnique {
   int visibilityMapsBuilt() const { return visibilityMapsBuilt_; }
 
  private:
-  // Renders the k + 1 shadow maps and the 2k visibility maps; throws Error for a light that is not a
-  // segment. Always rebuilds: prepare() is the call that says the light or the scene changed.
   // The k + 1 shadow maps, the 2k visibility maps and prepare()'s working images at the map size.
   void reserveImpl(int width, int height) override;
+  // Renders the k + 1 shadow maps and the 2k visibility maps; throws Error for a light that is not a
+  // segment. Always rebuilds: prepare() is the call that says the light or the scene changed.
   void prepareImpl(const Scene& scene, const Light& light) override;
   // Reads the maps only: a camera-only change (a new G-buffer) re-runs this pass alone.
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override;
