@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "penumbra/gbuffer.h"
 #include "penumbra/image.h"
@@ -68,8 +70,12 @@ struct LightMap {
   Image<float> lsDepth;             //!< light-space depth z (distance along +z); kInfinity where empty
   Image<int32_t> objectId;          //!< kNoObject where empty; empty (0 x 0) with LightMapLayers::NearestDepth
   // LightMapLayers::NearestAndFarthest only (else empty): the light-space depth of the deepest
-  // surface along the texel's ray; kInfinity where empty.
+  // surface along the texel's ray; kInfinity where empty. Only in the tiles farTiles names.
   Image<float> lsFarDepth;
+  // Which kFarLayerTile x kFarLayerTile tiles (row-major, ceil(size / kFarLayerTile) to a row) hold
+  // lsFarDepth: nonzero where they do; empty where every tile does. Elsewhere lsFarDepth holds
+  // whatever its storage held (rasterizeLightMap says why).
+  std::vector<uint8_t> farTiles;
 
   Vec3 lsFromWs(const Vec3& wsP) const { return lsFrame.toLocal(wsP - wsOrigin); }
   // Map coordinates (s, t) of a world point (texel centres at integer + 0.5, t down) and its
@@ -100,6 +106,18 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
 // every frame then costs a pass over its memory, not fresh pages.
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out,
                     LightMapFit fit = LightMapFit::Tight, LightMapLayers layers = LightMapLayers::Nearest);
+// renderLightMap in two steps, for a caller that needs the map's projection to decide where it wants
+// the far layer (the ribbon techniques: only where a ribbon can reach, a fifth of the map on the
+// built-in `crowded`; the far layer elsewhere would double the depth test's work for nothing).
+// fitLightMap sets every field of `out` but its images, as renderLightMap would (the images keep their
+// storage); rasterizeLightMap then draws `scene` (the one the map was fitted to) into them, the far
+// layer only in the kFarLayerTile tiles whose flag in `farTiles` is nonzero (as LightMap::farTiles;
+// empty: everywhere). Together they give renderLightMap's map to the bit in every tile that has a
+// layer.
+inline constexpr int kFarLayerTile = 64;
+void fitLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit = LightMapFit::Tight);
+void rasterizeLightMap(const Scene& scene, LightMap& map, LightMapLayers layers = LightMapLayers::Nearest,
+                       std::span<const uint8_t> farTiles = {});
 // The storage of a size x size map of these layers made in `out` and its pages touched, for
 // ShadowTechnique::reserve: a later renderLightMap into it of that size allocates nothing.
 void reserveLightMap(LightMap& out, int size, LightMapLayers layers = LightMapLayers::Nearest);

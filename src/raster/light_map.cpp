@@ -47,7 +47,9 @@
 //
 // With LightMapLayers::NearestAndFarthest (or NearestDepthAndFarthest) the same rasterization also
 // keeps each texel's deepest surface (lsFarDepth, from the rasterizer's farthest layer): the ribbon
-// techniques' far layer costs no second pass over the triangles.
+// techniques' far layer costs no second pass over the triangles. rasterizeLightMap keeps it only in
+// the tiles its caller names (fitLightMap first gives the projection they are chosen from): in the
+// others the rasterizer runs its near-only loop.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -221,22 +223,21 @@ void reserveLightMap(LightMap& out, int size, LightMapLayers layers) {
 
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit,
                     LightMapLayers layers) {
-  checkMapSize(size, "renderLightMap");
-  // Every field from its default, the images' storage from `out`.
+  fitLightMap(scene, light, size, out, fit);
+  rasterizeLightMap(scene, out, layers);
+}
+
+void fitLightMap(const Scene& scene, const Light& light, int size, LightMap& out, LightMapFit fit) {
+  checkMapSize(size, "fitLightMap");
+  // Every field from its default, the images' storage from `out` (rasterizeLightMap sizes them).
   LightMap fresh;
   fresh.lsDepth = std::move(out.lsDepth);
   fresh.objectId = std::move(out.objectId);
-  const bool farthest = keepsFarthest(layers), ids = keepsIds(layers);
-  if (farthest) fresh.lsFarDepth = std::move(out.lsFarDepth);
+  fresh.lsFarDepth = std::move(out.lsFarDepth);
+  fresh.farTiles = std::move(out.farTiles);
   out = std::move(fresh);
   LightMap& m = out;
   m.size = size;
-  resetInParallel(m.lsDepth, size, size, kInfinity);
-  if (ids)
-    resetInParallel(m.objectId, size, size, kNoObject);
-  else
-    m.objectId.resizeForOverwrite(0, 0);  // keeps its storage for a later map that wants ids
-  if (farthest) resetInParallel(m.lsFarDepth, size, size, kInfinity);
   const Bounds3 bounds = scene.bounds();
   m.lsFrame = lightMapFrame(light, bounds, fit);
   m.orthographic = light.isDirectional();
@@ -247,8 +248,6 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   const bool stable = fit != LightMapFit::Tight;
   // A stable extent keeps a texel of margin on each side for the snap of the origin.
   const float snapMargin = 1.0f / (1.0f - 2.0f / static_cast<float>(size));
-  // Clip-space z and w from light-space z (see the header comment).
-  float clipZScale = 0.0f, clipZOffset = 0.0f, clipWScale = 1.0f, clipWOffset = 0.0f;
   if (light.isDirectional()) {
     const Vec3 c = bounds.center();
     float extent = 0.0f, behind = -kInfinity, ahead = -kInfinity;
@@ -270,12 +269,6 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     m.zFar = behind + pad + ahead;
     if (stable)  // the snapped origin's float rounding may bring the nearest corner a little nearer
       for (const Vec3& p : wsCorners) m.zNear = std::min(m.zNear, m.lsFromWs(p).z);
-    // Linear key over [0, zFar]: z_clip = 2 z / zFar' - 1 >= -1 clips at the origin's plane.
-    const float range = m.zFar * kFitMargin + pad;
-    clipZScale = 2.0f / range;
-    clipZOffset = -1.0f;
-    clipWScale = 0.0f;
-    clipWOffset = 1.0f;
   } else {
     const float maxTanHalf = std::tan(0.5f * radians(kMaxFovDegrees));
     FrustumFit f = fitFrustum(m.lsFrame, m.wsOrigin, wsCorners);
@@ -324,6 +317,48 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
     }
     m.zNear = std::max(f.minZ * 0.999f, f.maxZ * 1e-6f);
     m.zFar = f.maxZ;
+  }
+}
+
+void rasterizeLightMap(const Scene& scene, LightMap& m, LightMapLayers layers, std::span<const uint8_t> farTiles) {
+  const int size = m.size;
+  checkMapSize(size, "rasterizeLightMap");
+  const bool farthest = keepsFarthest(layers), ids = keepsIds(layers);
+  const int tiles = (size + kFarLayerTile - 1) / kFarLayerTile;
+  if (farthest && !farTiles.empty() && farTiles.size() != static_cast<size_t>(tiles) * tiles)
+    fail("rasterizeLightMap: expected one far-layer flag per {}-texel tile ({} x {}), got {}", kFarLayerTile, tiles,
+         tiles, farTiles.size());
+  resetInParallel(m.lsDepth, size, size, kInfinity);
+  if (ids)
+    resetInParallel(m.objectId, size, size, kNoObject);
+  else
+    m.objectId.resizeForOverwrite(0, 0);  // keeps its storage for a later map that wants ids
+  // The far layer is written whole in each tile that has it (the tile visitor below), so it is not
+  // filled first: that fill was a pass over 4 MB at 1024^2.
+  if (farthest) {
+    m.lsFarDepth.resizeForOverwrite(size, size);
+    m.farTiles.assign(farTiles.begin(), farTiles.end());
+  } else {
+    m.lsFarDepth.resizeForOverwrite(0, 0);
+    m.farTiles.clear();
+  }
+  const Bounds3 bounds = scene.bounds();
+  // Nothing in front of the light (fitLightMap's depth range is empty) or no scene: no surface anywhere.
+  if (bounds.empty() || !(m.zFar > 0.0f)) {
+    if (farthest) resetInParallel(m.lsFarDepth, size, size, kInfinity);
+    return;
+  }
+  // Clip-space z and w from light-space z (see the header comment).
+  float clipZScale = 0.0f, clipZOffset = 0.0f, clipWScale = 1.0f, clipWOffset = 0.0f;
+  if (m.orthographic) {
+    // Linear key over [0, zFar]: z_clip = 2 z / zFar' - 1 >= -1 clips at the origin's plane.
+    const float pad = 1e-3f * std::max(bounds.radius(), 1e-6f);  // fitLightMap's
+    const float range = m.zFar * kFitMargin + pad;
+    clipZScale = 2.0f / range;
+    clipZOffset = -1.0f;
+    clipWScale = 0.0f;
+    clipWOffset = 1.0f;
+  } else {
     clipZOffset = -m.zNear;  // reversed, infinite-far key -zNear / z
     clipWScale = 1.0f;
   }
@@ -369,14 +404,19 @@ void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& 
   input.clipPositions = clip;
   input.triangles = triangles;
   input.farthestLayer = farthest;
+  input.farthestTiles = farTiles;
+  static_assert(kFarLayerTile == raster::kTileSize, "a far-layer tile is one of the rasterizer's");
   raster::rasterize(input, [&](const raster::TileSamples& samples) {
-    if (farthest)
+    if (samples.farTriangle)  // the tile has the far layer
       for (int j = 0; j < samples.height; ++j) {
         float* row = m.lsFarDepth.row(samples.y0 + j) + samples.x0;
         for (int i = 0; i < samples.width; ++i) {
           const int k = j * raster::kTileSize + i;
           const int32_t triangle = samples.farTriangle[k];
-          if (triangle < 0) continue;
+          if (triangle < 0) {
+            row[i] = kInfinity;
+            continue;
+          }
           const glm::uvec3& t = triangles[static_cast<size_t>(triangle)];
           const Vec3& b = samples.farBarycentrics[k];
           row[i] = b.x * lsZ[t.x] + b.y * lsZ[t.y] + b.z * lsZ[t.z];

@@ -329,6 +329,13 @@ void validate(const RasterInput& input) {
   if (input.attributes.size() != vertexCount * static_cast<size_t>(input.attributeCount))
     fail("rasterizer: expected {} attribute floats ({} vertices x {} channels), got {}",
          vertexCount * input.attributeCount, vertexCount, input.attributeCount, input.attributes.size());
+  if (input.farthestLayer && !input.farthestTiles.empty()) {
+    const size_t tiles = static_cast<size_t>((input.width + kTileSize - 1) / kTileSize) *
+                         static_cast<size_t>((input.height + kTileSize - 1) / kTileSize);
+    if (input.farthestTiles.size() != tiles)
+      fail("rasterizer: expected one far-layer flag per {}-pixel tile ({}), got {}", kTileSize, tiles,
+           input.farthestTiles.size());
+  }
   if (!input.payloads.empty() && input.payloads.size() != input.triangles.size())
     fail("rasterizer: expected one payload per triangle ({}), got {}", input.triangles.size(), input.payloads.size());
   for (size_t i = 0; i < input.triangles.size(); ++i) {
@@ -377,8 +384,9 @@ void rasterize(const RasterInput& input, const TileVisitor& visit) {
     TileBuffers tile;
     std::array<Vec3, kTileSize * kTileSize> barycentrics, farBarycentrics;
     std::array<float, kTileSize * kTileSize> clipW;
-    const bool farthest = input.farthestLayer;
     for (int t = r.begin(); t < r.end(); ++t) {
+      const bool farthest =
+          input.farthestLayer && (input.farthestTiles.empty() || input.farthestTiles[static_cast<size_t>(t)] != 0);
       const int tx0 = (t % ctx.tilesX) * kTileSize, ty0 = (t / ctx.tilesX) * kTileSize;
       tile.key.fill(kInfinity);
       tile.winner.fill(-1);

@@ -68,6 +68,10 @@ struct RasterInput {
   // Also keep, per pixel, the covering triangle with the largest depth key (the deepest surface),
   // handed to a TileVisitor as TileSamples::farTriangle: one pass for a map's near and far layers.
   bool farthestLayer = false;
+  // With farthestLayer: per kTileSize tile (row-major, ceil(width / kTileSize) to a row), nonzero
+  // where the far layer is wanted; empty: in every tile. A tile without it costs what a near-only
+  // pass costs there (the far layer doubles the depth test's work and adds a resolve).
+  std::span<const uint8_t> farthestTiles;
 };
 
 struct RasterOutput {
@@ -86,9 +90,9 @@ struct TileSamples {
   const float* depth = nullptr;        //!< depth key; kInfinity where empty
   const Vec3* barycentrics = nullptr;  //!< perspective-correct, of the input triangle's vertices
   const float* clipW = nullptr;        //!< clip w at the sample
-  // With RasterInput::farthestLayer (else nullptr): the covering triangle with the largest depth key
-  // (the first in input order among equals) and its barycentrics, as above. (A depth taken back from
-  // the interpolated key instead differs from the interpolated attribute by up to 1e-5 of it.)
+  // With RasterInput::farthestLayer, in the tiles it asks for (else nullptr): the covering triangle with the largest
+  // depth key (the first in input order among equals) and its barycentrics, as above. (A depth taken back from the
+  // interpolated key instead differs from the interpolated attribute by up to 1e-5 of it.)
   const int32_t* farTriangle = nullptr;
   const Vec3* farBarycentrics = nullptr;
 };

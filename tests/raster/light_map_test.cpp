@@ -12,6 +12,8 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <limits>
 #include <optional>
 #include <random>
 #include <vector>
@@ -209,6 +211,56 @@ TEST(LightMap, DepthLayersWithoutIdsAreTheDepthsOfTheMapWithIds) {
     EXPECT_EQ(differing, 0u);
     EXPECT_GT(between, 200u) << "the layers must differ at many texels for the comparison to mean something";
   }
+}
+
+// fitLightMap then rasterizeLightMap with a far layer in some tiles only: the near layer, the ids and
+// the far layer in those tiles are renderLightMap's to the bit, the other tiles' far texels are not
+// touched (a NaN put in their storage stays), farTiles records the tiles, and a mask of the wrong
+// size is refused. A scene with nothing in it has an empty far layer in every tile asked for.
+TEST(LightMap, FarLayerInSomeTilesIsTheWholeMapsThereAndLeavesTheRestAlone) {
+  const Scene scene = rastertest::objectsScene();
+  constexpr int kSize = 200;  // 4 x 4 tiles of 64, the last ones partial
+  const int tiles = (kSize + kFarLayerTile - 1) / kFarLayerTile;
+  std::vector<uint8_t> mask(static_cast<size_t>(tiles) * tiles);
+  for (size_t k = 0; k < mask.size(); ++k) mask[k] = (k * 7 + k / tiles) % 3 == 0 ? 1 : 0;  // a scattered third
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Light& light :
+       {Light::sphere(Vec3(1.0f, 6.0f, 2.0f), 0.3f), Light::directional(Vec3(0.4f, 1.0f, -0.3f), radians(0.53f))}) {
+    LightMap whole, part;
+    renderLightMap(scene, light, kSize, whole, LightMapFit::Tight, LightMapLayers::NearestAndFarthest);
+    part.lsFarDepth = Image<float>(kSize, kSize, nan);
+    fitLightMap(scene, light, kSize, part);
+    rasterizeLightMap(scene, part, LightMapLayers::NearestAndFarthest, mask);
+    expectSameMap(part, whole);
+    EXPECT_EQ(part.farTiles, mask);
+    EXPECT_TRUE(whole.farTiles.empty());
+    int kept = 0, left = 0, surfaces = 0;
+    for (int j = 0; j < kSize; ++j)
+      for (int i = 0; i < kSize; ++i) {
+        const bool inTile = mask[static_cast<size_t>(j / kFarLayerTile) * tiles + i / kFarLayerTile] != 0;
+        if (inTile) {
+          kept += std::memcmp(&part.lsFarDepth(i, j), &whole.lsFarDepth(i, j), sizeof(float)) == 0;
+          surfaces += std::isfinite(whole.lsFarDepth(i, j));
+        } else {
+          left += std::isnan(part.lsFarDepth(i, j));
+        }
+      }
+    EXPECT_GT(surfaces, 1000) << "the tiles asked for must hold surfaces for the comparison to mean something";
+    EXPECT_EQ(kept + left, kSize * kSize) << "kept " << kept << ", left " << left;
+    EXPECT_GT(left, 0);
+    EXPECT_THROW(
+        rasterizeLightMap(scene, part, LightMapLayers::NearestAndFarthest, std::vector<uint8_t>(mask.size() - 1, 1)),
+        Error);
+  }
+  LightMap empty;
+  empty.lsFarDepth = Image<float>(kSize, kSize, nan);
+  fitLightMap(Scene{}, Light::sphere(Vec3(0.0f, 5.0f, 0.0f), 0.5f), kSize, empty);
+  rasterizeLightMap(Scene{}, empty, LightMapLayers::NearestDepthAndFarthest, mask);
+  for (int j = 0; j < kSize; ++j)
+    for (int i = 0; i < kSize; ++i)
+      if (mask[static_cast<size_t>(j / kFarLayerTile) * tiles + i / kFarLayerTile]) {
+        ASSERT_EQ(empty.lsFarDepth(i, j), kInfinity) << i << "," << j;
+      }
 }
 
 // The far layer (LightMapLayers::NearestAndFarthest) against the last hit along each texel's ray,

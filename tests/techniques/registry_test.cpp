@@ -160,7 +160,9 @@ TEST(Registry, TracesRaysSaysWhichTechniquesBuildTheSharedRayScene) {
     }
   }
   for (const TechniqueInfo& info : techniqueRegistry())
-    if (info.tracesRays) EXPECT_TRUE(built.count(info.name)) << info.name << " says it traces rays but never did";
+    if (info.tracesRays) {
+      EXPECT_TRUE(built.count(info.name)) << info.name << " says it traces rays but never did";
+    }
 }
 
 TEST(Registry, EveryTechniqueSaysHowItTreatsAConcavePolygonLight) {

@@ -63,12 +63,16 @@ class KirschTechnique final : public ShadowTechnique {
 
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "kirsch");
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
+    // The silhouettes come from the map's projection alone, and the far layer is kept only where
+    // their ribbons can reach: the map is fitted first and rasterized once they are known.
+    fitShadowMap(scene, sceneLight, options_.lightMap, map_);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "kirsch");
     table_ = VisibilityToIllumination::forLight(light);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
+    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, farTiles_);
+    rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Inner, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, widths_);
@@ -102,6 +106,7 @@ class KirschTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> widths_;
   std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges widths_ names
   plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  std::vector<uint8_t> farTiles_;     //!< where map_ keeps its far layer
 };
 
 }  // namespace

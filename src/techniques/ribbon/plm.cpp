@@ -585,6 +585,30 @@ void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels&
   spanPass(path, s, count, out);
 }
 
+RibbonBox ribbonBox(const Edge& e, const Space& space, int mapSize, float marginTexels) {
+  const float cMin = std::min(e.zetaA, e.zetaB);
+  const float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
+  // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
+  const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
+  const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
+  return RibbonBox{std::max(0, static_cast<int>(std::floor(lo.x))), std::max(0, static_cast<int>(std::floor(lo.y))),
+                   std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))),
+                   std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
+}
+
+void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
+                        std::vector<uint8_t>& tiles) {
+  const int n = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
+  tiles.assign(static_cast<size_t>(n) * n, 0);
+  for (const Edge& e : edges) {
+    const RibbonBox box = ribbonBox(e, space, mapSize, marginTexels);
+    if (box.i0 > box.i1 || box.j0 > box.j1) continue;
+    for (int tj = box.j0 / kFarLayerTile; tj <= box.j1 / kFarLayerTile; ++tj)
+      std::fill_n(tiles.begin() + static_cast<ptrdiff_t>(tj) * n + box.i0 / kFarLayerTile,
+                  box.i1 / kFarLayerTile - box.i0 / kFarLayerTile + 1, uint8_t{1});
+  }
+}
+
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out) {
   const int mapSize = map.size;
@@ -596,11 +620,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
   out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = kRibbonTile;
   const int tiles = (mapSize + kTile - 1) / kTile;
-  struct Box {
-    int i0, j0, i1, j1;  //!< inclusive texel bounds
-    float halfWidth;     //!< texels
-  };
-  std::vector<Box> boxes(edges.size());
+  std::vector<RibbonBox> boxes(edges.size());
   std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
   // Whether `holds(x, y)` at every texel that the per-texel tests below may probe kHiddenProbeTexels
   // beyond the edge (false where one lies outside the map): the edge is sampled at quarter-texel
@@ -655,20 +675,24 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
   });
   for (size_t k = 0; k < edges.size(); ++k) {
     if (skip[k]) continue;
-    const Edge& e = edges[k];
-    const float cMin = std::min(e.zetaA, e.zetaB);
-    const float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
-    // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
-    const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
-    const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
-    Box box{std::max(0, static_cast<int>(std::floor(lo.x))), std::max(0, static_cast<int>(std::floor(lo.y))),
-            std::min(mapSize - 1, static_cast<int>(std::floor(hi.x))),
-            std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
-    boxes[k] = box;
+    const RibbonBox& box = boxes[k] = ribbonBox(edges[k], space, mapSize, marginTexels);
     if (box.i0 > box.i1 || box.j0 > box.j1) continue;
     for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
       for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti)
         bins[static_cast<size_t>(tj) * tiles + ti].push_back(static_cast<uint32_t>(k));
+  }
+  // The far layer where a ribbon reaches (a map rasterized with farTilesForRibbons' tiles has it there).
+  static_assert(kFarLayerTile % kTile == 0, "a ribbon tile lies in one far-layer tile");
+  if (!map.farTiles.empty()) {
+    const int farTilesPerRow = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
+    for (int tile = 0; tile < tiles * tiles; ++tile)
+      if (!bins[static_cast<size_t>(tile)].empty() &&
+          !map.farTiles[static_cast<size_t>((tile / tiles) * kTile / kFarLayerTile) * farTilesPerRow +
+                        static_cast<size_t>((tile % tiles) * kTile / kFarLayerTile)])
+        fail(
+            "rasterizeRibbons: a ribbon reaches texel ({}, {}), where the light map has no far layer (rasterize it "
+            "with farTilesForRibbons' tiles)",
+            (tile % tiles) * kTile, (tile / tiles) * kTile);
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
     // The tile's priorities and winners (texels are the tile's alone: no other task writes them),
@@ -733,7 +757,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
           if (tileMax <= order[q].first) break;  // nothing left in the tile that this edge or a later one can take
         }
         const Edge& e = edges[k];
-        const Box& box = boxes[k];
+        const RibbonBox& box = boxes[k];
         const Vec2 d = e.b - e.a;
         const float invLength2 = 1.0f / glm::dot(d, d);
         const int i0 = std::max(box.i0, ti * kTile), i1 = std::min(box.i1, ti * kTile + kTile - 1);
@@ -1016,7 +1040,10 @@ class PlmTechnique final : public ShadowTechnique {
 
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "plm");  // rejects unsupported shapes before any work
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
+    // The silhouettes come from the map's projection alone, and the far layer is kept only where
+    // their ribbons can reach (the fit of b reads it at ribbon texels only): the map is fitted first
+    // and rasterized once they are known.
+    fitShadowMap(scene, sceneLight, options_.lightMap, map_);
     light_ = lightAtMapOrigin(sceneLight, map_);  // silhouettes and b's rays look from the map's origin
     const Light& light = *light_;
     setHorizonClamp(options_.lightMap.horizon, light);
@@ -1024,6 +1051,8 @@ class PlmTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
+    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, farTiles_);
+    rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Both, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, ribbons_);
     const Image<plm::RibbonTexel>& ribbons = ribbons_;
@@ -1407,8 +1436,9 @@ class PlmTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> ribbons_;
   std::vector<plm::Edge> edges_;  //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
-  RaySceneCache raysCache_;   //!< findLowerLimits' BVH of the scene
-  plm::EdgeCache edgeCache_;  //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  RaySceneCache raysCache_;        //!< findLowerLimits' BVH of the scene
+  plm::EdgeCache edgeCache_;       //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  std::vector<uint8_t> farTiles_;  //!< where map_ keeps its far layer
 };
 
 }  // namespace

@@ -269,8 +269,24 @@ bool spanPathAvailable(SpanPath path);
 // The span's texels [0, count) (count at most kRibbonTile) into `out` through `path` (available).
 void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out);
 
+// The texels an edge's ribbon may reach in a mapSize map (inclusive bounds, clipped to the map; none
+// where i0 > i1 or j0 > j1): the edge's bounding box widened by the ribbon's half width (texels: the
+// widest penumbra below the edge in the map's depth range, plus the margin and kRibbonBorderTexels).
+struct RibbonBox {
+  int i0, j0, i1, j1;
+  float halfWidth;
+};
+RibbonBox ribbonBox(const Edge& e, const Space& space, int mapSize, float marginTexels);
+
+// Into `tiles`, one flag per kFarLayerTile tile of a mapSize map (LightMap::farTiles' layout): nonzero
+// where an edge's ribbon may reach (ribbonBox), the only texels where rasterizeRibbons reads the far
+// layer. Made from the map's projection alone (fitLightMap), for rasterizeLightMap's farTiles.
+void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
+                        std::vector<uint8_t>& tiles);
+
 // Into `out`, which keeps its storage where it is large enough.
-// `map` gives the far layer (farthestZeta; Error without it) and the size.
+// `map` gives the far layer (farthestZeta; Error without it, or without it in a tile a ribbon reaches)
+// and the size.
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
                       float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out);
 

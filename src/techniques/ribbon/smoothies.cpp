@@ -63,12 +63,16 @@ class SmoothiesTechnique final : public ShadowTechnique {
 
   void prepareImpl(const Scene& scene, const Light& sceneLight) override {
     plm::emitterRadius(sceneLight, "smoothies");
-    createShadowMap(scene, sceneLight, options_.lightMap, map_, kLayers);
+    // The silhouettes come from the map's projection alone, and the far layer is kept only where
+    // their ribbons can reach: the map is fitted first and rasterized once they are known.
+    fitShadowMap(scene, sceneLight, options_.lightMap, map_);
     const Light light = lightAtMapOrigin(sceneLight, map_);  // the silhouettes look from the map's origin
     setHorizonClamp(options_.lightMap.horizon, light);
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
+    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, farTiles_);
+    rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Outer, options_.marginTexels,
                           plm::RibbonFilter{nullptr, &map_.lsDepth, false}, smoothies_);
@@ -103,6 +107,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
   Image<plm::RibbonTexel> smoothies_;
   std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges smoothies_ names
   plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
+  std::vector<uint8_t> farTiles_;     //!< where map_ keeps its far layer
 };
 
 }  // namespace

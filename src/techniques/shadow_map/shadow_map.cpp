@@ -28,12 +28,23 @@ LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapO
   return map;
 }
 
-void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
-                     LightMapLayers layers) {
+namespace {
+void checkShadowMapSize(const LightMapOptions& options) {
   if (options.size < kMinShadowMapSize || options.size > kMaxShadowMapSize)
     fail("shadow map: map_size = {} is not valid: expected an int in [{}, {}] texels", options.size, kMinShadowMapSize,
          kMaxShadowMapSize);
+}
+}  // namespace
+
+void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
+                     LightMapLayers layers) {
+  checkShadowMapSize(options);
   renderLightMap(scene, light, options.size, out, options.fit, layers);
+}
+
+void fitShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out) {
+  checkShadowMapSize(options);
+  fitLightMap(scene, light, options.size, out, options.fit);
 }
 
 void reserveShadowMap(const LightMapOptions& options, LightMap& out, LightMapLayers layers) {

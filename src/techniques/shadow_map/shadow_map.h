@@ -62,6 +62,9 @@ LightMap createShadowMap(const Scene& scene, const Light& light, const LightMapO
 // The same into `out`, reusing its storage (renderLightMap); `out` is untouched when the size is refused.
 void createShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out,
                      LightMapLayers layers = LightMapLayers::Nearest);
+// createShadowMap's first step alone (fitLightMap: the projection, no images), for a technique that
+// chooses where it wants the far layer from it before rasterizeLightMap; the same check of the size.
+void fitShadowMap(const Scene& scene, const Light& light, const LightMapOptions& options, LightMap& out);
 // The storage createShadowMap fills at the options' map size made in `out` (reserveLightMap), for a
 // technique's reserveImpl.
 void reserveShadowMap(const LightMapOptions& options, LightMap& out, LightMapLayers layers = LightMapLayers::Nearest);

@@ -6,10 +6,12 @@
 // kirsch share (plm.h, rasterizeRibbons) against a brute-force rasterization of their definition.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -282,6 +284,68 @@ TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilte
         }
       EXPECT_EQ(mismatched, 0);
       EXPECT_GT(covered, 50) << edges.size() << " silhouette edges: the scene must exercise the ribbons";
+    }
+  }
+}
+
+// The ribbon techniques rasterize their light map's far layer only in farTilesForRibbons' tiles: the
+// ribbons over such a map are those over the whole layer to the bit, with a NaN left in every far
+// texel outside those tiles (a read of one would drop candidates there), on a map large enough that
+// the ribbons leave tiles out; a map without the far layer in a tile a ribbon reaches is refused.
+TEST(PlmRibbons, AFarLayerOnlyWhereRibbonsReachGivesTheRibbonsOfTheWholeLayer) {
+  for (const auto& [name, size] : {std::pair{"crowded", 512}, std::pair{"wuson", 300}, std::pair{"triangle", 200}}) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(name);
+    const Light& sceneLight = scene.lights[0];
+    const LightMapOptions options{size, LightMapFit::Tight};
+    constexpr float kMargin = 2.0f;
+    LightMap whole, part;
+    createShadowMap(scene, sceneLight, options, whole, LightMapLayers::NearestAndFarthest);
+    part.lsFarDepth = Image<float>(size, size, std::numeric_limits<float>::quiet_NaN());
+    fitShadowMap(scene, sceneLight, options, part);
+    const Light light = lightAtMapOrigin(sceneLight, part);
+    const plm::Space space = plm::makeSpace(part, light, "test");
+    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, part, space);
+    std::vector<uint8_t> tiles;
+    plm::farTilesForRibbons(edges, space, size, kMargin, tiles);
+    rasterizeLightMap(scene, part, LightMapLayers::NearestAndFarthest, tiles);
+    const auto leftOut = std::count(tiles.begin(), tiles.end(), uint8_t{0});
+    if (std::string(name) == "crowded") {
+      EXPECT_GT(leftOut, 0) << "the ribbons must leave tiles out";
+    }
+    int coveredI = -1, coveredJ = -1;  // a texel some ribbon takes
+    for (const plm::RibbonSides sides : {plm::RibbonSides::Both, plm::RibbonSides::Outer, plm::RibbonSides::Inner}) {
+      const bool footprint = sides == plm::RibbonSides::Inner;
+      Image<plm::RibbonTexel> want, got;
+      plm::rasterizeRibbons(edges, space, whole, sides, kMargin,
+                            plm::RibbonFilter{&whole.objectId, &whole.lsDepth, footprint}, want);
+      plm::rasterizeRibbons(edges, space, part, sides, kMargin,
+                            plm::RibbonFilter{&part.objectId, &part.lsDepth, footprint}, got);
+      int covered = 0, differing = 0;
+      for (int j = 0; j < size; ++j)
+        for (int i = 0; i < size; ++i) {
+          covered += want(i, j).covered();
+          if (want(i, j).covered()) coveredI = i, coveredJ = j;
+          differing += std::memcmp(&want(i, j), &got(i, j), sizeof(plm::RibbonTexel)) != 0;
+        }
+      EXPECT_EQ(differing, 0);
+      EXPECT_GT(covered, 100);
+    }
+    // The tile of a texel a ribbon takes, without the far layer.
+    ASSERT_GE(coveredI, 0);
+    {
+      std::vector<uint8_t> missing = tiles;
+      const int perRow = (size + kFarLayerTile - 1) / kFarLayerTile;
+      missing[static_cast<size_t>(coveredJ / kFarLayerTile) * perRow + coveredI / kFarLayerTile] = 0;
+      rasterizeLightMap(scene, part, LightMapLayers::NearestAndFarthest, missing);
+      Image<plm::RibbonTexel> ribbons;
+      try {
+        plm::rasterizeRibbons(edges, space, part, plm::RibbonSides::Both, kMargin,
+                              plm::RibbonFilter{&part.objectId, &part.lsDepth, false}, ribbons);
+        ADD_FAILURE() << "a ribbon over a tile without the far layer was not refused";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("no far layer"), std::string::npos) << e.what();
+      }
     }
   }
 }
