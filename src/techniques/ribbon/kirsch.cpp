@@ -103,7 +103,7 @@ class KirschTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
-  Image<plm::RibbonTexel> widths_;
+  plm::RibbonImage widths_;
   std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges widths_ names
   plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
   std::vector<uint8_t> farTiles_;     //!< where map_ keeps its far layer

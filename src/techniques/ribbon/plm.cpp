@@ -347,7 +347,11 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
   return edges;
 }
 
-void reserveRibbons(int mapSize, Image<RibbonTexel>& ribbons) { resetInParallel(ribbons, mapSize, mapSize, kNoRibbon); }
+void reserveRibbons(int mapSize, RibbonImage& ribbons) {
+  resetInParallel(ribbons.texels, mapSize, mapSize, kNoRibbon);
+  const int tiles = (mapSize + kRibbonTile - 1) / kRibbonTile;
+  ribbons.mayHoldRibbon.assign(static_cast<size_t>(tiles) * tiles, 0);
+}
 
 namespace {
 
@@ -610,16 +614,20 @@ void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int 
 }
 
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out) {
+                      float marginTexels, const RibbonFilter& filter, RibbonImage& out) {
   const int mapSize = map.size;
   if (map.lsFarDepth.width() != mapSize || map.lsFarDepth.height() != mapSize)
     fail(
         "rasterizeRibbons: the light map was rendered without its far layer (LightMapLayers::NearestAndFarthest or "
         "NearestDepthAndFarthest)");
   // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
-  out.resizeForOverwrite(mapSize, mapSize);
   constexpr int kTile = kRibbonTile;
   const int tiles = (mapSize + kTile - 1) / kTile;
+  const size_t tileCount = static_cast<size_t>(tiles) * tiles;
+  if (out.texels.width() != mapSize || out.texels.height() != mapSize || out.mayHoldRibbon.size() != tileCount) {
+    out.texels.resizeForOverwrite(mapSize, mapSize);
+    out.mayHoldRibbon.assign(tileCount, 1);  // storage of unknown content: every tile is written
+  }
   std::vector<RibbonBox> boxes(edges.size());
   std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
   // Whether `holds(x, y)` at every texel that the per-texel tests below may probe kHiddenProbeTexels
@@ -708,11 +716,15 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
       const int ti = tile % tiles, tj = tile / tiles;
       const int tileWidth = std::min(kTile, mapSize - ti * kTile), tileHeight = std::min(kTile, mapSize - tj * kTile);
       const std::vector<uint32_t>& bin = bins[static_cast<size_t>(tile)];
-      if (bin.empty()) {  // no ribbon reaches the tile (most of a map): its texels straight to `out`
-        for (int j = tj * kTile; j < tj * kTile + tileHeight; ++j)
-          std::fill_n(out.row(j) + ti * kTile, tileWidth, kNoRibbon);
+      uint8_t& mayHoldRibbon = out.mayHoldRibbon[static_cast<size_t>(tile)];
+      if (bin.empty()) {  // no ribbon reaches the tile (most of a map): emptied where it may hold one
+        if (mayHoldRibbon)
+          for (int j = tj * kTile; j < tj * kTile + tileHeight; ++j)
+            std::fill_n(out.texels.row(j) + ti * kTile, tileWidth, kNoRibbon);
+        mayHoldRibbon = 0;
         continue;
       }
+      bool tileTook = false;
       for (int j = 0; j < tileHeight; ++j)
         for (int i = 0; i < tileWidth; ++i)
           far[j * kTile + i] = farthestZeta(map, space, ti * kTile + i, tj * kTile + j);
@@ -905,6 +917,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
             prio[m] = p;
             row[i - ti * kTile] = RibbonTexel{c, outer ? distance : -distance, static_cast<int32_t>(k)};
             took = true;
+            tileTook = true;
           }
           if (ordered && took) {
             const float* rowPriority = priority + (j - tj * kTile) * kTile;
@@ -915,9 +928,10 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
       }
       for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
         const RibbonTexel* from = winners + (j - tj * kTile) * kTile;
-        RibbonTexel* to = out.row(j) + ti * kTile;
+        RibbonTexel* to = out.texels.row(j) + ti * kTile;
         std::copy_n(from, tileWidth, to);
       }
+      mayHoldRibbon = tileTook ? 1 : 0;
     }
   });
 }
@@ -1055,7 +1069,7 @@ class PlmTechnique final : public ShadowTechnique {
     rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Both, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, ribbons_);
-    const Image<plm::RibbonTexel>& ribbons = ribbons_;
+    const Image<plm::RibbonTexel>& ribbons = ribbons_.texels;
     const int n = map_.size;
     limits_.resizeForOverwrite(n, n);
     // Texels whose ribbon needs the lower limit b, row by row as the parallel pass finds them, then
@@ -1433,7 +1447,7 @@ class PlmTechnique final : public ShadowTechnique {
   Image<uint8_t> ribbonAt_;                     //!< kRibbonHere | kRibbonBelowNone where a ribbon holds the texel
   // prepare()'s working storage, kept so that a new light or scene refills it rather than faulting in
   // fresh pages.
-  Image<plm::RibbonTexel> ribbons_;
+  plm::RibbonImage ribbons_;
   std::vector<plm::Edge> edges_;  //!< the silhouette edges, which visibility() asks for neighbours
   std::vector<int> needLower_;
   RaySceneCache raysCache_;        //!< findLowerLimits' BVH of the scene

@@ -140,9 +140,9 @@ inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
 
-// 12 bytes: a 1024^2 ribbon image is written whole every prepare (its winners' priorities stay in
-// rasterizeRibbons' tiles; the edge's object is the Edge's). Trivially constructible, so that a fresh
-// image's pages are first touched by rasterizeRibbons' parallel tiles (DefaultInitAllocator, image.h);
+// 12 bytes: the tiles of a 1024^2 ribbon image that a ribbon reaches are written whole every prepare
+// (its winners' priorities stay in rasterizeRibbons' tiles; the edge's object is the Edge's). Trivially constructible,
+// so that a fresh image's pages are first touched by rasterizeRibbons' parallel tiles (DefaultInitAllocator, image.h);
 // kNoRibbon is the texel no ribbon covers.
 struct RibbonTexel {
   float c;       //!< zeta of the winning edge at its nearest point
@@ -196,9 +196,21 @@ inline float farthestZeta(const LightMap& map, const Space& space, int i, int j)
   const float z = map.lsFarDepth(i, j);
   return z < kInfinity && (map.orthographic || z > 0.0f) ? space.zeta(z) : space.zetaNone;
 }
+// rasterizeRibbons' output: the ribbon texel of every map texel, and per kRibbonTile tile (row-major)
+// whether it may hold a ribbon texel. A tile that held none after the last frame and that no ribbon
+// reaches in this one still holds kNoRibbon throughout, so rasterizeRibbons leaves it alone: a frame
+// writes the tiles its ribbons reach and those they have left, not the whole map (the empty tiles'
+// 12-byte texels were a pass over 9 MB at 1024^2 on `crowded`).
+struct RibbonImage {
+  Image<RibbonTexel> texels;
+  std::vector<uint8_t> mayHoldRibbon;  //!< per tile; a size that does not fit the image: nothing known
+
+  const RibbonTexel& operator()(int i, int j) const { return texels(i, j); }
+};
+
 // The storage rasterizeRibbons fills for a mapSize x mapSize map made in `ribbons`, its pages touched
 // (ShadowTechnique::reserve).
-void reserveRibbons(int mapSize, Image<RibbonTexel>& ribbons);
+void reserveRibbons(int mapSize, RibbonImage& ribbons);
 
 // Which candidate texels of a ribbon may compete for a texel at all (before the priority decides
 // among them); every test is made per edge and texel, so a dropped candidate leaves the texel to the
@@ -284,10 +296,10 @@ RibbonBox ribbonBox(const Edge& e, const Space& space, int mapSize, float margin
 void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
                         std::vector<uint8_t>& tiles);
 
-// Into `out`, which keeps its storage where it is large enough.
-// `map` gives the far layer (farthestZeta; Error without it, or without it in a tile a ribbon reaches)
+// Into `out`, which keeps its storage where it is large enough (and writes only the tiles that need it:
+// RibbonImage). `map` gives the far layer (farthestZeta; Error without it, or without it in a tile a ribbon reaches)
 // and the size.
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, Image<RibbonTexel>& out);
+                      float marginTexels, const RibbonFilter& filter, RibbonImage& out);
 
 }  // namespace penumbra::plm

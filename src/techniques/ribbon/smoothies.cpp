@@ -104,7 +104,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
   LightMap map_;
   plm::Space space_;
   VisibilityToIllumination table_;
-  Image<plm::RibbonTexel> smoothies_;
+  plm::RibbonImage smoothies_;
   std::vector<plm::EdgeLine> lines_;  //!< the silhouette edges smoothies_ names
   plm::EdgeCache edgeCache_;          //!< the meshes' edge adjacency, kept while the geometry is unchanged
   std::vector<uint8_t> farTiles_;     //!< where map_ keeps its far layer

@@ -268,7 +268,7 @@ TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilte
     for (const Filter& f : filters) {
       SCOPED_TRACE(std::string(name) + ", " + f.technique + "'s filter");
       constexpr float kMargin = 2.0f;
-      Image<plm::RibbonTexel> ribbons;
+      plm::RibbonImage ribbons;
       plm::rasterizeRibbons(edges, space, map, f.sides, kMargin, f.filter, ribbons);
       const Image<plm::RibbonTexel> expected =
           bruteForceRibbons(edges, space, size, f.sides, kMargin, f.filter, farthest);
@@ -316,7 +316,7 @@ TEST(PlmRibbons, AFarLayerOnlyWhereRibbonsReachGivesTheRibbonsOfTheWholeLayer) {
     int coveredI = -1, coveredJ = -1;  // a texel some ribbon takes
     for (const plm::RibbonSides sides : {plm::RibbonSides::Both, plm::RibbonSides::Outer, plm::RibbonSides::Inner}) {
       const bool footprint = sides == plm::RibbonSides::Inner;
-      Image<plm::RibbonTexel> want, got;
+      plm::RibbonImage want, got;
       plm::rasterizeRibbons(edges, space, whole, sides, kMargin,
                             plm::RibbonFilter{&whole.objectId, &whole.lsDepth, footprint}, want);
       plm::rasterizeRibbons(edges, space, part, sides, kMargin,
@@ -338,7 +338,7 @@ TEST(PlmRibbons, AFarLayerOnlyWhereRibbonsReachGivesTheRibbonsOfTheWholeLayer) {
       const int perRow = (size + kFarLayerTile - 1) / kFarLayerTile;
       missing[static_cast<size_t>(coveredJ / kFarLayerTile) * perRow + coveredI / kFarLayerTile] = 0;
       rasterizeLightMap(scene, part, LightMapLayers::NearestAndFarthest, missing);
-      Image<plm::RibbonTexel> ribbons;
+      plm::RibbonImage ribbons;
       try {
         plm::rasterizeRibbons(edges, space, part, plm::RibbonSides::Both, kMargin,
                               plm::RibbonFilter{&part.objectId, &part.lsDepth, false}, ribbons);
@@ -347,6 +347,51 @@ TEST(PlmRibbons, AFarLayerOnlyWhereRibbonsReachGivesTheRibbonsOfTheWholeLayer) {
         EXPECT_NE(std::string(e.what()).find("no far layer"), std::string::npos) << e.what();
       }
     }
+  }
+}
+
+// A RibbonImage kept from frame to frame (as the techniques keep theirs) leaves the tiles alone that
+// held no ribbon and that no ribbon reaches: frames whose ribbons reach other tiles (other scenes and
+// lights at one map size), into one image, made afresh (storage of unknown content) and after
+// reserveRibbons, give the ribbons of a fresh image every time, to the bit.
+TEST(PlmRibbons, AnImageKeptAcrossFramesHoldsEachFramesRibbonsAlone) {
+  constexpr int kSize = 256;
+  constexpr float kMargin = 2.0f;
+  struct Frame {
+    const char* scene;
+    int light;
+  };
+  const auto ribbonsOf = [&](const Frame& frame, plm::RibbonImage& into) {
+    const Scene scene = loadScene(frame.scene);
+    const Light& sceneLight = scene.lights.at(static_cast<size_t>(frame.light));
+    LightMap map;
+    createShadowMap(scene, sceneLight, LightMapOptions{kSize, LightMapFit::Tight}, map,
+                    LightMapLayers::NearestAndFarthest);
+    const Light light = lightAtMapOrigin(sceneLight, map);
+    const plm::Space space = plm::makeSpace(map, light, "test");
+    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map, space), space, map, plm::RibbonSides::Both, kMargin,
+                          plm::RibbonFilter{&map.objectId, &map.lsDepth, false}, into);
+  };
+  const Frame frames[] = {{"crowded", 0}, {"triangle", 0}, {"wuson", 0},
+                          {"crowded", 0}, {"spheres", 0},  {"crowded", 0}};
+  plm::RibbonImage kept, reserved;
+  plm::reserveRibbons(kSize, reserved);
+  for (const Frame& frame : frames) {
+    SCOPED_TRACE(frame.scene);
+    plm::RibbonImage fresh;
+    ribbonsOf(frame, fresh);
+    ribbonsOf(frame, kept);
+    ribbonsOf(frame, reserved);
+    int covered = 0, differing = 0;
+    for (int j = 0; j < kSize; ++j)
+      for (int i = 0; i < kSize; ++i) {
+        covered += fresh(i, j).covered();
+        differing += std::memcmp(&fresh(i, j), &kept(i, j), sizeof(plm::RibbonTexel)) != 0;
+        differing += std::memcmp(&fresh(i, j), &reserved(i, j), sizeof(plm::RibbonTexel)) != 0;
+      }
+    EXPECT_EQ(differing, 0);
+    EXPECT_GT(covered, 100);
+    EXPECT_LT(covered, kSize * kSize / 2) << "the frames must leave tiles empty for the test to mean something";
   }
 }
 
