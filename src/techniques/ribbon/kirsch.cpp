@@ -29,9 +29,12 @@
 // the map to the edge that won the texel, so the fade follows the silhouette below a texel; the paper's per-texel width
 // map (`sub_texel` off) moves it in whole-texel steps, which pop as the light moves. V goes through Appendix A's table
 // of Lawlor 2006 (penumbra/light_profile.h) when `illumination_table` is on. A blocked texel no ribbon reaches lies
-// deeper in the shadow than any penumbra: V = 0. Lights: as plm (sphere, disk, rect, polygon, directional; segments
-// rejected). Parameters: map_size (texels), bias_constant (texels), bias_slope (shadow_map.h), margin (texels added to
-// every ribbon's width), illumination_table (bool), sub_texel (bool).
+// deeper in the shadow than any penumbra: V = 0. The ribbons reach only as far as the widest shadow width the surfaces
+// around them can show, from the shallowest occluding point to the deepest receiver there (plm::RibbonReach::
+// SurfacesInRange): a texel beyond it reads V = 0 either way, and the ribbon pass costs far fewer texels. Lights: as
+// plm (sphere, disk, rect, polygon, directional; segments rejected). Parameters: map_size (texels), bias_constant
+// (texels), bias_slope (shadow_map.h), margin (texels added to every ribbon's width), illumination_table (bool),
+// sub_texel (bool).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -75,7 +78,8 @@ class KirschTechnique final : public ShadowTechnique {
     rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Inner, options_.marginTexels,
-                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, widths_);
+                          plm::RibbonFilter{&map_.objectId, &map_.lsDepth, true}, widths_,
+                          plm::RibbonReach::SurfacesInRange);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {

@@ -589,9 +589,11 @@ void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels&
   spanPass(path, s, count, out);
 }
 
-RibbonBox ribbonBox(const Edge& e, const Space& space, int mapSize, float marginTexels) {
-  const float cMin = std::min(e.zetaA, e.zetaB);
-  const float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
+float penumbraTexels(const Edge& e, float zetaDeepest, float zetaFrom) {
+  return std::max(0.0f, zetaDeepest - std::min({e.zetaA, e.zetaB, zetaFrom})) / e.rate;
+}
+
+RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels) {
   // Capped at the map's size: a ribbon wider than the map covers all of it anyway.
   const float half = std::min(width + marginTexels + kRibbonBorderTexels, 2.0f * static_cast<float>(mapSize));
   const Vec2 lo = glm::min(e.a, e.b) - half, hi = glm::max(e.a, e.b) + half;
@@ -605,7 +607,7 @@ void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int 
   const int n = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
   tiles.assign(static_cast<size_t>(n) * n, 0);
   for (const Edge& e : edges) {
-    const RibbonBox box = ribbonBox(e, space, mapSize, marginTexels);
+    const RibbonBox box = ribbonBox(e, penumbraTexels(e, space.zetaFar), mapSize, marginTexels);
     if (box.i0 > box.i1 || box.j0 > box.j1) continue;
     for (int tj = box.j0 / kFarLayerTile; tj <= box.j1 / kFarLayerTile; ++tj)
       std::fill_n(tiles.begin() + static_cast<ptrdiff_t>(tj) * n + box.i0 / kFarLayerTile,
@@ -614,7 +616,7 @@ void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int 
 }
 
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, RibbonImage& out) {
+                      float marginTexels, const RibbonFilter& filter, RibbonImage& out, RibbonReach reach) {
   const int mapSize = map.size;
   if (map.lsFarDepth.width() != mapSize || map.lsFarDepth.height() != mapSize)
     fail(
@@ -681,26 +683,70 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
     for (size_t k = range.begin(); k < range.end(); ++k)
       skip[k] = hidden(edges[k]) || insideFootprint(edges[k]) ? 1 : 0;
   });
+  // Each ribbon first as wide as the widest penumbra the map's depth range allows (ribbonBox at
+  // zetaFar); narrowed (RibbonReach), then only as wide as the widest one on the surfaces there are:
+  // down to the deepest surface the far layer holds in the tiles the first box reaches (capped at
+  // zetaFar), from the edge or (SurfacesInRange) from the shallowest surface the map sees there.
+  const auto forEachTile = [&](const RibbonBox& box, const auto& f) {
+    for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
+      for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti) f(static_cast<size_t>(tj) * tiles + ti);
+  };
+  const auto empty = [](const RibbonBox& box) { return box.i0 > box.i1 || box.j0 > box.j1; };
+  std::vector<uint8_t> reached(tileCount, 0);
   for (size_t k = 0; k < edges.size(); ++k) {
     if (skip[k]) continue;
-    const RibbonBox& box = boxes[k] = ribbonBox(edges[k], space, mapSize, marginTexels);
-    if (box.i0 > box.i1 || box.j0 > box.j1) continue;
-    for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
-      for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti)
-        bins[static_cast<size_t>(tj) * tiles + ti].push_back(static_cast<uint32_t>(k));
+    boxes[k] = ribbonBox(edges[k], penumbraTexels(edges[k], space.zetaFar), mapSize, marginTexels);
+    if (!empty(boxes[k])) forEachTile(boxes[k], [&](size_t tile) { reached[tile] = 1; });
   }
-  // The far layer where a ribbon reaches (a map rasterized with farTilesForRibbons' tiles has it there).
+  // The far layer where a ribbon may reach (a map rasterized with farTilesForRibbons' tiles has it there).
   static_assert(kFarLayerTile % kTile == 0, "a ribbon tile lies in one far-layer tile");
   if (!map.farTiles.empty()) {
     const int farTilesPerRow = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
     for (int tile = 0; tile < tiles * tiles; ++tile)
-      if (!bins[static_cast<size_t>(tile)].empty() &&
+      if (reached[static_cast<size_t>(tile)] &&
           !map.farTiles[static_cast<size_t>((tile / tiles) * kTile / kFarLayerTile) * farTilesPerRow +
                         static_cast<size_t>((tile % tiles) * kTile / kFarLayerTile)])
         fail(
             "rasterizeRibbons: a ribbon reaches texel ({}, {}), where the light map has no far layer (rasterize it "
             "with farTilesForRibbons' tiles)",
             (tile % tiles) * kTile, (tile / tiles) * kTile);
+  }
+  const bool narrowed = reach != RibbonReach::MapDepthRange, fromTop = reach == RibbonReach::SurfacesInRange;
+  // Per reached tile, the zeta of its deepest surface (-infinity: none) and of its shallowest one.
+  std::vector<float> deepest(narrowed ? tileCount : 0, -kInfinity), shallowest(fromTop ? tileCount : 0, kInfinity);
+  const auto seen = [&](float z) { return z < kInfinity && (map.orthographic || z > 0.0f); };
+  if (narrowed)
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
+      for (int tile = range.begin(); tile < range.end(); ++tile) {
+        if (!reached[static_cast<size_t>(tile)]) continue;
+        const int ti = tile % tiles, tj = tile / tiles;
+        float deep = -kInfinity, shallow = kInfinity;
+        for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
+          const float *far = map.lsFarDepth.row(j), *top = map.lsDepth.row(j);
+          for (int i = ti * kTile; i < std::min(mapSize, ti * kTile + kTile); ++i) {
+            if (seen(far[i])) deep = std::max(deep, space.zeta(far[i]));
+            if (fromTop && seen(top[i])) shallow = std::min(shallow, space.zeta(top[i]));
+          }
+        }
+        deepest[static_cast<size_t>(tile)] = deep;
+        if (fromTop) shallowest[static_cast<size_t>(tile)] = shallow;
+      }
+    });
+  for (size_t k = 0; k < edges.size(); ++k) {
+    if (skip[k] || empty(boxes[k])) continue;
+    if (narrowed) {
+      float below = -kInfinity, from = kInfinity;
+      forEachTile(boxes[k], [&](size_t tile) {
+        below = std::max(below, deepest[tile]);
+        if (fromTop) from = std::min(from, shallowest[tile]);
+      });
+      if (below == -kInfinity) continue;  // no surface anywhere the ribbon could fall
+      // Never wider than the map's range allows: the far layer is there only in the first box's tiles.
+      const float width = std::min(penumbraTexels(edges[k], space.zetaFar),
+                                   penumbraTexels(edges[k], std::min(below, space.zetaFar), from));
+      boxes[k] = ribbonBox(edges[k], width, mapSize, marginTexels);
+    }
+    if (!empty(boxes[k])) forEachTile(boxes[k], [&](size_t tile) { bins[tile].push_back(static_cast<uint32_t>(k)); });
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
     // The tile's priorities and winners (texels are the tile's alone: no other task writes them),

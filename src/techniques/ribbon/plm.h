@@ -31,15 +31,14 @@
 //
 // Ribbons. Each silhouette edge covers the texels within W(c) = (zeta_far - c) / (s r) + margin +
 // kRibbonBorderTexels texels of its projected segment: the widest penumbra it can cast on anything
-// in the map, plus a margin so that bilinear interpolation near the penumbra reads texels of the same
-// ribbon (the paper's "bias up the z-buffer depth to expand the penumbra limit over a few extra
-// pixels"), plus a border of texels beyond any penumbra, where a bilinear lookup that straddles the
-// ribbon's end sees values that all agree the receiver is lit (plm.cpp). At a
-// texel the edge gives c (its zeta at the nearest point of the segment) and w (the signed distance to
-// the segment in texels, + on the outer side; the distance to the line where the texel lies beside
-// the segment, so p_i is a plane along a straight edge). Beyond an end, where the nearest point is a
-// corner shared with the next silhouette edge, the side is the corner's: outer at a convex corner
-// (beyond a sharp convex corner a texel can lie on the inner side of one edge's line and still
+// in the map (smoothies and kirsch: on the surfaces there are around it; RibbonReach), plus a margin so that bilinear
+// interpolation near the penumbra reads texels of the same ribbon (the paper's "bias up the z-buffer depth to expand
+// the penumbra limit over a few extra pixels"), plus a border of texels beyond any penumbra, where a bilinear lookup
+// that straddles the ribbon's end sees values that all agree the receiver is lit (plm.cpp). At a texel the edge gives c
+// (its zeta at the nearest point of the segment) and w (the signed distance to the segment in texels, + on the outer
+// side; the distance to the line where the texel lies beside the segment, so p_i is a plane along a straight edge).
+// Beyond an end, where the nearest point is a corner shared with the next silhouette edge, the side is the corner's:
+// outer at a convex corner (beyond a sharp convex corner a texel can lie on the inner side of one edge's line and still
 // outside the occluder), inner at a concave one; the two edges then tie exactly (the same corner,
 // the same distance) and the first keeps the texel. Overlapping ribbons are resolved per texel
 // like a depth buffer, by "highest penumbra limit wins" (priority c + |w| s r, Sec. 3.1), among the
@@ -139,6 +138,23 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
 inline constexpr float kRibbonBorderTexels = 1.5f;
 
 enum class RibbonSides { Both, Outer, Inner };
+
+// How far a ribbon reaches (rasterizeRibbons):
+//  - MapDepthRange: as wide as the widest penumbra its edge can cast in the map's depth range (W(c) of
+//    the file comment, at zeta_far);
+//  - SurfacesBelow: only as wide as the widest one on the surfaces there are: zeta_far lowered to the
+//    deepest surface of the far layer in the tiles the first width reaches (smoothies, whose V
+//    measures the penumbra from the edge's c);
+//  - SurfacesInRange: the same, measured from the shallowest surface the map sees in those tiles where
+//    that lies above the edge (kirsch, whose V measures the shadow width from the occluder's depth at
+//    the texel, which may lie above the edge).
+// A texel a narrower ribbon gives up lies beyond the whole penumbra (kirsch: beyond the whole shadow
+// width) of every surface in its tile by the margin and border, so the V of a receiver there does not
+// change — but for a receiver deeper than every far-layer texel centre of the tile by more than that,
+// a surface seen edge-on from the light, whose texels the far layer samples at their centres. plm's
+// interpolation and its fit of b read ribbon texels that no receiver's V uses alone, so plm keeps the
+// map's range.
+enum class RibbonReach { MapDepthRange, SurfacesBelow, SurfacesInRange };
 
 // 12 bytes: the tiles of a 1024^2 ribbon image that a ribbon reaches are written whole every prepare
 // (its winners' priorities stay in rasterizeRibbons' tiles; the edge's object is the Edge's). Trivially constructible,
@@ -281,14 +297,17 @@ bool spanPathAvailable(SpanPath path);
 // The span's texels [0, count) (count at most kRibbonTile) into `out` through `path` (available).
 void ribbonSpan(SpanPath path, const RibbonSpan& s, int count, RibbonSpanTexels& out);
 
+// The widest penumbra (texels) the edge casts on a receiver at zeta zetaDeepest, measured from its
+// nearest end's c or from zetaFrom where that lies above it (RibbonReach).
+float penumbraTexels(const Edge& e, float zetaDeepest, float zetaFrom = kInfinity);
 // The texels an edge's ribbon may reach in a mapSize map (inclusive bounds, clipped to the map; none
-// where i0 > i1 or j0 > j1): the edge's bounding box widened by the ribbon's half width (texels: the
-// widest penumbra below the edge in the map's depth range, plus the margin and kRibbonBorderTexels).
+// where i0 > i1 or j0 > j1): the edge's bounding box widened by the ribbon's half width (texels: a
+// penumbra `width` wide, plus the margin and kRibbonBorderTexels).
 struct RibbonBox {
   int i0, j0, i1, j1;
   float halfWidth;
 };
-RibbonBox ribbonBox(const Edge& e, const Space& space, int mapSize, float marginTexels);
+RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels);
 
 // Into `tiles`, one flag per kFarLayerTile tile of a mapSize map (LightMap::farTiles' layout): nonzero
 // where an edge's ribbon may reach (ribbonBox), the only texels where rasterizeRibbons reads the far
@@ -300,6 +319,7 @@ void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int 
 // RibbonImage). `map` gives the far layer (farthestZeta; Error without it, or without it in a tile a ribbon reaches)
 // and the size.
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
-                      float marginTexels, const RibbonFilter& filter, RibbonImage& out);
+                      float marginTexels, const RibbonFilter& filter, RibbonImage& out,
+                      RibbonReach reach = RibbonReach::MapDepthRange);
 
 }  // namespace penumbra::plm

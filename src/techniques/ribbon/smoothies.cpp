@@ -16,14 +16,15 @@
 // over the penumbra's width at the receiver's depth,
 //     V = sat(w s r / (z - c))    (in plm.h's zeta and depth rate: the disk light's outer penumbra),
 // which is Chan & Durand's remap with the strip width set from the light's size instead of a user
-// knob. Deviation that follows from it: per texel the buffer keeps the strip whose penumbra begins
-// highest on the texel's light ray (priority c + w s r, plm's "highest penumbra limit wins"), not the
-// strip nearest the light. A strip as wide as the widest penumbra in the map reaches far beyond a
-// raised object's own penumbra, and kept by depth it covered the strips of every lower object
-// around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's penumbra);
-// with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden
-// from the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at
-// the texel holding the pixel (no filtering: the 2003 hardware filtered no float textures). With `sub_texel` on (the
+// knob: the widest penumbra the edge casts on the surfaces below it (the deepest one the far layer holds
+// around it; plm::RibbonReach::SurfacesBelow), beyond which every receiver reads V = 1 either way. Deviation that
+// follows from it: per texel the buffer keeps the strip whose penumbra begins highest on the texel's light ray
+// (priority c + w s r, plm's "highest penumbra limit wins"), not the strip nearest the light. A strip as wide as the
+// widest penumbra in the map reaches far beyond a raised object's own penumbra, and kept by depth it covered the strips
+// of every lower object around it, whose fades then vanished (V = 1 there: a receiver outside the raised edge's
+// penumbra); with Chan & Durand's narrow strips the two rules pick the same strip. Strips whose shadow is hidden from
+// the light's centre are dropped as in plm (plm::RibbonFilter). The smoothie buffer and the hard map are read at the
+// texel holding the pixel (no filtering: the 2003 hardware filtered no float textures). With `sub_texel` on (the
 // default) the strip's alpha is then taken at the pixel's own point in the map, from the edge that won the texel (its
 // distance and depth there), so the fade follows the silhouette below a texel; the paper's buffer, alpha at the
 // texel's centre (`sub_texel` off), moves it in whole-texel steps, which pop as the light moves. V goes through
@@ -75,7 +76,8 @@ class SmoothiesTechnique final : public ShadowTechnique {
     rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Outer, options_.marginTexels,
-                          plm::RibbonFilter{nullptr, &map_.lsDepth, false}, smoothies_);
+                          plm::RibbonFilter{nullptr, &map_.lsDepth, false}, smoothies_,
+                          plm::RibbonReach::SurfacesBelow);
   }
 
   void visibilityImpl(const GBuffer& gbuffer, Image<float>& v) override {
