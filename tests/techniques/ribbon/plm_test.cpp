@@ -257,18 +257,34 @@ Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, c
   return out;
 }
 
+// A built-in scene's light map with its far layer, size x size under one of its lights, and the
+// silhouette edges the ribbon techniques find in it.
+struct RibbonScene {
+  Scene scene;
+  LightMap map;
+  plm::Space space;
+  std::vector<plm::Edge> edges;
+};
+RibbonScene ribbonScene(const char* name, int size, size_t lightIndex = 0) {
+  RibbonScene r;
+  r.scene = loadScene(name);
+  const Light& sceneLight = r.scene.lights.at(lightIndex);
+  createShadowMap(r.scene, sceneLight, LightMapOptions{size, LightMapFit::Tight}, r.map,
+                  LightMapLayers::NearestAndFarthest);
+  const Light light = lightAtMapOrigin(sceneLight, r.map);
+  r.space = plm::makeSpace(r.map, light, "test");
+  r.edges = plm::silhouetteEdges(r.scene, light, r.map, r.space);
+  return r;
+}
+
 TEST(PlmRibbons, EveryTexelMatchesABruteForceRasterizationForEachTechniquesFilter) {
   // A perspective map over tori and boxes (sphere light), a real closed mesh (rect light), and an
   // orthographic one (directional light); map sizes that end in a partial 32-texel tile.
   for (const auto& [name, size] : {std::pair{"crowded", 200}, std::pair{"wuson", 176}, std::pair{"triangle", 72}}) {
-    const Scene scene = loadScene(name);
-    const Light& sceneLight = scene.lights[0];
-    LightMap map;
-    createShadowMap(scene, sceneLight, LightMapOptions{size, LightMapFit::Tight}, map,
-                    LightMapLayers::NearestAndFarthest);
-    const Light light = lightAtMapOrigin(sceneLight, map);
-    const plm::Space space = plm::makeSpace(map, light, "test");
-    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map, space);
+    const RibbonScene r = ribbonScene(name, size);
+    const LightMap& map = r.map;
+    const plm::Space& space = r.space;
+    const std::vector<plm::Edge>& edges = r.edges;
     Image<float> farthest(size, size);
     for (int j = 0; j < size; ++j)
       for (int i = 0; i < size; ++i) farthest(i, j) = plm::farthestZeta(map, space, i, j);
@@ -322,14 +338,10 @@ TEST(PlmRibbons, TheNarrowerReachesGiveUpOnlyTexelsBeyondEveryPenumbraThere) {
   constexpr float kMargin = 2.0f;
   for (const char* name : {"crowded", "wuson", "teapots"}) {
     SCOPED_TRACE(name);
-    const Scene scene = loadScene(name);
-    const Light& sceneLight = scene.lights[0];
-    LightMap map;
-    createShadowMap(scene, sceneLight, LightMapOptions{kSize, LightMapFit::Tight}, map,
-                    LightMapLayers::NearestAndFarthest);
-    const Light light = lightAtMapOrigin(sceneLight, map);
-    const plm::Space space = plm::makeSpace(map, light, "test");
-    const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map, space);
+    const RibbonScene r = ribbonScene(name, kSize);
+    const LightMap& map = r.map;
+    const plm::Space& space = r.space;
+    const std::vector<plm::Edge>& edges = r.edges;
     struct Case {
       plm::RibbonSides sides;
       plm::RibbonFilter filter;
@@ -454,15 +466,9 @@ TEST(PlmRibbons, AnImageKeptAcrossFramesHoldsEachFramesRibbonsAlone) {
     int light;
   };
   const auto ribbonsOf = [&](const Frame& frame, plm::RibbonImage& into) {
-    const Scene scene = loadScene(frame.scene);
-    const Light& sceneLight = scene.lights.at(static_cast<size_t>(frame.light));
-    LightMap map;
-    createShadowMap(scene, sceneLight, LightMapOptions{kSize, LightMapFit::Tight}, map,
-                    LightMapLayers::NearestAndFarthest);
-    const Light light = lightAtMapOrigin(sceneLight, map);
-    const plm::Space space = plm::makeSpace(map, light, "test");
-    plm::rasterizeRibbons(plm::silhouetteEdges(scene, light, map, space), space, map, plm::RibbonSides::Both, kMargin,
-                          plm::RibbonFilter{&map.objectId, &map.lsDepth, false}, into);
+    const RibbonScene r = ribbonScene(frame.scene, kSize, static_cast<size_t>(frame.light));
+    plm::rasterizeRibbons(r.edges, r.space, r.map, plm::RibbonSides::Both, kMargin,
+                          plm::RibbonFilter{&r.map.objectId, &r.map.lsDepth, false}, into);
   };
   const Frame frames[] = {{"crowded", 0}, {"triangle", 0}, {"wuson", 0},
                           {"crowded", 0}, {"spheres", 0},  {"crowded", 0}};
