@@ -107,8 +107,8 @@ LightMap renderLightMap(const Scene& scene, const Light& light, int size, LightM
 void renderLightMap(const Scene& scene, const Light& light, int size, LightMap& out,
                     LightMapFit fit = LightMapFit::Tight, LightMapLayers layers = LightMapLayers::Nearest);
 // renderLightMap in two steps, for a caller that needs the map's projection to decide where it wants
-// the far layer (the ribbon techniques: only where a ribbon can reach, a fifth of the map on the
-// built-in `crowded`; the far layer elsewhere would double the depth test's work for nothing).
+// the far layer (the ribbon techniques: only where a ribbon can reach, most often a small part of the
+// map; the far layer elsewhere would double the depth test's work for nothing).
 // fitLightMap sets every field of `out` but its images, as renderLightMap would (the images keep their
 // storage); rasterizeLightMap then draws `scene` (the one the map was fitted to) into them, the far
 // layer only in the kFarLayerTile tiles whose flag in `farTiles` is nonzero (as LightMap::farTiles;

@@ -215,8 +215,8 @@ inline float farthestZeta(const LightMap& map, const Space& space, int i, int j)
 // rasterizeRibbons' output: the ribbon texel of every map texel, and per kRibbonTile tile (row-major)
 // whether it may hold a ribbon texel. A tile that held none after the last frame and that no ribbon
 // reaches in this one still holds kNoRibbon throughout, so rasterizeRibbons leaves it alone: a frame
-// writes the tiles its ribbons reach and those they have left, not the whole map (the empty tiles'
-// 12-byte texels were a pass over 9 MB at 1024^2 on `crowded`).
+// writes the tiles its ribbons reach and those they have left, not the whole map (most of a map's
+// tiles hold no ribbon, and its 12-byte texels are most of what a frame would write).
 struct RibbonImage {
   Image<RibbonTexel> texels;
   std::vector<uint8_t> mayHoldRibbon;  //!< per tile; a size that does not fit the image: nothing known
