@@ -328,6 +328,9 @@ ViewFrame ViewSession::render(const ViewRequest& request) {
   if (techniqueChanged) {
     technique_.reset();
     technique_ = info.create(params);
+    // Its frames' storage made now, at the view's size (ShadowTechnique::reserve), as bench and compare
+    // do: this frame would otherwise fault it in piecemeal, inside the passes it times.
+    technique_->reserve(gbuffer_.width(), gbuffer_.height());
     techniqueName_ = info.name;
     techniqueParams_ = params;
     techniqueValid_ = false;
