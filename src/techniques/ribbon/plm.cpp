@@ -854,6 +854,14 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
                                   .wantOuter = wantOuter,
                                   .ties = ordered,
                                   .orthographic = space.orthographic};
+        // The texels of the edge's line it may take lie within h of the line on either side; with one
+        // side wanted and neither end's corner putting the texels beyond it on that side (kirsch's inner
+        // sides at convex corners, smoothies' outer ones at concave corners), on that side alone: the
+        // others are the pass's to reject, so they are not visited.
+        const float wantedSide = wantOuter ? 1.0f : -1.0f;
+        const bool oneSide =
+            !(wantOuter && wantInner) && e.endSideA * wantedSide <= 0.0f && e.endSideB * wantedSide <= 0.0f;
+        const float acrossLo = oneSide && wantOuter ? 0.0f : -h, acrossHi = oneSide && !wantOuter ? 0.0f : h;
         for (int j = j0; j <= j1; ++j) {
           // The texels of the row within h of the segment lie within h of its bounding box and
           // within h of its line: only that span is visited (widened by a texel against rounding;
@@ -865,9 +873,9 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
           const float reach = std::sqrt(std::max(h * h - dy * dy, 0.0f));
           float spanLo = xLo - reach, spanHi = xHi + reach;
           if (std::abs(e.outward.x) > 1e-3f) {
-            // |(q - a) . n| <= h along the row, solved for q.x.
+            // (q - a) . n within [acrossLo, acrossHi] along the row, solved for q.x.
             const float across = (y - e.a.y) * e.outward.y;
-            const float x0 = e.a.x + (-h - across) / e.outward.x, x1 = e.a.x + (h - across) / e.outward.x;
+            const float x0 = e.a.x + (acrossLo - across) / e.outward.x, x1 = e.a.x + (acrossHi - across) / e.outward.x;
             spanLo = std::max(spanLo, std::min(x0, x1));
             spanHi = std::min(spanHi, std::max(x0, x1));
           }
