@@ -52,8 +52,9 @@
 // test would drop is not rasterized at all (most silhouettes of a dense model lie behind its own
 // front), nor, where only footprint borders count, an edge inside its object's footprint; each row of
 // a ribbon is trimmed to the texels whose current winner it may still beat (a bound on its priority
-// there), and the filters that read the texel's own row run in the vectorized pass over the row;
-// none of these changes a texel.
+// there) and, where one side is wanted and no corner puts the texels beyond an end on it, to that side
+// of the edge's line; the filters that read the texel's own row run in the vectorized pass over the
+// row; none of these changes a texel.
 #pragma once
 
 #include <algorithm>
