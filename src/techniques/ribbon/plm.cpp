@@ -607,7 +607,7 @@ void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int 
   const int n = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
   tiles.assign(static_cast<size_t>(n) * n, 0);
   for (const Edge& e : edges) {
-    const RibbonBox box = ribbonBox(e, penumbraTexels(e, space.zetaFar), mapSize, marginTexels);
+    const RibbonBox box = mapRangeRibbonBox(e, space, mapSize, marginTexels);
     if (box.i0 > box.i1 || box.j0 > box.j1) continue;
     for (int tj = box.j0 / kFarLayerTile; tj <= box.j1 / kFarLayerTile; ++tj)
       std::fill_n(tiles.begin() + static_cast<ptrdiff_t>(tj) * n + box.i0 / kFarLayerTile,
@@ -631,7 +631,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
     out.mayHoldRibbon.assign(tileCount, 1);  // storage of unknown content: every tile is written
   }
   std::vector<RibbonBox> boxes(edges.size());
-  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(tiles) * tiles);
+  std::vector<std::vector<uint32_t>> bins(tileCount);
   // Whether `holds(x, y)` at every texel that the per-texel tests below may probe kHiddenProbeTexels
   // beyond the edge (false where one lies outside the map): the edge is sampled at quarter-texel
   // steps, each sample with the 3 x 3 texels around it, which hold every probe texel of the points
@@ -695,7 +695,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
   std::vector<uint8_t> reached(tileCount, 0);
   for (size_t k = 0; k < edges.size(); ++k) {
     if (skip[k]) continue;
-    boxes[k] = ribbonBox(edges[k], penumbraTexels(edges[k], space.zetaFar), mapSize, marginTexels);
+    boxes[k] = mapRangeRibbonBox(edges[k], space, mapSize, marginTexels);
     if (!empty(boxes[k])) forEachTile(boxes[k], [&](size_t tile) { reached[tile] = 1; });
   }
   // The far layer where a ribbon may reach (a map rasterized with farTilesForRibbons' tiles has it there).
@@ -714,7 +714,6 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
   const bool narrowed = reach != RibbonReach::MapDepthRange, fromTop = reach == RibbonReach::SurfacesInRange;
   // Per reached tile, the zeta of its deepest surface (-infinity: none) and of its shallowest one.
   std::vector<float> deepest(narrowed ? tileCount : 0, -kInfinity), shallowest(fromTop ? tileCount : 0, kInfinity);
-  const auto seen = [&](float z) { return z < kInfinity && (map.orthographic || z > 0.0f); };
   if (narrowed)
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
       for (int tile = range.begin(); tile < range.end(); ++tile) {
@@ -724,8 +723,8 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
         for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
           const float *far = map.lsFarDepth.row(j), *top = map.lsDepth.row(j);
           for (int i = ti * kTile; i < std::min(mapSize, ti * kTile + kTile); ++i) {
-            if (seen(far[i])) deep = std::max(deep, space.zeta(far[i]));
-            if (fromTop && seen(top[i])) shallow = std::min(shallow, space.zeta(top[i]));
+            if (isSurface(map, far[i])) deep = std::max(deep, space.zeta(far[i]));
+            if (fromTop && isSurface(map, top[i])) shallow = std::min(shallow, space.zeta(top[i]));
           }
         }
         deepest[static_cast<size_t>(tile)] = deep;

@@ -209,9 +209,13 @@ inline void edgeLines(const std::vector<Edge>& edges, std::vector<EdgeLine>& out
 // nothing to receive its shadow (the border of a ground plane, seen from above, would otherwise lay an
 // inner ribbon over the ground itself, whose texels then interpolate with the ribbons of the occluders
 // above it). rasterizeRibbons takes it where a ribbon reaches, not over the whole map.
+// Whether a light-map depth (either layer) is a surface: finite, and in front of a perspective map's origin.
+inline bool isSurface(const LightMap& map, float lsDepth) {
+  return lsDepth < kInfinity && (map.orthographic || lsDepth > 0.0f);
+}
 inline float farthestZeta(const LightMap& map, const Space& space, int i, int j) {
   const float z = map.lsFarDepth(i, j);
-  return z < kInfinity && (map.orthographic || z > 0.0f) ? space.zeta(z) : space.zetaNone;
+  return isSurface(map, z) ? space.zeta(z) : space.zetaNone;
 }
 // rasterizeRibbons' output: the ribbon texel of every map texel, and per kRibbonTile tile (row-major)
 // whether it may hold a ribbon texel. A tile that held none after the last frame and that no ribbon
@@ -309,6 +313,11 @@ struct RibbonBox {
   float halfWidth;
 };
 RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels);
+// ribbonBox at the widest penumbra the map's depth range allows (to zeta_far): the tiles
+// farTilesForRibbons flags, and the first box rasterizeRibbons takes for every reach.
+inline RibbonBox mapRangeRibbonBox(const Edge& e, const Space& space, int mapSize, float marginTexels) {
+  return ribbonBox(e, penumbraTexels(e, space.zetaFar), mapSize, marginTexels);
+}
 
 // Into `tiles`, one flag per kFarLayerTile tile of a mapSize map (LightMap::farTiles' layout): nonzero
 // where an edge's ribbon may reach (ribbonBox), the only texels where rasterizeRibbons reads the far

@@ -207,7 +207,7 @@ Image<plm::RibbonTexel> bruteForceRibbons(const std::vector<plm::Edge>& edges, c
     // wider than the map's range.
     float width = std::max(0.0f, space.zetaFar - cMin) / e.rate;
     if (reach != plm::RibbonReach::MapDepthRange) {
-      const plm::RibbonBox wide = plm::ribbonBox(e, width, n, margin);
+      const plm::RibbonBox wide = plm::mapRangeRibbonBox(e, space, n, margin);
       constexpr int kTile = plm::kRibbonTile;
       float below = -kInfinity, from = cMin;
       for (int j = wide.j0 / kTile * kTile; j < std::min(n, (wide.j1 / kTile + 1) * kTile); ++j)
