@@ -602,17 +602,51 @@ RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels)
                    std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
 }
 
+bool ribbonMayTake(const Edge& e, RibbonSides sides, float halfWidth, Vec2 lo, Vec2 hi) {
+  if (sides == RibbonSides::Both) return true;
+  const float wanted = sides == RibbonSides::Outer ? 1.0f : -1.0f;
+  constexpr float kSlack = 1.0f;  // texels; far beyond the rounding of the per-texel side test
+  // The signed distance across the line is linear: its greatest value on the wanted side is at a corner.
+  const auto acrossAt = [&](float x, float y) {
+    return wanted * ((x - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y);
+  };
+  if (std::max({acrossAt(lo.x, lo.y), acrossAt(hi.x, lo.y), acrossAt(lo.x, hi.y), acrossAt(hi.x, hi.y)}) >= -kSlack)
+    return true;
+  const auto nearEnd = [&](Vec2 end, float endSide) {
+    if (!(endSide * wanted > 0.0f)) return false;  // the texels beyond this end are on the other side
+    const float dx = std::max({0.0f, lo.x - end.x, end.x - hi.x}), dy = std::max({0.0f, lo.y - end.y, end.y - hi.y});
+    return std::sqrt(dx * dx + dy * dy) <= halfWidth + kSlack;
+  };
+  return nearEnd(e.a, e.endSideA) || nearEnd(e.b, e.endSideB);
+}
+
+namespace {
+
+// Calls f(tile index) for each `tileSize` tile of a mapSize map that the box reaches and where the
+// edge's ribbon may take a texel on the wanted sides (ribbonMayTake).
+template <typename F>
+void forEachRibbonTile(const Edge& e, const RibbonBox& box, RibbonSides sides, int mapSize, int tileSize, const F& f) {
+  if (box.i0 > box.i1 || box.j0 > box.j1) return;
+  const int tiles = (mapSize + tileSize - 1) / tileSize;
+  for (int tj = box.j0 / tileSize; tj <= box.j1 / tileSize; ++tj)
+    for (int ti = box.i0 / tileSize; ti <= box.i1 / tileSize; ++ti) {
+      // The tile's texel centres.
+      const Vec2 lo(static_cast<float>(ti * tileSize) + 0.5f, static_cast<float>(tj * tileSize) + 0.5f);
+      const Vec2 hi(static_cast<float>(std::min(mapSize, (ti + 1) * tileSize)) - 0.5f,
+                    static_cast<float>(std::min(mapSize, (tj + 1) * tileSize)) - 0.5f);
+      if (ribbonMayTake(e, sides, box.halfWidth, lo, hi)) f(static_cast<size_t>(tj) * tiles + ti);
+    }
+}
+
+}  // namespace
+
 void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
-                        std::vector<uint8_t>& tiles) {
+                        RibbonSides sides, std::vector<uint8_t>& tiles) {
   const int n = (mapSize + kFarLayerTile - 1) / kFarLayerTile;
   tiles.assign(static_cast<size_t>(n) * n, 0);
-  for (const Edge& e : edges) {
-    const RibbonBox box = mapRangeRibbonBox(e, space, mapSize, marginTexels);
-    if (box.i0 > box.i1 || box.j0 > box.j1) continue;
-    for (int tj = box.j0 / kFarLayerTile; tj <= box.j1 / kFarLayerTile; ++tj)
-      std::fill_n(tiles.begin() + static_cast<ptrdiff_t>(tj) * n + box.i0 / kFarLayerTile,
-                  box.i1 / kFarLayerTile - box.i0 / kFarLayerTile + 1, uint8_t{1});
-  }
+  for (const Edge& e : edges)
+    forEachRibbonTile(e, mapRangeRibbonBox(e, space, mapSize, marginTexels), sides, mapSize, kFarLayerTile,
+                      [&](size_t tile) { tiles[tile] = 1; });
 }
 
 void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const LightMap& map, RibbonSides sides,
@@ -687,16 +721,16 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
   // zetaFar); narrowed (RibbonReach), then only as wide as the widest one on the surfaces there are:
   // down to the deepest surface the far layer holds in the tiles the first box reaches (capped at
   // zetaFar), from the edge or (SurfacesInRange) from the shallowest surface the map sees there.
-  const auto forEachTile = [&](const RibbonBox& box, const auto& f) {
-    for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj)
-      for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti) f(static_cast<size_t>(tj) * tiles + ti);
+  // The tiles of the box where the edge may take a texel on the wanted sides (ribbonMayTake).
+  const auto forEachTile = [&](size_t k, const auto& f) {
+    forEachRibbonTile(edges[k], boxes[k], sides, mapSize, kTile, f);
   };
   const auto empty = [](const RibbonBox& box) { return box.i0 > box.i1 || box.j0 > box.j1; };
   std::vector<uint8_t> reached(tileCount, 0);
   for (size_t k = 0; k < edges.size(); ++k) {
     if (skip[k]) continue;
     boxes[k] = mapRangeRibbonBox(edges[k], space, mapSize, marginTexels);
-    if (!empty(boxes[k])) forEachTile(boxes[k], [&](size_t tile) { reached[tile] = 1; });
+    forEachTile(k, [&](size_t tile) { reached[tile] = 1; });
   }
   // The far layer where a ribbon may reach (a map rasterized with farTilesForRibbons' tiles has it there).
   static_assert(kFarLayerTile % kTile == 0, "a ribbon tile lies in one far-layer tile");
@@ -735,7 +769,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
     if (skip[k] || empty(boxes[k])) continue;
     if (narrowed) {
       float below = -kInfinity, from = kInfinity;
-      forEachTile(boxes[k], [&](size_t tile) {
+      forEachTile(k, [&](size_t tile) {
         below = std::max(below, deepest[tile]);
         if (fromTop) from = std::min(from, shallowest[tile]);
       });
@@ -745,7 +779,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
                                    penumbraTexels(edges[k], std::min(below, space.zetaFar), from));
       boxes[k] = ribbonBox(edges[k], width, mapSize, marginTexels);
     }
-    if (!empty(boxes[k])) forEachTile(boxes[k], [&](size_t tile) { bins[tile].push_back(static_cast<uint32_t>(k)); });
+    forEachTile(k, [&](size_t tile) { bins[tile].push_back(static_cast<uint32_t>(k)); });
   }
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles * tiles), [&](const tbb::blocked_range<int>& range) {
     // The tile's priorities and winners (texels are the tile's alone: no other task writes them),
@@ -1118,7 +1152,7 @@ class PlmTechnique final : public ShadowTechnique {
     table_ = VisibilityToIllumination::forLight(light);
     edges_ = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
     const std::vector<plm::Edge>& edges = edges_;
-    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, farTiles_);
+    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, plm::RibbonSides::Both, farTiles_);
     rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Both, options_.marginTexels,
                           plm::RibbonFilter{&map_.objectId, &map_.lsDepth, false}, ribbons_);

@@ -319,11 +319,20 @@ inline RibbonBox mapRangeRibbonBox(const Edge& e, const Space& space, int mapSiz
   return ribbonBox(e, penumbraTexels(e, space.zetaFar), mapSize, marginTexels);
 }
 
+// Whether the edge's ribbon, `halfWidth` texels wide (RibbonBox::halfWidth), may take a texel whose
+// centre lies in the rectangle [lo, hi] (map texels) on the wanted sides. With both sides wanted: always
+// (the box bounds it). With one: where part of the rectangle lies on that side of the edge's line, or
+// within halfWidth of an end whose corner puts the texels beyond it on that side (Edge::endSideA), with
+// a texel's slack against rounding; the other side's texels are ones rasterizeRibbons' per-texel test
+// rejects. Monotone in the rectangle and in halfWidth, so a tile holds whenever a tile it contains does.
+bool ribbonMayTake(const Edge& e, RibbonSides sides, float halfWidth, Vec2 lo, Vec2 hi);
+
 // Into `tiles`, one flag per kFarLayerTile tile of a mapSize map (LightMap::farTiles' layout): nonzero
-// where an edge's ribbon may reach (ribbonBox), the only texels where rasterizeRibbons reads the far
-// layer. Made from the map's projection alone (fitLightMap), for rasterizeLightMap's farTiles.
+// where an edge's ribbon may take a texel (mapRangeRibbonBox, on the wanted sides: ribbonMayTake), the
+// only texels where rasterizeRibbons reads the far layer. Made from the map's projection alone
+// (fitLightMap), for rasterizeLightMap's farTiles.
 void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
-                        std::vector<uint8_t>& tiles);
+                        RibbonSides sides, std::vector<uint8_t>& tiles);
 
 // Into `out`, which keeps its storage where it is large enough (and writes only the tiles that need it:
 // RibbonImage). `map` gives the far layer (farthestZeta; Error without it, or without it in a tile a ribbon reaches)

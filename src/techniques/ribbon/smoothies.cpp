@@ -72,7 +72,7 @@ class SmoothiesTechnique final : public ShadowTechnique {
     space_ = plm::makeSpace(map_, light, "smoothies");
     table_ = VisibilityToIllumination::forLight(light);
     const std::vector<plm::Edge> edges = plm::silhouetteEdges(scene, light, map_, space_, &edgeCache_);
-    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, farTiles_);
+    plm::farTilesForRibbons(edges, space_, map_.size, options_.marginTexels, plm::RibbonSides::Outer, farTiles_);
     rasterizeLightMap(scene, map_, kLayers, farTiles_);
     plm::edgeLines(edges, lines_);  // what sub_texel reads per pixel
     plm::rasterizeRibbons(edges, space_, map_, plm::RibbonSides::Outer, options_.marginTexels,
