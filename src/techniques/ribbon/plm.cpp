@@ -1038,6 +1038,9 @@ constexpr int kMaxProbes = 16;
 // Fewer samples than Equation 1 predicts by at least this many (2/16 of the light): a prediction
 // below it cannot be told from no light by 16 samples, and is left alone.
 constexpr float kProfileMinDeficit = 2.0f;
+// Receivers whose probes start within this many texels (of the map, at their depth) of each other
+// share packets, half the samples each at a time (PlmTechnique::probe).
+constexpr float kPairedProbeTexels = 4.0f;
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
 // PlmTechnique::ribbonAt_'s bits: a ribbon holds the texel (limits_ is written there); its c lies below
@@ -1432,16 +1435,26 @@ class PlmTechnique final : public ShadowTechnique {
             packet.ray.id[lane] = static_cast<uint32_t>(lane);  // the filter's index into group.walks
           }
           rays.intersect16(packet, walking, filter);
-          int kept = 0;
+          ProbeBatch batch;
           for (int lane = 0; lane < walking; ++lane) {
-            LowerLimitWalk& w = group.walks[lane];
             if (packet.hit.geomId[lane] == HitPacket16::kNoHit) continue;  // the ray left the scene
-            const float hitT = packet.ray.tMax[lane];
-            const std::optional<ProfileReceiver> receiver =
-                profileReceiver(w, hitT, Vec3(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]));
-            assert(receiver);                                         // the filter accepted the hit
-            if (probe(light, pattern, rays, w, *receiver)) continue;  // b found
-            w.ray.tMin = std::nextafter(hitT, kInfinity);
+            const LowerLimitWalk& w = group.walks[lane];
+            const std::optional<ProfileReceiver> receiver = profileReceiver(
+                w, packet.ray.tMax[lane], Vec3(packet.hit.ngX[lane], packet.hit.ngY[lane], packet.hit.ngZ[lane]));
+            assert(receiver);  // the filter accepted the hit
+            batch.add(w, *receiver);
+          }
+          probe(light, pattern, rays, batch);
+          int kept = 0;
+          for (int lane = 0, q = 0; lane < walking; ++lane) {
+            LowerLimitWalk& w = group.walks[lane];
+            if (packet.hit.geomId[lane] == HitPacket16::kNoHit) continue;
+            const ProbeBatch::Receiver& r = batch.receivers[q++];
+            if (r.shadowed) {  // b found: just above the receiver
+              limits_(w.i, w.j).b = space_.zeta(r.profile.probeDepth);
+              continue;
+            }
+            w.ray.tMin = std::nextafter(packet.ray.tMax[lane], kInfinity);
             if (++w.probes < kMaxProbes) group.walks[kept++] = w;
           }
           walking = kept;
@@ -1497,29 +1510,101 @@ class PlmTechnique final : public ShadowTechnique {
     return group.self->profileReceiver(group.walks[rayId], t, ng).has_value();
   }
 
-  // Probes a receiver with kProfileSamples rays to the light and, where it sees too little, puts b
-  // just above it (true: the walk ends).
-  bool probe(const Light& light, const LightPatternPoint* pattern, const RayScene& rays, const LowerLimitWalk& w,
-             const ProfileReceiver& receiver) {
-    const Vec3 probe = receiver.wsHit - receiver.lift * w.ray.direction;
-    Ray toLight[kProfileSamples];
-    bool blocked[kProfileSamples];
-    for (int q = 0; q < kProfileSamples; ++q) {
-      const LightSample sample = light.sampleFrom(probe, pattern[q]);
-      toLight[q].origin = probe;
-      toLight[q].direction = sample.wsDirection;
-      toLight[q].tMax = sample.distance;  // kInfinity for a directional light
+  // The receivers one step of a packet's walks met, each to be probed: where its probe starts (lifted
+  // off the surface towards the light), how many of its samples traced so far see the light, and the
+  // answer.
+  struct ProbeBatch {
+    struct Receiver {
+      ProfileReceiver profile;
+      Vec3 at;
+      int seen = 0;
+      bool decided = false, shadowed = false;
+    };
+    Receiver receivers[16];
+    int count = 0;
+    void add(const LowerLimitWalk& w, const ProfileReceiver& r) {
+      receivers[count++] = Receiver{r, r.wsHit - r.lift * w.ray.direction};
     }
-    rays.occluded16(toLight, kProfileSamples, blocked);
-    int seen = 0;
-    for (int q = 0; q < kProfileSamples; ++q) seen += blocked[q] ? 0 : 1;
-    const float expected = receiver.predicted * kProfileSamples;
-    if (static_cast<float>(seen) < kProfileFraction * expected &&
-        expected - static_cast<float>(seen) >= kProfileMinDeficit) {
-      limits_(w.i, w.j).b = space_.zeta(receiver.probeDepth);
-      return true;
+  };
+
+  // Whether a receiver that Equation 1 expects to see `expected` of kProfileSamples samples is shadowed
+  // by more than the ribbon's edge when `seen` of them see the light; true for fewer seen whenever it is
+  // for more.
+  static bool seesTooLittle(int seen, float expected) {
+    return static_cast<float>(seen) < kProfileFraction * expected &&
+           expected - static_cast<float>(seen) >= kProfileMinDeficit;
+  }
+
+  // Probes each receiver of the batch with kProfileSamples rays to the light (stratified over the
+  // emitter): shadowed where it sees too little (seesTooLittle). Two receivers whose probes start
+  // close together (neighbouring texels on one surface) trace their samples in two halves, each a
+  // checkerboard of the 4 x 4 grid, both receivers' halves in one Embree packet: the first half alone
+  // decides a receiver that sees enough even if none of its second half does (seesTooLittle falls as
+  // more see the light; one too dark is told by all sixteen at kProfileFraction 1/2, where eight more
+  // seen could reach half of any prediction); the rest trace the second half. Any other receiver traces all sixteen in
+  // a packet of its own (rays from far-apart points share little of a traversal). The answer is the
+  // one the sixteen samples give together.
+  void probe(const Light& light, const LightPatternPoint* pattern, const RayScene& rays, ProbeBatch& batch) const {
+    constexpr int kHalf = kProfileSamples / 2;
+    static_assert(kProfileGrid % 2 == 0 && 2 * kHalf <= 16, "two receivers' halves to a packet");
+    struct Job {
+      int receiver, half;  // half 0 or 1 of the grid, or -1: all of it
+    };
+    // The jobs' rays in packets of at most 16 lanes, a job's rays in one packet, in the jobs' order.
+    const auto trace = [&](const Job* jobs, int count) {
+      for (int first = 0; first < count;) {
+        Ray toLight[16];
+        bool blocked[16];
+        int lanes = 0, last = first;
+        for (; last < count; ++last) {
+          const int n = jobs[last].half < 0 ? kProfileSamples : kHalf;
+          if (lanes + n > 16) break;
+          const ProbeBatch::Receiver& r = batch.receivers[jobs[last].receiver];
+          for (int k = 0; k < n; ++k) {
+            // The k-th cell of the half's checkerboard: row k / 2, column 2 (k % 2) shifted by the row's parity.
+            const int row = jobs[last].half < 0 ? k / kProfileGrid : k / (kProfileGrid / 2);
+            const int column =
+                jobs[last].half < 0 ? k % kProfileGrid : 2 * (k % (kProfileGrid / 2)) + ((row + jobs[last].half) & 1);
+            const LightSample sample = light.sampleFrom(r.at, pattern[row * kProfileGrid + column]);
+            Ray& ray = toLight[lanes++];
+            ray.origin = r.at;
+            ray.direction = sample.wsDirection;
+            ray.tMax = sample.distance;  // kInfinity for a directional light
+          }
+        }
+        rays.occluded16(toLight, lanes, blocked);
+        for (int j = first, lane = 0; j < last; ++j) {
+          ProbeBatch::Receiver& r = batch.receivers[jobs[j].receiver];
+          const int n = jobs[j].half < 0 ? kProfileSamples : kHalf;
+          for (int k = 0; k < n; ++k) r.seen += blocked[lane++] ? 0 : 1;
+          const float expected = r.profile.predicted * kProfileSamples;
+          const int unseen = jobs[j].half == 0 ? kHalf : 0;  // samples still to trace
+          if (unseen == 0 || seesTooLittle(r.seen + unseen, expected) || !seesTooLittle(r.seen, expected)) {
+            r.decided = true;
+            r.shadowed = seesTooLittle(r.seen, expected);
+          }
+        }
+        first = last;
+      }
+    };
+    Job jobs[16];
+    int count = 0;
+    for (int r = 0; r < batch.count;) {
+      const ProbeBatch::Receiver& a = batch.receivers[r];
+      if (r + 1 < batch.count && glm::length(batch.receivers[r + 1].at - a.at) <=
+                                     kPairedProbeTexels * map_.texelWorldSize(a.profile.probeDepth)) {
+        jobs[count++] = Job{r, 0};
+        jobs[count++] = Job{r + 1, 0};
+        r += 2;
+      } else {
+        jobs[count++] = Job{r++, -1};
+      }
     }
-    return false;
+    trace(jobs, count);
+    count = 0;
+    for (int r = 0; r < batch.count; ++r)
+      if (!batch.receivers[r].decided) jobs[count++] = Job{r, 1};
+    trace(jobs, count);
   }
 
   PlmOptions options_;
