@@ -753,16 +753,22 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
       for (int tile = range.begin(); tile < range.end(); ++tile) {
         if (!reached[static_cast<size_t>(tile)]) continue;
         const int ti = tile % tiles, tj = tile / tiles;
+        // The deepest and shallowest surface depths, then their zeta: zeta rises with depth (and its
+        // rounding never reverses an order), so this is the greatest and least zeta of the surfaces.
+        // Texels without a surface (isSurface, written out for the vector loops) count as none.
         float deep = -kInfinity, shallow = kInfinity;
+        const bool orthographic = map.orthographic;
         for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
-          const float *far = map.lsFarDepth.row(j), *top = map.lsDepth.row(j);
-          for (int i = ti * kTile; i < std::min(mapSize, ti * kTile + kTile); ++i) {
-            if (isSurface(map, far[i])) deep = std::max(deep, space.zeta(far[i]));
-            if (fromTop && isSurface(map, top[i])) shallow = std::min(shallow, space.zeta(top[i]));
-          }
+          const float *far = map.lsFarDepth.row(j) + ti * kTile, *top = map.lsDepth.row(j) + ti * kTile;
+          const int count = std::min(mapSize - ti * kTile, kTile);
+          for (int i = 0; i < count; ++i)
+            deep = std::max(deep, far[i] < kInfinity && (orthographic || far[i] > 0.0f) ? far[i] : -kInfinity);
+          if (fromTop)
+            for (int i = 0; i < count; ++i)
+              shallow = std::min(shallow, top[i] < kInfinity && (orthographic || top[i] > 0.0f) ? top[i] : kInfinity);
         }
-        deepest[static_cast<size_t>(tile)] = deep;
-        if (fromTop) shallowest[static_cast<size_t>(tile)] = shallow;
+        deepest[static_cast<size_t>(tile)] = deep > -kInfinity ? space.zeta(deep) : -kInfinity;
+        if (fromTop) shallowest[static_cast<size_t>(tile)] = shallow < kInfinity ? space.zeta(shallow) : kInfinity;
       }
     });
   for (size_t k = 0; k < edges.size(); ++k) {
@@ -805,8 +811,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
       }
       bool tileTook = false;
       for (int j = 0; j < tileHeight; ++j)
-        for (int i = 0; i < tileWidth; ++i)
-          far[j * kTile + i] = farthestZeta(map, space, ti * kTile + i, tj * kTile + j);
+        farthestZetaRow(map, space, map.lsFarDepth.row(tj * kTile + j) + ti * kTile, tileWidth, far + j * kTile);
       std::fill(priority, priority + kTile * kTile, kInfinity);
       std::fill(winners, winners + kTile * kTile, kNoRibbon);
       std::fill(rowMax, rowMax + kTile, kInfinity);
