@@ -21,7 +21,9 @@
 //      the most reliable approach ("first calculate the true shadow profile (e.g., by dense sampling
 //      along each shadow ray) and then choose shadowing-function parameters to best fit this known
 //      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
-//      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light,
+//      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light
+//      (two neighbouring receivers half of them at a time, the second halves only where the first
+//      leaves the answer open: the same answer),
 //      and b is put just above the first one that sees less than half of what Equation 1 predicts
 //      for it, by at least 2 of the 16 (findLowerLimits). A receiver the map sees is lit from the
 //      light's centre, so in no umbra, and is not probed,
@@ -602,25 +604,27 @@ RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels)
                    std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
 }
 
-bool ribbonMayTake(const Edge& e, RibbonSides sides, float halfWidth, Vec2 lo, Vec2 hi) {
-  if (sides == RibbonSides::Both) return true;
+bool ribbonOneSided(const Edge& e, RibbonSides sides) {
   const float wanted = sides == RibbonSides::Outer ? 1.0f : -1.0f;
-  constexpr float kSlack = 1.0f;  // texels; far beyond the rounding of the per-texel side test
-  // The signed distance across the line is linear: its greatest value on the wanted side is at a corner.
-  const auto acrossAt = [&](float x, float y) {
-    return wanted * ((x - e.a.x) * e.outward.x + (y - e.a.y) * e.outward.y);
-  };
-  if (std::max({acrossAt(lo.x, lo.y), acrossAt(hi.x, lo.y), acrossAt(lo.x, hi.y), acrossAt(hi.x, hi.y)}) >= -kSlack)
-    return true;
-  const auto nearEnd = [&](Vec2 end, float endSide) {
-    if (!(endSide * wanted > 0.0f)) return false;  // the texels beyond this end are on the other side
-    const float dx = std::max({0.0f, lo.x - end.x, end.x - hi.x}), dy = std::max({0.0f, lo.y - end.y, end.y - hi.y});
-    return std::sqrt(dx * dx + dy * dy) <= halfWidth + kSlack;
-  };
-  return nearEnd(e.a, e.endSideA) || nearEnd(e.b, e.endSideB);
+  return sides != RibbonSides::Both && e.endSideA * wanted <= 0.0f && e.endSideB * wanted <= 0.0f;
 }
 
 namespace {
+
+// ribbonMayTake's test of a one-sided ribbon, set up once per edge: the signed distance across the
+// edge's line towards the wanted side is linear, so over a rectangle it is greatest at the corner the
+// signs of the wanted normal pick (float rounding keeps each term's order, so no other corner's value
+// is greater).
+struct WantedSide {
+  Vec2 a, normal;  // normal: the outward normal turned to the wanted side
+  explicit WantedSide(const Edge& e, RibbonSides sides)
+      : a(e.a), normal(sides == RibbonSides::Outer ? e.outward : -e.outward) {}
+  bool reaches(Vec2 lo, Vec2 hi) const {
+    constexpr float kSlack = 1.0f;  // texels; far beyond the rounding of the per-texel side test
+    const float x = normal.x >= 0.0f ? hi.x : lo.x, y = normal.y >= 0.0f ? hi.y : lo.y;
+    return (x - a.x) * normal.x + (y - a.y) * normal.y >= -kSlack;
+  }
+};
 
 // Calls f(tile index) for each `tileSize` tile of a mapSize map that the box reaches and where the
 // edge's ribbon may take a texel on the wanted sides (ribbonMayTake).
@@ -628,17 +632,28 @@ template <typename F>
 void forEachRibbonTile(const Edge& e, const RibbonBox& box, RibbonSides sides, int mapSize, int tileSize, const F& f) {
   if (box.i0 > box.i1 || box.j0 > box.j1) return;
   const int tiles = (mapSize + tileSize - 1) / tileSize;
-  for (int tj = box.j0 / tileSize; tj <= box.j1 / tileSize; ++tj)
-    for (int ti = box.i0 / tileSize; ti <= box.i1 / tileSize; ++ti) {
+  const int ti0 = box.i0 / tileSize, ti1 = box.i1 / tileSize, tj0 = box.j0 / tileSize, tj1 = box.j1 / tileSize;
+  if (!ribbonOneSided(e, sides)) {
+    for (int tj = tj0; tj <= tj1; ++tj)
+      for (int ti = ti0; ti <= ti1; ++ti) f(static_cast<size_t>(tj) * tiles + ti);
+    return;
+  }
+  const WantedSide side(e, sides);
+  for (int tj = tj0; tj <= tj1; ++tj)
+    for (int ti = ti0; ti <= ti1; ++ti) {
       // The tile's texel centres.
       const Vec2 lo(static_cast<float>(ti * tileSize) + 0.5f, static_cast<float>(tj * tileSize) + 0.5f);
       const Vec2 hi(static_cast<float>(std::min(mapSize, (ti + 1) * tileSize)) - 0.5f,
                     static_cast<float>(std::min(mapSize, (tj + 1) * tileSize)) - 0.5f);
-      if (ribbonMayTake(e, sides, box.halfWidth, lo, hi)) f(static_cast<size_t>(tj) * tiles + ti);
+      if (side.reaches(lo, hi)) f(static_cast<size_t>(tj) * tiles + ti);
     }
 }
 
 }  // namespace
+
+bool ribbonMayTake(const Edge& e, RibbonSides sides, Vec2 lo, Vec2 hi) {
+  return !ribbonOneSided(e, sides) || WantedSide(e, sides).reaches(lo, hi);
+}
 
 void farTilesForRibbons(const std::vector<Edge>& edges, const Space& space, int mapSize, float marginTexels,
                         RibbonSides sides, std::vector<uint8_t>& tiles) {
@@ -896,9 +911,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
         // side wanted and neither end's corner putting the texels beyond it on that side (kirsch's inner
         // sides at convex corners, smoothies' outer ones at concave corners), on that side alone: the
         // others are the pass's to reject, so they are not visited.
-        const float wantedSide = wantOuter ? 1.0f : -1.0f;
-        const bool oneSide =
-            !(wantOuter && wantInner) && e.endSideA * wantedSide <= 0.0f && e.endSideB * wantedSide <= 0.0f;
+        const bool oneSide = ribbonOneSided(e, sides);
         const float acrossLo = oneSide && wantOuter ? 0.0f : -h, acrossHi = oneSide && !wantOuter ? 0.0f : h;
         for (int j = j0; j <= j1; ++j) {
           // The texels of the row within h of the segment lie within h of its bounding box and

@@ -144,8 +144,8 @@ enum class RibbonSides { Both, Outer, Inner };
 //  - MapDepthRange: as wide as the widest penumbra its edge can cast in the map's depth range (W(c) of
 //    the file comment, at zeta_far);
 //  - SurfacesBelow: only as wide as the widest one on the surfaces there are: zeta_far lowered to the
-//    deepest surface of the far layer in the tiles the first width reaches (smoothies, whose V
-//    measures the penumbra from the edge's c);
+//    deepest surface of the far layer in the tiles the first width reaches on the ribbon's sides
+//    (ribbonMayTake; smoothies, whose V measures the penumbra from the edge's c);
 //  - SurfacesInRange: the same, measured from the shallowest surface the map sees in those tiles where
 //    that lies above the edge (kirsch, whose V measures the shadow width from the occluder's depth at
 //    the texel, which may lie above the edge).
@@ -332,13 +332,16 @@ inline RibbonBox mapRangeRibbonBox(const Edge& e, const Space& space, int mapSiz
   return ribbonBox(e, penumbraTexels(e, space.zetaFar), mapSize, marginTexels);
 }
 
-// Whether the edge's ribbon, `halfWidth` texels wide (RibbonBox::halfWidth), may take a texel whose
-// centre lies in the rectangle [lo, hi] (map texels) on the wanted sides. With both sides wanted: always
-// (the box bounds it). With one: where part of the rectangle lies on that side of the edge's line, or
-// within halfWidth of an end whose corner puts the texels beyond it on that side (Edge::endSideA), with
-// a texel's slack against rounding; the other side's texels are ones rasterizeRibbons' per-texel test
-// rejects. Monotone in the rectangle and in halfWidth, so a tile holds whenever a tile it contains does.
-bool ribbonMayTake(const Edge& e, RibbonSides sides, float halfWidth, Vec2 lo, Vec2 hi);
+// Whether only one side of the edge is wanted and neither end's corner puts the texels beyond it on
+// that side (kirsch's inner sides at convex corners, smoothies' outer ones at concave corners): then
+// every texel the ribbon takes lies on that side of the edge's line.
+bool ribbonOneSided(const Edge& e, RibbonSides sides);
+// Whether the edge's ribbon may take a texel whose centre lies in the rectangle [lo, hi] (map texels)
+// on the wanted sides: always where it is not one-sided (ribbonOneSided; its box bounds it); else where
+// part of the rectangle lies on that side of the edge's line, with a texel's slack against rounding.
+// The other side's texels are ones rasterizeRibbons' per-texel test rejects. Monotone in the rectangle,
+// so a tile holds whenever a tile it contains does.
+bool ribbonMayTake(const Edge& e, RibbonSides sides, Vec2 lo, Vec2 hi);
 
 // Into `tiles`, one flag per kFarLayerTile tile of a mapSize map (LightMap::farTiles' layout): nonzero
 // where an edge's ribbon may take a texel (mapRangeRibbonBox, on the wanted sides: ribbonMayTake), the
