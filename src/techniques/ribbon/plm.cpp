@@ -1057,8 +1057,13 @@ constexpr int kMaxProbes = 16;
 // below it cannot be told from no light by 16 samples, and is left alone.
 constexpr float kProfileMinDeficit = 2.0f;
 // Receivers whose probes start within this many texels (of the map, at their depth) of each other
-// share packets, half the samples each at a time (PlmTechnique::probe).
+// share the first stage's packets (PlmTechnique::probe).
 constexpr float kPairedProbeTexels = 4.0f;
+// The cells of the 4 x 4 grid (row-major indices) in the order a probe's stages trace them, and where
+// each stage ends: a checkerboard, then the other one in two quarters of one cell per row and column.
+constexpr int kProbeOrder[kProfileSamples] = {0, 2, 5, 7, 8, 10, 13, 15, 1, 4, 11, 14, 3, 6, 9, 12};
+constexpr int kProbeStages = 3;
+constexpr int kProbeStageEnd[kProbeStages] = {8, 12, 16};
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
 // PlmTechnique::ribbonAt_'s bits: a ribbon holds the texel (limits_ is written there); its c lies below
@@ -1554,49 +1559,42 @@ class PlmTechnique final : public ShadowTechnique {
   }
 
   // Probes each receiver of the batch with kProfileSamples rays to the light (stratified over the
-  // emitter): shadowed where it sees too little (seesTooLittle). Two receivers whose probes start
-  // close together (neighbouring texels on one surface) trace their samples in two halves, each a
-  // checkerboard of the 4 x 4 grid, both receivers' halves in one Embree packet: the first half alone
-  // decides a receiver that sees enough even if none of its second half does (seesTooLittle falls as
-  // more see the light; one too dark is told by all sixteen at kProfileFraction 1/2, where eight more
-  // seen could reach half of any prediction); the rest trace the second half. Any other receiver traces all sixteen in
-  // a packet of its own (rays from far-apart points share little of a traversal). The answer is the
-  // one the sixteen samples give together.
+  // emitter): shadowed where it sees too little (seesTooLittle). The samples go in stages
+  // (kProbeOrder): a receiver whose answer the samples traced so far settle — it sees too little even
+  // if every sample left sees the light, or enough even if none does (seesTooLittle falls as more
+  // see it) — traces no more. Receivers whose probes start close together (neighbouring texels on
+  // one surface) share a stage's packet; a receiver with no close neighbour left open traces all its
+  // remaining samples in a packet of its own (rays from far-apart points share little of a
+  // traversal, and a packet costs about as much with fewer rays). The answer is the one the sixteen
+  // samples give together.
   void probe(const Light& light, const LightPatternPoint* pattern, const RayScene& rays, ProbeBatch& batch) const {
-    constexpr int kHalf = kProfileSamples / 2;
-    static_assert(kProfileGrid % 2 == 0 && 2 * kHalf <= 16, "two receivers' halves to a packet");
     struct Job {
-      int receiver, half;  // half 0 or 1 of the grid, or -1: all of it
+      int receiver, begin, end;  // the samples kProbeOrder[begin, end)
+      bool opensPacket;          // no earlier job shares its packet
     };
-    // The jobs' rays in packets of at most 16 lanes, a job's rays in one packet, in the jobs' order.
+    // Each packet's jobs traced in one Embree query, and the receivers they settle marked.
     const auto trace = [&](const Job* jobs, int count) {
       for (int first = 0; first < count;) {
         Ray toLight[16];
         bool blocked[16];
         int lanes = 0, last = first;
-        for (; last < count; ++last) {
-          const int n = jobs[last].half < 0 ? kProfileSamples : kHalf;
-          if (lanes + n > 16) break;
+        for (; last < count && (last == first || !jobs[last].opensPacket); ++last) {
           const ProbeBatch::Receiver& r = batch.receivers[jobs[last].receiver];
-          for (int k = 0; k < n; ++k) {
-            // The k-th cell of the half's checkerboard: row k / 2, column 2 (k % 2) shifted by the row's parity.
-            const int row = jobs[last].half < 0 ? k / kProfileGrid : k / (kProfileGrid / 2);
-            const int column =
-                jobs[last].half < 0 ? k % kProfileGrid : 2 * (k % (kProfileGrid / 2)) + ((row + jobs[last].half) & 1);
-            const LightSample sample = light.sampleFrom(r.at, pattern[row * kProfileGrid + column]);
+          for (int k = jobs[last].begin; k < jobs[last].end; ++k) {
+            const LightSample sample = light.sampleFrom(r.at, pattern[kProbeOrder[k]]);
             Ray& ray = toLight[lanes++];
             ray.origin = r.at;
             ray.direction = sample.wsDirection;
             ray.tMax = sample.distance;  // kInfinity for a directional light
           }
         }
+        assert(lanes <= 16);
         rays.occluded16(toLight, lanes, blocked);
         for (int j = first, lane = 0; j < last; ++j) {
           ProbeBatch::Receiver& r = batch.receivers[jobs[j].receiver];
-          const int n = jobs[j].half < 0 ? kProfileSamples : kHalf;
-          for (int k = 0; k < n; ++k) r.seen += blocked[lane++] ? 0 : 1;
+          for (int k = jobs[j].begin; k < jobs[j].end; ++k) r.seen += blocked[lane++] ? 0 : 1;
           const float expected = r.profile.predicted * kProfileSamples;
-          const int unseen = jobs[j].half == 0 ? kHalf : 0;  // samples still to trace
+          const int unseen = kProfileSamples - jobs[j].end;  // samples still to trace
           if (unseen == 0 || seesTooLittle(r.seen + unseen, expected) || !seesTooLittle(r.seen, expected)) {
             r.decided = true;
             r.shadowed = seesTooLittle(r.seen, expected);
@@ -1605,24 +1603,27 @@ class PlmTechnique final : public ShadowTechnique {
         first = last;
       }
     };
-    Job jobs[16];
-    int count = 0;
-    for (int r = 0; r < batch.count;) {
+    const auto close = [&](int r, int q) {
       const ProbeBatch::Receiver& a = batch.receivers[r];
-      if (r + 1 < batch.count && glm::length(batch.receivers[r + 1].at - a.at) <=
-                                     kPairedProbeTexels * map_.texelWorldSize(a.profile.probeDepth)) {
-        jobs[count++] = Job{r, 0};
-        jobs[count++] = Job{r + 1, 0};
-        r += 2;
-      } else {
-        jobs[count++] = Job{r++, -1};
+      return glm::length(batch.receivers[q].at - a.at) <=
+             kPairedProbeTexels * map_.texelWorldSize(a.profile.probeDepth);
+    };
+    Job jobs[16];
+    for (int stage = 0, begin = 0; stage < kProbeStages; begin = kProbeStageEnd[stage++]) {
+      const int end = kProbeStageEnd[stage], perPacket = 16 / (end - begin);
+      int open[16], openCount = 0, count = 0;
+      for (int r = 0; r < batch.count; ++r)
+        if (!batch.receivers[r].decided) open[openCount++] = r;
+      for (int q = 0; q < openCount;) {
+        // The close receivers that follow the first open one, as many as the packet holds.
+        int members = 1;
+        while (members < perPacket && q + members < openCount && close(open[q], open[q + members])) ++members;
+        for (int m = 0; m < members; ++m)
+          jobs[count++] = Job{open[q + m], begin, members > 1 ? end : kProfileSamples, m == 0};
+        q += members;
       }
+      trace(jobs, count);
     }
-    trace(jobs, count);
-    count = 0;
-    for (int r = 0; r < batch.count; ++r)
-      if (!batch.receivers[r].decided) jobs[count++] = Job{r, 1};
-    trace(jobs, count);
   }
 
   PlmOptions options_;
