@@ -22,8 +22,8 @@
 //      along each shadow ray) and then choose shadowing-function parameters to best fit this known
 //      shadow profile"), sparsely: along the texel's light ray below c, every surface that faces the
 //      light (a receiver) and lies below the one the map sees is probed with 16 rays to the light
-//      (two neighbouring receivers half of them at a time, the second halves only where the first
-//      leaves the answer open: the same answer),
+//      (in stages, neighbouring receivers sharing packets, each stopping once the samples traced
+//      settle its answer: the sixteen's answer),
 //      and b is put just above the first one that sees less than half of what Equation 1 predicts
 //      for it, by at least 2 of the 16 (findLowerLimits). A receiver the map sees is lit from the
 //      light's centre, so in no umbra, and is not probed,
@@ -604,6 +604,60 @@ RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels)
                    std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
 }
 
+void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out) {
+  int i = 0;
+#if defined(__SSE4_1__)
+  // isSurface and Space::zeta on four texels, every lane's zeta computed and the surface test picking it.
+  const __m128 infinity = _mm_set1_ps(kInfinity), zero = _mm_setzero_ps(), minusOne = _mm_set1_ps(-1.0f);
+  const __m128 none = _mm_set1_ps(space.zetaNone);
+  for (; i + 4 <= count; i += 4) {
+    const __m128 z = _mm_loadu_ps(lsFar + i);
+    const __m128 finite = _mm_cmplt_ps(z, infinity);
+    const __m128 zeta = space.orthographic ? z : _mm_div_ps(minusOne, z);
+    const __m128 surface = map.orthographic ? finite : _mm_and_ps(finite, _mm_cmpgt_ps(z, zero));
+    _mm_storeu_ps(out + i, _mm_blendv_ps(none, zeta, surface));
+  }
+#endif
+  for (; i < count; ++i) out[i] = isSurface(map, lsFar[i]) ? space.zeta(lsFar[i]) : space.zetaNone;
+}
+
+namespace {
+
+// The greatest surface depth of `count` texels of a far-layer row, and the least of a nearest-layer
+// row (`top`, when given), into `deepest` and `shallowest` (isSurface; texels without a surface leave
+// them as they are).
+void surfaceDepthRange(const LightMap& map, const float* far, const float* top, int count, float& deepest,
+                       float& shallowest) {
+  int i = 0;
+#if defined(__SSE4_1__)
+  const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity), zero = _mm_setzero_ps();
+  const auto surfaces = [&](__m128 z) {
+    const __m128 finite = _mm_cmplt_ps(z, infinity);
+    return map.orthographic ? finite : _mm_and_ps(finite, _mm_cmpgt_ps(z, zero));
+  };
+  __m128 deep = minusInfinity, shallow = infinity;
+  for (; i + 4 <= count; i += 4) {
+    const __m128 f = _mm_loadu_ps(far + i);
+    deep = _mm_max_ps(deep, _mm_blendv_ps(minusInfinity, f, surfaces(f)));
+    if (top) {
+      const __m128 t = _mm_loadu_ps(top + i);
+      shallow = _mm_min_ps(shallow, _mm_blendv_ps(infinity, t, surfaces(t)));
+    }
+  }
+  float lanes[4];
+  _mm_storeu_ps(lanes, deep);
+  deepest = std::max({deepest, lanes[0], lanes[1], lanes[2], lanes[3]});
+  _mm_storeu_ps(lanes, shallow);
+  shallowest = std::min({shallowest, lanes[0], lanes[1], lanes[2], lanes[3]});
+#endif
+  for (; i < count; ++i) {
+    if (isSurface(map, far[i])) deepest = std::max(deepest, far[i]);
+    if (top && isSurface(map, top[i])) shallowest = std::min(shallowest, top[i]);
+  }
+}
+
+}  // namespace
+
 bool ribbonOneSided(const Edge& e, RibbonSides sides) {
   const float wanted = sides == RibbonSides::Outer ? 1.0f : -1.0f;
   return sides != RibbonSides::Both && e.endSideA * wanted <= 0.0f && e.endSideB * wanted <= 0.0f;
@@ -770,18 +824,11 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
         const int ti = tile % tiles, tj = tile / tiles;
         // The deepest and shallowest surface depths, then their zeta: zeta rises with depth (and its
         // rounding never reverses an order), so this is the greatest and least zeta of the surfaces.
-        // Texels without a surface (isSurface, written out for the vector loops) count as none.
         float deep = -kInfinity, shallow = kInfinity;
-        const bool orthographic = map.orthographic;
-        for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j) {
-          const float *far = map.lsFarDepth.row(j) + ti * kTile, *top = map.lsDepth.row(j) + ti * kTile;
-          const int count = std::min(mapSize - ti * kTile, kTile);
-          for (int i = 0; i < count; ++i)
-            deep = std::max(deep, far[i] < kInfinity && (orthographic || far[i] > 0.0f) ? far[i] : -kInfinity);
-          if (fromTop)
-            for (int i = 0; i < count; ++i)
-              shallow = std::min(shallow, top[i] < kInfinity && (orthographic || top[i] > 0.0f) ? top[i] : kInfinity);
-        }
+        for (int j = tj * kTile; j < std::min(mapSize, tj * kTile + kTile); ++j)
+          surfaceDepthRange(map, map.lsFarDepth.row(j) + ti * kTile,
+                            fromTop ? map.lsDepth.row(j) + ti * kTile : nullptr, std::min(mapSize - ti * kTile, kTile),
+                            deep, shallow);
         deepest[static_cast<size_t>(tile)] = deep > -kInfinity ? space.zeta(deep) : -kInfinity;
         if (fromTop) shallowest[static_cast<size_t>(tile)] = shallow < kInfinity ? space.zeta(shallow) : kInfinity;
       }

@@ -218,18 +218,8 @@ inline float farthestZeta(const LightMap& map, const Space& space, int i, int j)
   return isSurface(map, z) ? space.zeta(z) : space.zetaNone;
 }
 // farthestZeta of `count` texels of one row of the far layer from `lsFar` on, into `out`: the same
-// values, in vector loops (the zeta of every texel is computed, and the surface test picks it).
-inline void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out) {
-  const float none = space.zetaNone;
-  if (space.orthographic) {
-    for (int i = 0; i < count; ++i) out[i] = lsFar[i] < kInfinity ? lsFar[i] : none;
-  } else {
-    for (int i = 0; i < count; ++i) {
-      const float zeta = -1.0f / lsFar[i];
-      out[i] = lsFar[i] < kInfinity && lsFar[i] > 0.0f ? zeta : none;
-    }
-  }
-}
+// values, four at a time in SSE where the build has it (plm.cpp).
+void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out);
 // rasterizeRibbons' output: the ribbon texel of every map texel, and per kRibbonTile tile (row-major)
 // whether it may hold a ribbon texel. A tile that held none after the last frame and that no ribbon
 // reaches in this one still holds kNoRibbon throughout, so rasterizeRibbons leaves it alone: a frame

@@ -503,6 +503,38 @@ TEST(PlmRibbons, AnImageKeptAcrossFramesHoldsEachFramesRibbonsAlone) {
   }
 }
 
+// The far layer's zeta a row at a time (vector lanes and a scalar tail) is farthestZeta's to the bit, for
+// both map kinds, on depths with no surface (infinite, NaN, at or behind a perspective origin) among them.
+TEST(PlmRibbons, AFarLayerRowInZetaIsFarthestZetaTexelByTexel) {
+  constexpr int kWidth = 37;
+  uint32_t state = 11u;
+  const auto uniform = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  };
+  for (const bool orthographic : {false, true}) {
+    LightMap map;
+    map.orthographic = orthographic;
+    map.lsFarDepth = Image<float>(kWidth, 1);
+    const float special[] = {kInfinity, std::numeric_limits<float>::quiet_NaN(), 0.0f, -0.0f, -1.0f, -kInfinity,
+                             1e-30f};
+    for (int i = 0; i < kWidth; ++i)
+      map.lsFarDepth(i, 0) = i % 3 == 0 ? special[(i / 3) % 7] : 0.1f + 20.0f * uniform();
+    plm::Space space;
+    space.orthographic = orthographic;
+    space.zetaNone = 7.0f;
+    for (int first = 0; first < 4; ++first) {
+      float out[kWidth];
+      plm::farthestZetaRow(map, space, map.lsFarDepth.row(0) + first, kWidth - first, out);
+      for (int i = first; i < kWidth; ++i) {
+        const float want = plm::farthestZeta(map, space, i, 0);
+        EXPECT_EQ(std::memcmp(&want, &out[i - first], sizeof(float)), 0)
+            << (orthographic ? "orthographic " : "perspective ") << i << ": " << want << " " << out[i - first];
+      }
+    }
+  }
+}
+
 // ribbonMayTake, which leaves a tile out of an edge's one-sided ribbon, never leaves out a tile where
 // the per-texel definition (the scalar span pass, every filter passing) takes a texel for that side:
 // random edges with every kind of end, tiles around them, half widths up to past the tile; and it
