@@ -53,8 +53,9 @@
 // front), nor, where only footprint borders count, an edge inside its object's footprint; each row of
 // a ribbon is trimmed to the texels whose current winner it may still beat (a bound on its priority
 // there) and, where one side is wanted and no corner puts the texels beyond an end on it, to that side
-// of the edge's line; the filters that read the texel's own row run in the vectorized pass over the
-// row; none of these changes a texel.
+// of the edge's line, and such a ribbon goes only to the tiles on that side (ribbonMayTake); the
+// filters that read the texel's own row run in the vectorized pass over the row; none of these
+// changes a texel.
 #pragma once
 
 #include <algorithm>
