@@ -186,6 +186,15 @@ TEST(PlmEdgeRate, ASphereLightIsAsWideAcrossAnEdgeAsItsEllipseInTheMapsPlane) {
   EXPECT_EQ(plm::edgeRate(space, map, edgeAt(mid, Vec2(0.0f, 3.0f), Vec2(1.0f, 0.0f))), 0.02f);
 }
 
+// Reproducible uniform floats in [0, 1) (a linear congruential generator) for the randomized tests.
+struct UniformFloats {
+  uint32_t state;
+  float operator()() {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
+  }
+};
+
 // The ribbons of plm.h by their definition alone: every edge, in list order, at every texel within
 // its width of it, through every filter, the least priority winning (ties to the first edge) — no
 // tiles, no edges reordered or skipped ahead of the texels, no trimmed or skipped rows, no vector pass. The same
@@ -507,11 +516,7 @@ TEST(PlmRibbons, AnImageKeptAcrossFramesHoldsEachFramesRibbonsAlone) {
 // both map kinds, on depths with no surface (infinite, NaN, at or behind a perspective origin) among them.
 TEST(PlmRibbons, AFarLayerRowInZetaIsFarthestZetaTexelByTexel) {
   constexpr int kWidth = 37;
-  uint32_t state = 11u;
-  const auto uniform = [&] {
-    state = state * 1664525u + 1013904223u;
-    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
-  };
+  UniformFloats uniform{11u};
   for (const bool orthographic : {false, true}) {
     LightMap map;
     map.orthographic = orthographic;
@@ -540,11 +545,7 @@ TEST(PlmRibbons, AFarLayerRowInZetaIsFarthestZetaTexelByTexel) {
 // random edges with every kind of end, tiles around them, half widths up to past the tile; and it
 // does leave tiles out (else it would cost without saving), only of one-sided ribbons.
 TEST(PlmRibbons, ATileLeftOutOfAOneSidedRibbonHoldsNoTexelItWouldTake) {
-  uint32_t state = 7u;
-  const auto uniform = [&] {
-    state = state * 1664525u + 1013904223u;
-    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
-  };
+  UniformFloats uniform{7u};
   constexpr int kTile = plm::kRibbonTile;
   float far[kTile], priority[kTile];
   std::fill_n(far, kTile, 1e30f);  // a surface below every edge
@@ -614,11 +615,7 @@ TEST(PlmRibbons, ATileLeftOutOfAOneSidedRibbonHoldsNoTexelItWouldTake) {
 // row, ends beyond the edge on either side, both map kinds, every filter present or not, and
 // priorities that tie the edge's own (taken through the scalar pass first) on some texels.
 TEST(PlmRibbons, SpanPathsGiveTheScalarPassToTheBit) {
-  uint32_t state = 2024u;
-  const auto uniform = [&] {
-    state = state * 1664525u + 1013904223u;
-    return static_cast<float>(state >> 8) / static_cast<float>(1u << 24);
-  };
+  UniformFloats uniform{2024u};
   constexpr int kTile = plm::kRibbonTile;
   float far[kTile], top[kTile], priority[kTile];
   int32_t coverage[kTile];
