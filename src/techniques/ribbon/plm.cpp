@@ -1111,6 +1111,10 @@ constexpr float kPairedProbeTexels = 4.0f;
 constexpr int kProbeOrder[kProfileSamples] = {0, 2, 5, 7, 8, 10, 13, 15, 1, 4, 11, 14, 3, 6, 9, 12};
 constexpr int kProbeStages = 3;
 constexpr int kProbeStageEnd[kProbeStages] = {8, 12, 16};
+static_assert(kProbeStageEnd[kProbeStages - 1] == kProfileSamples &&
+                  16 % (kProbeStageEnd[1] - kProbeStageEnd[0]) == 0 &&
+                  16 % (kProbeStageEnd[2] - kProbeStageEnd[1]) == 0 && 16 % kProbeStageEnd[0] == 0,
+              "every sample traced once; a stage's packet holds whole jobs");
 static_assert(kProfileSamples <= 16, "one Embree packet (RayScene::occluded16)");
 
 // PlmTechnique::ribbonAt_'s bits: a ribbon holds the texel (limits_ is written there); its c lies below
