@@ -73,6 +73,9 @@ constexpr int kStableExtentSteps = 16;  //!< stable extents per octave (steps of
 // A stable map of a sphere or segment light looks along the world axis nearest its quantized axis
 // when the two are at most this far apart (degrees).
 constexpr float kStableWorldAxisDegrees = 30.0f;
+// An orthographic map's margin (world units) around the scene's bounds: its origin stands this far
+// behind them, and its depth key's range reaches this far beyond zFar (fitLightMap, rasterizeLightMap).
+float orthographicPad(const Bounds3& bounds) { return 1e-3f * std::max(bounds.radius(), 1e-6f); }
 
 // Octahedral map of a unit direction to [-1, 1]^2 and back (Meyer et al. 2010, "On floating-point
 // normal vectors"): cells of equal size in the square are of similar solid angle on the sphere. The
@@ -257,7 +260,7 @@ void fitLightMap(const Scene& scene, const Light& light, int size, LightMap& out
       behind = std::max(behind, -l.z);
       ahead = std::max(ahead, l.z);
     }
-    const float pad = 1e-3f * std::max(bounds.radius(), 1e-6f);
+    const float pad = orthographicPad(bounds);
     m.halfWidth = extent > 0.0f ? extent * kFitMargin : pad;
     m.wsOrigin = c - m.lsFrame.z * (behind + pad);
     if (stable) {
@@ -352,8 +355,7 @@ void rasterizeLightMap(const Scene& scene, LightMap& m, LightMapLayers layers, s
   float clipZScale = 0.0f, clipZOffset = 0.0f, clipWScale = 1.0f, clipWOffset = 0.0f;
   if (m.orthographic) {
     // Linear key over [0, zFar]: z_clip = 2 z / zFar' - 1 >= -1 clips at the origin's plane.
-    const float pad = 1e-3f * std::max(bounds.radius(), 1e-6f);  // fitLightMap's
-    const float range = m.zFar * kFitMargin + pad;
+    const float range = m.zFar * kFitMargin + orthographicPad(bounds);
     clipZScale = 2.0f / range;
     clipZOffset = -1.0f;
     clipWScale = 0.0f;

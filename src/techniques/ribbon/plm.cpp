@@ -604,24 +604,15 @@ RibbonBox ribbonBox(const Edge& e, float width, int mapSize, float marginTexels)
                    std::min(mapSize - 1, static_cast<int>(std::floor(hi.y))), half};
 }
 
-void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out) {
-  int i = 0;
-#if defined(__SSE4_1__)
-  // isSurface and Space::zeta on four texels, every lane's zeta computed and the surface test picking it.
-  const __m128 infinity = _mm_set1_ps(kInfinity), zero = _mm_setzero_ps(), minusOne = _mm_set1_ps(-1.0f);
-  const __m128 none = _mm_set1_ps(space.zetaNone);
-  for (; i + 4 <= count; i += 4) {
-    const __m128 z = _mm_loadu_ps(lsFar + i);
-    const __m128 finite = _mm_cmplt_ps(z, infinity);
-    const __m128 zeta = space.orthographic ? z : _mm_div_ps(minusOne, z);
-    const __m128 surface = map.orthographic ? finite : _mm_and_ps(finite, _mm_cmpgt_ps(z, zero));
-    _mm_storeu_ps(out + i, _mm_blendv_ps(none, zeta, surface));
-  }
-#endif
-  for (; i < count; ++i) out[i] = isSurface(map, lsFar[i]) ? space.zeta(lsFar[i]) : space.zetaNone;
-}
-
 namespace {
+
+#if defined(__SSE4_1__)
+// isSurface on four depths: all bits set in the lanes that hold a surface.
+inline __m128 surfaceLanes(const LightMap& map, __m128 lsDepth) {
+  const __m128 finite = _mm_cmplt_ps(lsDepth, _mm_set1_ps(kInfinity));
+  return map.orthographic ? finite : _mm_and_ps(finite, _mm_cmpgt_ps(lsDepth, _mm_setzero_ps()));
+}
+#endif
 
 // The greatest surface depth of `count` texels of a far-layer row, and the least of a nearest-layer
 // row (`top`, when given), into `deepest` and `shallowest` (isSurface; texels without a surface leave
@@ -630,18 +621,14 @@ void surfaceDepthRange(const LightMap& map, const float* far, const float* top, 
                        float& shallowest) {
   int i = 0;
 #if defined(__SSE4_1__)
-  const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity), zero = _mm_setzero_ps();
-  const auto surfaces = [&](__m128 z) {
-    const __m128 finite = _mm_cmplt_ps(z, infinity);
-    return map.orthographic ? finite : _mm_and_ps(finite, _mm_cmpgt_ps(z, zero));
-  };
+  const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
   __m128 deep = minusInfinity, shallow = infinity;
   for (; i + 4 <= count; i += 4) {
     const __m128 f = _mm_loadu_ps(far + i);
-    deep = _mm_max_ps(deep, _mm_blendv_ps(minusInfinity, f, surfaces(f)));
+    deep = _mm_max_ps(deep, _mm_blendv_ps(minusInfinity, f, surfaceLanes(map, f)));
     if (top) {
       const __m128 t = _mm_loadu_ps(top + i);
-      shallow = _mm_min_ps(shallow, _mm_blendv_ps(infinity, t, surfaces(t)));
+      shallow = _mm_min_ps(shallow, _mm_blendv_ps(infinity, t, surfaceLanes(map, t)));
     }
   }
   float lanes[4];
@@ -657,6 +644,20 @@ void surfaceDepthRange(const LightMap& map, const float* far, const float* top, 
 }
 
 }  // namespace
+
+void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out) {
+  int i = 0;
+#if defined(__SSE4_1__)
+  // Space::zeta on four texels, every lane's computed and the surface test picking it.
+  const __m128 minusOne = _mm_set1_ps(-1.0f), none = _mm_set1_ps(space.zetaNone);
+  for (; i + 4 <= count; i += 4) {
+    const __m128 z = _mm_loadu_ps(lsFar + i);
+    const __m128 zeta = space.orthographic ? z : _mm_div_ps(minusOne, z);
+    _mm_storeu_ps(out + i, _mm_blendv_ps(none, zeta, surfaceLanes(map, z)));
+  }
+#endif
+  for (; i < count; ++i) out[i] = isSurface(map, lsFar[i]) ? space.zeta(lsFar[i]) : space.zetaNone;
+}
 
 bool ribbonOneSided(const Edge& e, RibbonSides sides) {
   const float wanted = sides == RibbonSides::Outer ? 1.0f : -1.0f;
