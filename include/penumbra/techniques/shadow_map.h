@@ -169,7 +169,8 @@ struct BrabecOptions {
   std::optional<float> rBias;       //!< paper: search radius at z = 0, texels
   std::optional<float> rShrink;     //!< paper: r_max factor per world unit of depth difference, 1 / world unit
   int maxRadius = 96;               //!< hard cap of the search radius, texels (see the file comment)
-  bool interpolate = true;          //!< Sec. 4.3 adaptive 4x4 block interpolation
+  bool interpolate = true;          //!< Sec. 4.3 adaptive block interpolation
+  int interpolateBlock = 0;         //!< block side, pixels; 0: from the image size (brabec.h, "Adaptive sampling")
   float interpolateMaxStep = 1.0f;  //!< also refine a group whose border V differ by more
   bool interpolateKinks = true;  //!< also refine across the kinks of V (r = r_max, ridges of r); see the file comment
   float interpolateMaxAngle = 30.0f;  //!< kinks: largest angle between the borders' directions to their texels, degrees
@@ -211,7 +212,15 @@ struct BrabecOptions {
                 "nearest possible blocker sits close to the light; beyond it a penumbra is cut. 96 holds the widest "
                 "physical radius of the built-in scenes at map_size 1024 (69 texels, `linear`)"));
     f.add(&O::interpolate,
-          OptionDecl("interpolate").help("adaptive 4x4 block interpolation (Sec. 4.3); false searches every pixel"));
+          OptionDecl("interpolate").help("adaptive block interpolation (Sec. 4.3); false searches every pixel"));
+    f.add(&O::interpolateBlock,
+          OptionDecl("interpolate_block")
+              .range(0, 64)
+              .unit("pixels")
+              .help("side of the interpolation's blocks (searched borders every this many pixels); 0 = auto: 4 on "
+                    "images up to 1023 pixels on their longer side, the paper's 4 x 4 at 512 x 512 and 800 x 600, "
+                    "doubled at every doubling of it (8 at 1024, 16 at 2048), as Sec. 4.3 says the block should "
+                    "depend on the image size"));
     f.add(&O::interpolateMaxStep,
           OptionDecl("interpolate_max_step")
               .range(0, 1)

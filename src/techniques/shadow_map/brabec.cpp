@@ -1,7 +1,7 @@
 // `brabec`: Brabec & Seidel 2002, "Single Sample Soft Shadows using Depth Maps" — the whole method:
 // outer and inner penumbra searches with the object-id test (Sec. 3.2, 3.3), r_max derived from the
 // physical light or from the paper's r_scale / r_bias / r_shrink, sub-texel distances and texel
-// jitter (Sec. 4.3), the vectorized axis-aligned search (Sec. 4.2) and the adaptive 4x4 block
+// jitter (Sec. 4.3), the vectorized axis-aligned search (Sec. 4.2) and the adaptive block
 // interpolation (Sec. 4.3); and our extension, the coverage bound (on by default). See brabec.h for
 // the equations, the units and the deviations.
 #include "techniques/shadow_map/brabec.h"
@@ -1048,6 +1048,17 @@ float BrabecTechnique::boundByCoverage(const Pixel& p, float v, float zb) const 
   return std::max(v, 1.0f - static_cast<float>(c.blocked) / static_cast<float>(c.total));
 }
 
+namespace brabec {
+
+int interpolationBlock(int option, int width, int height) {
+  if (option > 0) return option;
+  int block = 4;  // the paper's, up to 1023 pixels on the longer side
+  for (int side = std::max(width, height); side >= 1024; side /= 2) block *= 2;
+  return block;
+}
+
+}  // namespace brabec
+
 namespace {
 
 // Sec. 4.3 group refinement along one line of pixels (a column or a row): `at(i)` is pixel i's
@@ -1080,10 +1091,10 @@ void refineGroup(int a, int b, const Solve& solve, const Smooth& smooth, const S
   refineGroup(mid, b, solve, smooth, same, fill, at, v, known);
 }
 
-// Group borders along a line of `length` pixels: every 4th pixel and the last one.
-std::vector<int> groupBorders(int length) {
+// Group borders along a line of `length` pixels: every `block`-th pixel and the last one.
+std::vector<int> groupBorders(int length, int block) {
   std::vector<int> borders;
-  for (int i = 0; i < length; i += 4) borders.push_back(i);
+  for (int i = 0; i < length; i += block) borders.push_back(i);
   if (borders.back() != length - 1) borders.push_back(length - 1);
   return borders;
 }
@@ -1173,7 +1184,8 @@ void BrabecTechnique::visibilityImpl(const GBuffer& gbuffer, Image<float>& v) {
       direction[2 * k] = direction[2 * from];
       direction[2 * k + 1] = direction[2 * from + 1];
     };
-    const std::vector<int> columns = groupBorders(width), rowBorders = groupBorders(height);
+    const int block = brabec::interpolationBlock(options_.interpolateBlock, width, height);
+    const std::vector<int> columns = groupBorders(width, block), rowBorders = groupBorders(height, block);
     // A task's solves: they count its searches, and each search starts from the texel its task's last
     // search of that kind found (`seeds`, the task's own), as the task's next pixels lie near its last.
     auto makeSolve = [&](int64_t& searchCount, SearchSeeds& seeds) {

@@ -70,6 +70,12 @@
 // result and the id (the blocker's id when blocked, the receiver's when lit), else search the middle
 // and repeat on the two groups of 3; then every row, between those columns, in the same way. Since a
 // group interpolates only when its ids agree, an interpolated pixel keeps the id of its interpolants.
+// The block's side (option `interpolate_block`, pixels): the paper's 4 on images up to 1023 pixels on
+// their longer side, doubled at every doubling of it (8 at 1024, 16 at 2048). Sec. 4.3: "The size of
+// the pixel group used for interpolation should depend on the image size ... blocks of 4 x 4 pixels
+// are a good speed/quality tradeoff when rendering images of moderate size (512 x 512, 800 x 600
+// pixels)"; a block scaled with the image covers the same part of the view, so a penumbra spans as
+// many blocks as at the paper's size. A group of b + 1 pixels halves as above down to groups of 3.
 // Deviation (option `interpolate_kinks`, on by default): two more refinement criteria, in the spirit
 // of the paper's "very conservative refinement". Linear interpolation is exact where V is linear in
 // the pixel position, and V = f(clamp(r / r_max)) with r the distance to the nearest qualifying texel
@@ -158,6 +164,10 @@ struct SearchMap {
 };
 
 // Fills the tile summary of `map` (tilesPerRow^2 tiles, row-major).
+// The interpolation's block side in pixels for an image of width x height: `option` when it is
+// positive, else the paper's 4 scaled with the image (see "Adaptive sampling" above).
+int interpolationBlock(int option, int width, int height);
+
 void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<float>& maxDepth,
                 std::vector<int32_t>& objectId, int& tilesPerRow);
 
