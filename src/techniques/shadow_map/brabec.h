@@ -163,11 +163,11 @@ struct SearchMap {
   const int32_t* tileObjectId = nullptr;  //!< per tile: the id all its texels share, or kMixedTile
 };
 
-// Fills the tile summary of `map` (tilesPerRow^2 tiles, row-major).
 // The interpolation's block side in pixels for an image of width x height: `option` when it is
 // positive, else the paper's 4 scaled with the image (see "Adaptive sampling" above).
 int interpolationBlock(int option, int width, int height);
 
+// Fills the tile summary of `map` (tilesPerRow^2 tiles, row-major).
 void buildTiles(const LightMap& map, std::vector<float>& minDepth, std::vector<float>& maxDepth,
                 std::vector<int32_t>& objectId, int& tilesPerRow);
 

@@ -307,19 +307,25 @@ TEST(Brabec, QualityWithDefaults) {
 // ---------------------------------------------------------------------------------------------------
 // Sec. 4.3 interpolation against the exhaustive search.
 
+// V of brabec with options `o` on `gbuffer`, and the share of its pixels it searched (its stat).
+Image<float> brabecVisibility(const BrabecOptions& o, const Scene& scene, const Light& light, const GBuffer& gbuffer,
+                              double* searchFraction) {
+  BrabecTechnique t(o);
+  t.prepare(scene, light);
+  Image<float> v;
+  t.visibility(gbuffer, v);
+  for (const auto& [k, value] : t.stats())
+    if (k == "search_fraction") *searchFraction = value;
+  return v;
+}
+
 // The criterion: the interpolated V stays within 1/255 RMSE of the exhaustive search's V,
 // pixel by pixel over the error mask, on `crowded` (512x512 image here; maps 256 and 1024).
 TEST(Brabec, InterpolationStaysWithinOneRmse8OfTheExhaustiveSearchOnCrowded) {
   const ShadowTestScene& s = shadowTestScene("crowded");
   for (int mapSize : {256, 1024}) {
     auto run = [&](const BrabecOptions& o, double* searchFraction) {
-      BrabecTechnique t(o);
-      t.prepare(s.scene, s.light());
-      Image<float> v;
-      t.visibility(s.gbuffer, v);
-      for (const auto& [k, value] : t.stats())
-        if (k == "search_fraction") *searchFraction = value;
-      return v;
+      return brabecVisibility(o, s.scene, s.light(), s.gbuffer, searchFraction);
     };
     BrabecOptions o;
     o.lightMap.size = mapSize;
@@ -381,13 +387,7 @@ TEST(Brabec, TheBlockScaledWithTheImageStaysWithinOneRmse8OfTheExhaustiveSearch)
     BrabecOptions o;
     o.interpolate = interpolate;
     o.interpolateBlock = block;
-    BrabecTechnique t(o);
-    t.prepare(scene, light);
-    Image<float> v;
-    t.visibility(gbuffer, v);
-    for (const auto& [k, value] : t.stats())
-      if (k == "search_fraction") *searchFraction = value;
-    return v;
+    return brabecVisibility(o, scene, light, gbuffer, searchFraction);
   };
   double fExhaustive = -1.0, fAuto = -1.0, fFour = -1.0;
   const Image<float> vx = run(false, 0, &fExhaustive);
