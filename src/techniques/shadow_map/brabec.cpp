@@ -592,18 +592,39 @@ Coverage countBlockedInPolygon(const LightMap& map, float s, float t, float zLay
   return countRows(map, lattices, tLo, tHi, stride, s, t, zLayer, dzds, dzdt, span);
 }
 
+namespace {
+
+// Samples k0 .. k0 + count - 1 of a segment's `total`: the texel each falls in (its index in the map,
+// -1 outside it) and the receiver plane's depth at that texel's centre. The set-up of the count in one
+// loop over samples that the compiler vectorizes; the depth reads, scattered along the segment, are
+// left to countBlockedAlong's short scalar loop.
+PENUMBRA_CLONES_AVX512 void segmentSamples(int k0, int count, int total, int n, float s, float t, float hx, float hy,
+                                           float zLayer, float dzds, float dzdt, int32_t* __restrict index,
+                                           float* __restrict layer) {
+  for (int m = 0; m < count; ++m) {
+    const float u = (2.0f * static_cast<float>(k0 + m) + 1.0f) / static_cast<float>(total) - 1.0f;
+    const int i = static_cast<int>(std::floor(s + u * hx)), j = static_cast<int>(std::floor(t + u * hy));
+    index[m] = i >= 0 && j >= 0 && i < n && j < n ? j * n + i : -1;
+    layer[m] = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t) + dzds * (static_cast<float>(i) + 0.5f - s);
+  }
+}
+
+}  // namespace
+
 Coverage countBlockedAlong(const LightMap& map, float s, float t, float zLayer, float dzds, float dzdt, Vec2 half) {
   Coverage c;
   const float length = 2.0f * glm::length(half);
   if (!(length > 0.0f)) return c;
   const int n = map.size;
+  const float* const depth = map.lsDepth.data();
   c.total = static_cast<int>(std::ceil(length)) + 1;
-  for (int k = 0; k < c.total; ++k) {
-    const float u = (2.0f * static_cast<float>(k) + 1.0f) / static_cast<float>(c.total) - 1.0f;
-    const int i = static_cast<int>(std::floor(s + u * half.x)), j = static_cast<int>(std::floor(t + u * half.y));
-    if (i < 0 || j < 0 || i >= n || j >= n) continue;
-    const float layer = zLayer + dzdt * (static_cast<float>(j) + 0.5f - t) + dzds * (static_cast<float>(i) + 0.5f - s);
-    c.blocked += map.lsDepth(i, j) < layer;
+  constexpr int kChunk = 64;
+  int32_t index[kChunk];
+  float layer[kChunk];
+  for (int k0 = 0; k0 < c.total; k0 += kChunk) {
+    const int count = std::min(kChunk, c.total - k0);
+    segmentSamples(k0, count, c.total, n, s, t, half.x, half.y, zLayer, dzds, dzdt, index, layer);
+    for (int m = 0; m < count; ++m) c.blocked += index[m] >= 0 && depth[index[m]] < layer[m];
   }
   return c;
 }

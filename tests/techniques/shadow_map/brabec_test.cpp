@@ -882,6 +882,38 @@ TEST(BrabecCoverage, DiskCountsAreTheTexelByTexelCount) {
   EXPECT_GT(partial, 300);  // most counts are partial, so a texel counted wrongly would show
 }
 
+// A segment's count against its header's definition, sample by sample: ceil(length) + 1 samples at u
+// = (2k + 1) / n - 1 along (s, t) + u * half, each the texel it falls in, against the receiver plane at
+// that texel's centre. Half-lengths up to 100 texels in any direction (more samples than the count
+// sets up at once), segments that leave the map.
+TEST(BrabecCoverage, SegmentCountsAreTheSampleBySampleCount) {
+  const LightMap map = randomDepthMap(203);
+  int partial = 0, longer = 0;
+  for (uint32_t i = 0; i < 600; ++i) {
+    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
+    const float s = -20.0f + 243.0f * u(1), t = -20.0f + 243.0f * u(2), z = 2.0f + 2.0f * u(3);
+    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f);
+    const float angle = 6.2831853f * u(6), length = 0.5f + 100.0f * u(7);
+    const Vec2 half(length * std::cos(angle), length * std::sin(angle));
+    brabec::Coverage expected;
+    expected.total = static_cast<int>(std::ceil(2.0f * glm::length(half))) + 1;
+    for (int k = 0; k < expected.total; ++k) {
+      const float w = (2.0f * static_cast<float>(k) + 1.0f) / static_cast<float>(expected.total) - 1.0f;
+      const int x = static_cast<int>(std::floor(s + w * half.x)), y = static_cast<int>(std::floor(t + w * half.y));
+      if (x < 0 || y < 0 || x >= map.size || y >= map.size) continue;
+      expected.blocked +=
+          map.lsDepth(x, y) < z + dzdt * (static_cast<float>(y) + 0.5f - t) + dzds * (static_cast<float>(x) + 0.5f - s);
+    }
+    const brabec::Coverage c = brabec::countBlockedAlong(map, s, t, z, dzds, dzdt, half);
+    ASSERT_EQ(c.total, expected.total) << i;
+    ASSERT_EQ(c.blocked, expected.blocked) << i;
+    partial += expected.blocked > 0 && expected.blocked < expected.total;
+    longer += expected.total > 128;
+  }
+  EXPECT_GT(partial, 300);
+  EXPECT_GT(longer, 100);
+}
+
 // The too-dark measure of docs/small-occluders.md: over the error mask, the pixels where the
 // reference is mostly lit (V_ref > 0.5) and the technique darker by more than 0.1.
 struct Overdarkening {
