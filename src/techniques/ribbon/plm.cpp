@@ -1245,6 +1245,7 @@ class PlmTechnique final : public ShadowTechnique {
     g_.resizeForOverwrite(n, n);
     ribbonAt_.resizeForOverwrite(n, n);
     const plm::Space space = space_;
+    const int tiles = (n + plm::kRibbonTile - 1) / plm::kRibbonTile;
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         std::vector<int>& covered = coveredInRow_[static_cast<size_t>(j)];
@@ -1260,8 +1261,16 @@ class PlmTechnique final : public ShadowTechnique {
         const plm::RibbonTexel* ribbonRow = ribbons.row(j);
         PlmTexel* out = limits_.row(j);
         uint8_t* ribbonAt = ribbonAt_.row(j);
-        // A texel without a ribbon is not written: texelAt makes it from g.
+        // A texel without a ribbon is not written: texelAt makes it from g. A tile that holds no ribbon
+        // texel (rasterizeRibbons' mayHoldRibbon, most of a map) is passed over without reading it.
+        const uint8_t* tileHolds = ribbons_.mayHoldRibbon.data() + static_cast<size_t>(j / plm::kRibbonTile) * tiles;
         for (int i = 0; i < n; ++i) {
+          if (!tileHolds[i / plm::kRibbonTile]) {
+            const int end = std::min(n, (i / plm::kRibbonTile + 1) * plm::kRibbonTile);
+            std::fill(ribbonAt + i, ribbonAt + end, uint8_t{0});
+            i = end - 1;
+            continue;
+          }
           const plm::RibbonTexel& r = ribbonRow[i];
           if (!r.covered()) {
             ribbonAt[i] = 0;
