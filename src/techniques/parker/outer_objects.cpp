@@ -26,15 +26,16 @@
 // seeds, the capsules that gave the previous group's minima: neighbouring rays' minima come from
 // the same few capsules, so the walk starts near its end and skips more) and pushes the children
 // whose group bound is below the largest of them, the most promising on top. A node or
-// leaf taken from the stack is first tested ray by ray, 8 rays at a time, against the ball
+// leaf taken from the stack is first tested ray by ray, 8 rays at a time (16 with AVX-512F), against the ball
 // around its bound (each ray's own bound: the group's is loose where the rays start near the
 // capsules, as on a many-part mesh); a leaf's capsules are then culled by their group bound (a
 // capsule bounds itself) and the rest evaluated for the rays of each half of the group one ray of
-// which passed. A capsule left out has, for every ray, tau >= that ray's final minimum, so the
-// minima, and V, are those of reading every capsule. Rounding: every bounding radius is enlarged
-// by 1e-6 of itself and of the coordinates' magnitude when built, and by kBoundSlack of the
-// coordinates' magnitude when read (the formulas' float rounding is a few 1e-7 of it), and every
-// bound is lowered by 1e-5 of itself: bounds err only low, which only adds work.
+// which passed (with AVX-512F, for the whole group where one ray passed: a capsule read for a ray
+// that did not need it takes that ray's minimum over one more capsule, which changes nothing). A capsule left out has,
+// for every ray, tau >= that ray's final minimum, so the minima, and V, are those of reading every capsule. Rounding:
+// every bounding radius is enlarged by 1e-6 of itself and of the coordinates' magnitude when built, and by kBoundSlack
+// of the coordinates' magnitude when read (the formulas' float rounding is a few 1e-7 of it), and every bound is
+// lowered by 1e-5 of itself: bounds err only low, which only adds work.
 //
 // The tree. Capsules are cut into pieces no longer than 1/64 of the scene's radius; a node holds
 // up to kWidth runs of pieces, made by splitting the run of largest area in two until there are
@@ -48,7 +49,7 @@
 // position, the half-edges of the triangles that can be hit matched by their welded ends), shared
 // with the ribbon techniques and kept while the mesh is unchanged.
 //
-// The per-ray and per-group loops read 8 capsules, 8 node children or 8 rays at a time
+// The per-ray and per-group loops read 8 capsules, 8 node children or 8 (or 16) rays at a time
 // branch-free, so the compiler turns them into vector operations (CMakeLists.txt builds this file
 // without errno for sqrt and with selects it may if-convert). Every lane computes exactly the
 // scalar formulas and the minimum is exact, so V depends neither on the tree, the groups, nor the
@@ -61,6 +62,7 @@
 #include <cstring>
 #include <limits>
 #include <span>
+#include <tuple>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -194,17 +196,18 @@ struct RayGroup {
   }
 }
 
-// Whether one of the rays [first, first + 8) of the group can find, within the bound `c` (its
+// Whether one of the rays [first, first + kLanes) of the group can find, within the bound `c` (its
 // first capsule), a capsule with tau below its minimum best[i] (each ray's own bound, the top of
 // the file). Rays in the vector lanes.
+template <int kLanes>
 [[gnu::always_inline]] inline bool someRayReads(const CapsuleView& c, const RayGroup& g, const float* __restrict best,
                                                 int first) {
   // The ball around the capsule bound: centre at its middle, radius half its length plus its own.
   const float hx = 0.5f * c.ex[0], hy = 0.5f * c.ey[0], hz = 0.5f * c.ez[0];
   const float cx = c.p0x[0] + hx, cy = c.p0y[0] + hy, cz = c.p0z[0] + hz;
   const float radius = std::sqrt(hx * hx + hy * hy + hz * hz) * (1.0f + 1e-6f) + c.radius[0];
-  alignas(32) float reads[8];
-  for (int k = 0; k < 8; ++k) {
+  alignas(64) float reads[kLanes];
+  for (int k = 0; k < kLanes; ++k) {
     const int i = first + k;
     const float wx = cx - g.ox[i], wy = cy - g.oy[i], wz = cz - g.oz[i];
     const float wv = wx * g.vx[i] + wy * g.vy[i] + wz * g.vz[i];
@@ -216,7 +219,7 @@ struct RayGroup {
     reads[k] = ((t0max > 0.0f) & (wv - y < g.tLimit[i]) & (b < best[i])) ? 1.0f : 0.0f;
   }
   float any = 0.0f;
-  for (int k = 0; k < 8; ++k) any = std::max(any, reads[k]);
+  for (int k = 0; k < kLanes; ++k) any = std::max(any, reads[k]);
   return any > 0.0f;
 }
 
@@ -250,9 +253,6 @@ struct TreeView {
   const Vec3 v0 = sumLength > 0.0f ? directionSum / sumLength : rays[0].direction;
   g.ax = anchor.x, g.ay = anchor.y, g.az = anchor.z;
   g.v0x = v0.x, g.v0y = v0.y, g.v0z = v0.z;
-  g.rho = g.kappa = g.mu = 0.0f;
-  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.gLimit = -kInfinity;
-  float magnitude = std::max({view.sceneMagnitude, std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)});
   for (int i = 0; i < kGroup; ++i) {
     const int k = i < count ? i : 0;
     const Ray& ray = rays[k];
@@ -260,19 +260,38 @@ struct TreeView {
     g.vx[i] = ray.direction.x, g.vy[i] = ray.direction.y, g.vz[i] = ray.direction.z;
     g.bScale[i] = view.directional ? view.diameter : view.diameter / distanceToLight[k];
     g.tLimit[i] = view.directional ? kInfinity : distanceToLight[k];
-    const float rayMagnitude =
-        std::max({view.sceneMagnitude, std::abs(ray.origin.x), std::abs(ray.origin.y), std::abs(ray.origin.z)});
-    g.raySlack[i] = kBoundSlack * rayMagnitude;
-    magnitude = std::max(magnitude, rayMagnitude);
-    const Vec3 w = anchor - ray.origin;
-    const float h = glm::dot(w, ray.direction);
-    g.rho = std::max(g.rho, glm::length(w - h * ray.direction));
-    g.kappa = std::max(g.kappa, glm::length(glm::cross(ray.direction, v0)));
-    g.mu = std::max(g.mu, glm::length(ray.direction - v0));
+  }
+  // Each ray's terms of the bounds, a ray to a vector lane (glm's dot, length and cross written out in
+  // their order), then their extremes over the group.
+  alignas(64) float rayMagnitude[kGroup], rho[kGroup], kappa[kGroup], mu[kGroup], bh[kGroup], limit[kGroup];
+  for (int i = 0; i < kGroup; ++i) {
+    rayMagnitude[i] =
+        std::max(std::max(view.sceneMagnitude, std::abs(g.ox[i])), std::max(std::abs(g.oy[i]), std::abs(g.oz[i])));
+    g.raySlack[i] = kBoundSlack * rayMagnitude[i];
+    const float wx = anchor.x - g.ox[i], wy = anchor.y - g.oy[i], wz = anchor.z - g.oz[i];
+    const float h = wx * g.vx[i] + wy * g.vy[i] + wz * g.vz[i];
+    const float px = wx - h * g.vx[i], py = wy - h * g.vy[i], pz = wz - h * g.vz[i];
+    rho[i] = std::sqrt(px * px + py * py + pz * pz);
+    const float cx = g.vy[i] * v0.z - v0.y * g.vz[i], cy = g.vz[i] * v0.x - v0.z * g.vx[i],
+                cz = g.vx[i] * v0.y - v0.x * g.vy[i];
+    kappa[i] = std::sqrt(cx * cx + cy * cy + cz * cz);
+    const float dx = g.vx[i] - v0.x, dy = g.vy[i] - v0.y, dz = g.vz[i] - v0.z;
+    mu[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+    bh[i] = g.bScale[i] * h;
+    limit[i] = g.tLimit[i] - h;
+  }
+  float magnitude = std::max({view.sceneMagnitude, std::abs(anchor.x), std::abs(anchor.y), std::abs(anchor.z)});
+  g.rho = g.kappa = g.mu = 0.0f;
+  g.bsMin = kInfinity, g.bsMax = 0.0f, g.h = -kInfinity, g.gLimit = -kInfinity;
+  for (int i = 0; i < kGroup; ++i) {
+    magnitude = std::max(magnitude, rayMagnitude[i]);
+    g.rho = std::max(g.rho, rho[i]);
+    g.kappa = std::max(g.kappa, kappa[i]);
+    g.mu = std::max(g.mu, mu[i]);
     g.bsMin = std::min(g.bsMin, g.bScale[i]);
     g.bsMax = std::max(g.bsMax, g.bScale[i]);
-    g.h = std::max(g.h, g.bScale[i] * h);
-    g.gLimit = std::max(g.gLimit, g.tLimit[i] - h);
+    g.h = std::max(g.h, bh[i]);
+    g.gLimit = std::max(g.gLimit, limit[i]);
   }
   g.slack = kBoundSlack * magnitude;
 }
@@ -312,12 +331,13 @@ struct StackItem {
 }
 
 // Ray i's tau of leaf entry `e` lowers best[i] (and sets bestEntry[i] to e where it does), for the
-// rays [half, half + kGroup / 2), one to a vector lane.
-[[gnu::always_inline]] inline void readEntry(const CapsuleView& entries, int32_t e, const RayGroup& g, int half,
+// rays [first, first + kLanes), one to a vector lane.
+template <int kLanes>
+[[gnu::always_inline]] inline void readEntry(const CapsuleView& entries, int32_t e, const RayGroup& g, int first,
                                              float* __restrict best, int32_t* __restrict bestEntry) {
   const float p0x = entries.p0x[e], p0y = entries.p0y[e], p0z = entries.p0z[e], ex = entries.ex[e], ey = entries.ey[e],
               ez = entries.ez[e], radius = entries.radius[e];
-  for (int i = half; i < half + kGroup / 2; ++i) {
+  for (int i = first; i < first + kLanes; ++i) {
     const float tau = capsuleTau(p0x, p0y, p0z, ex, ey, ez, radius, g.ox[i], g.oy[i], g.oz[i], g.vx[i], g.vy[i],
                                  g.vz[i], g.bScale[i], g.tLimit[i]);
     bestEntry[i] = tau < best[i] ? e : bestEntry[i];
@@ -325,25 +345,53 @@ struct StackItem {
   }
 }
 
+// The rays of a group as the walk reads them: the halves [0, 8) and [8, 16), each read where one of
+// its rays passes a bound; or, with kWhole (16-lane vectors) and more than 8 rays, all 16 at once
+// wherever one of them passes. Reading a capsule for a ray that did not need it only takes the
+// minimum over more capsules, which it already is: the minima are the same either way.
+template <bool kWhole>
+struct GroupReads {
+  const RayGroup& g;
+  const bool second = g.count > kGroup / 2;  // the second half holds rays
+  const bool whole = kWhole && second;
+
+  // Which halves pass the bound `c` (both or neither, when whole).
+  std::pair<bool, bool> pass(const CapsuleView& c, const float* __restrict best) const {
+    if (whole) {
+      const bool any = someRayReads<kGroup>(c, g, best, 0);
+      return {any, any};
+    }
+    return {someRayReads<kGroup / 2>(c, g, best, 0), second && someRayReads<kGroup / 2>(c, g, best, kGroup / 2)};
+  }
+  // Entry e read for the halves that passed.
+  void read(const CapsuleView& entries, int32_t e, bool first, bool last, float* __restrict best,
+            int32_t* __restrict bestEntry) const {
+    if (whole) {
+      if (first || last) readEntry<kGroup>(entries, e, g, 0, best, bestEntry);
+      return;
+    }
+    if (first) readEntry<kGroup / 2>(entries, e, g, 0, best, bestEntry);
+    if (last && second) readEntry<kGroup / 2>(entries, e, g, kGroup / 2, best, bestEntry);
+  }
+};
+
 // best[i] = the smallest tau of ray i over every capsule where it is below 1 (else 1): the
 // traversal of the top of the file. The leaf entries `seeds` (those that gave the minima of the
 // group before, whose rays are neighbours of these) are read first: the minima then start near
 // their final values and the walk skips more. Reading an entry twice changes no minimum, so the
 // minima do not depend on the seeds. `seeds` is replaced by the entries that gave this group's
 // minima.
+template <bool kWhole>
 [[gnu::always_inline]] inline void groupMinTau(const TreeView& view, const RayGroup& g, float* __restrict best,
                                                OuterObjects::Seeds& seeds) {
-  alignas(32) int32_t bestEntry[kGroup];
+  alignas(64) int32_t bestEntry[kGroup];
   for (int i = 0; i < kGroup; ++i) {
     best[i] = i < g.count ? 1.0f : -kInfinity;  // unused slots read nothing
     bestEntry[i] = -1;
   }
   if (view.empty) return;
-  const bool second = g.count > kGroup / 2;
-  for (int k = 0; k < seeds.count; ++k) {
-    readEntry(view.entries, seeds.entry[k], g, 0, best, bestEntry);
-    if (second) readEntry(view.entries, seeds.entry[k], g, kGroup / 2, best, bestEntry);
-  }
+  const GroupReads<kWhole> reads{g};
+  for (int k = 0; k < seeds.count; ++k) reads.read(view.entries, seeds.entry[k], true, true, best, bestEntry);
   float limit = largestMinimum(best);
   const auto keepSeeds = [&] {
     seeds.count = 0;
@@ -370,21 +418,20 @@ struct StackItem {
         const CapsuleView bound =
             capsulesFrom({parent.p0x, parent.p0y, parent.p0z, parent.ex, parent.ey, parent.ez, parent.radius},
                          static_cast<size_t>(item.slot));
-        if (!someRayReads(bound, g, best, 0) && !(g.count > kGroup / 2 && someRayReads(bound, g, best, kGroup / 2)))
-          continue;
+        const auto [first, last] = reads.pass(bound, best);
+        if (!first && !last) continue;
       }
       pushChildren(view.nodes[item.ref], item.ref, g, limit, stack, top);
       continue;
     }
     // The leaf (the top of the file): the halves of the group one ray of which passes its own
-    // bound, the capsules that pass their group bound, those against those, 8 rays to the lanes.
+    // bound, the capsules that pass their group bound, those against those, 8 or 16 rays to the lanes.
     const uint32_t leaf = static_cast<uint32_t>(~item.ref);
     const CapsuleView bound = capsulesFrom(view.leafBounds, leaf);
-    bool first = true, second = g.count > kGroup / 2;
+    bool first = true, last = true;
     if (item.parent >= 0) {
-      first = someRayReads(bound, g, best, 0);
-      second = second && someRayReads(bound, g, best, kGroup / 2);
-      if (!first && !second) continue;
+      std::tie(first, last) = reads.pass(bound, best);
+      if (!first && !last) continue;
     }
     const CapsuleView c = capsulesFrom(view.entries, static_cast<size_t>(leaf) * kWidth);
     alignas(32) float capsuleBound[kWidth];
@@ -394,11 +441,8 @@ struct StackItem {
       listed[capsules] = j;
       capsules += capsuleBound[j] < kInfinity;
     }
-    for (int n = 0; n < capsules; ++n) {
-      const int32_t e = static_cast<int32_t>(leaf * kWidth) + listed[n];
-      for (int half = first ? 0 : kGroup / 2; half < (second ? kGroup : kGroup / 2); half += kGroup / 2)
-        readEntry(view.entries, e, g, half, best, bestEntry);
-    }
+    for (int n = 0; n < capsules; ++n)
+      reads.read(view.entries, static_cast<int32_t>(leaf * kWidth) + listed[n], first, last, best, bestEntry);
     limit = largestMinimum(best);
     if (!(limit > 0.0f)) break;  // every ray is inside an analytic sphere's inner object
   }
@@ -406,6 +450,7 @@ struct StackItem {
 }
 
 // s of each ray under the min combination: the falloff of its smallest tau, group by group.
+template <bool kWhole>
 [[gnu::always_inline]] inline void minAttenuationsOver(const TreeView& view, const Ray* rays,
                                                        const float* distanceToLight, int count, OuterFalloff falloff,
                                                        float* s, OuterObjects::Seeds& seeds) {
@@ -414,23 +459,29 @@ struct StackItem {
     const int n = std::min(kGroup, count - first);
     makeGroup(view, rays + first, distanceToLight + first, n, g);
     alignas(32) float best[kGroup];
-    groupMinTau(view, g, best, seeds);
+    groupMinTau<kWhole>(view, g, best, seeds);
     for (int i = 0; i < n; ++i) s[first + i] = best[i] <= 0.0f ? 0.0f : outerFalloff(best[i], falloff);
   }
 }
 
 void minAttenuations(const TreeView& view, const Ray* rays, const float* distanceToLight, int count,
                      OuterFalloff falloff, float* s, OuterObjects::Seeds& seeds) {
-  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
+  minAttenuationsOver<false>(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 
 #if PENUMBRA_OUTER_AVX2
-// The same compiled for 8-wide vectors, where the CPU has them: the same operations per lane (no
-// multiply-add: CMakeLists.txt builds this file with -ffp-contract=off), so the same values.
+// The same compiled for 8-wide vectors, and for 16-wide ones (a whole group of rays to a vector), where
+// the CPU has them: the same operations per lane (no multiply-add: CMakeLists.txt builds this file with
+// -ffp-contract=off), so the same values.
 [[gnu::target("avx2")]] void minAttenuationsAvx2(const TreeView& view, const Ray* rays, const float* distanceToLight,
                                                  int count, OuterFalloff falloff, float* s,
                                                  OuterObjects::Seeds& seeds) {
-  minAttenuationsOver(view, rays, distanceToLight, count, falloff, s, seeds);
+  minAttenuationsOver<false>(view, rays, distanceToLight, count, falloff, s, seeds);
+}
+[[gnu::target("avx512f")]] void minAttenuationsAvx512(const TreeView& view, const Ray* rays,
+                                                      const float* distanceToLight, int count, OuterFalloff falloff,
+                                                      float* s, OuterObjects::Seeds& seeds) {
+  minAttenuationsOver<true>(view, rays, distanceToLight, count, falloff, s, seeds);
 }
 #endif
 
@@ -456,7 +507,7 @@ float combinedAttenuation(const TreeView& view, const Ray& ray, float distanceTo
       continue;
     }
     const uint32_t leaf = static_cast<uint32_t>(~item.ref);
-    if (!someRayReads(capsulesFrom(view.leafBounds, leaf), g, one, 0)) continue;
+    if (!someRayReads<kGroup / 2>(capsulesFrom(view.leafBounds, leaf), g, one, 0)) continue;
     alignas(32) float tau[kWidth];
     leafTau(view.entries, leaf, r, tau);
     for (int j = 0; j < kWidth; ++j) {
@@ -860,6 +911,7 @@ OuterObjects::OuterObjects(const Scene& scene, const Light& light, const OuterOb
   diameter_ = options.lightDiameter;
 #if PENUMBRA_OUTER_AVX2
   avx2_ = __builtin_cpu_supports("avx2");
+  avx512_ = __builtin_cpu_supports("avx512f");
 #endif
 
   const Bounds3 bounds = scene.bounds();
@@ -950,6 +1002,10 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
       valid = use.entry[k] >= 0 && static_cast<size_t>(use.entry[k]) < entryP0x_.size();
     if (!valid) use = Seeds{this};
 #if PENUMBRA_OUTER_AVX2
+    if (avx512_) {
+      minAttenuationsAvx512(view, rays, distanceToLight, count, falloff, s, use);
+      return;
+    }
     if (avx2_) {
       minAttenuationsAvx2(view, rays, distanceToLight, count, falloff, s, use);
       return;

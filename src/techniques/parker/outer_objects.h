@@ -43,7 +43,8 @@
 // pieces for the tree (bench/parker_bench.cpp: prepare at 10k, 40k and 160k triangles). Per group
 // of shadow rays that miss every inner object: per visited node, its 8 children's group bounds in
 // one vector pass and 8 rays' own bounds per pass; per visited leaf, the same, then each capsule
-// left against 8 rays per pass (8 lanes where the CPU has AVX2, else 4). Where a small occluder
+// left against 8 rays per pass (8 lanes where the CPU has AVX2, else 4; with AVX-512F the whole
+// group of 16 in one pass, for the rays' own bounds too). Where a small occluder
 // lies under a wide light every ray is in its penumbra and many of its silhouette edges lie
 // within a few per cent of the ray's smallest tau, all of which must be read: about 30 capsule
 // evaluations per ray on `teapots` under its 2.4 x 2.4 light, where a light buffer listed all 551.
@@ -152,6 +153,7 @@ class OuterObjects {
   float diameter_ = 1.0f;
   float sceneMagnitude_ = 0.0f;  //!< the largest coordinate magnitude of the scene's bounds (rounding slack)
   bool avx2_ = false;            //!< the per-ray loop's 8-wide build runs (same values, see outer_objects.cpp)
+  bool avx512_ = false;          //!< its 16-wide build runs (a whole group of rays to a vector; same values)
 
   std::vector<bool> analytic_;
   size_t analyticCount_ = 0, edgeCount_ = 0, pieceCount_ = 0, leafCount_ = 0;
