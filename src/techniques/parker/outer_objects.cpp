@@ -1019,6 +1019,11 @@ void OuterObjects::attenuations(const Ray* rays, const float* distanceToLight, i
     s[i] = combinedAttenuation(view, rays[i], distanceToLight[i], falloff, combine, found);
 }
 
+void OuterObjects::limitLanes(int lanes) {
+  avx512_ = avx512_ && lanes >= 16;
+  avx2_ = avx2_ && lanes >= 8;
+}
+
 float OuterObjects::attenuation(const Vec3& origin, const Vec3& direction, float distanceToLight, OuterFalloff falloff,
                                 OuterCombine combine) const {
   Ray ray;

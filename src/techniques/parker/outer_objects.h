@@ -124,6 +124,11 @@ class OuterObjects {
   void attenuations(const Ray* rays, const float* distanceToLight, int count, OuterFalloff falloff,
                     OuterCombine combine, float* s, Seeds* seeds = nullptr) const;
 
+  // The widest build of the per-ray loop that runs, at most `lanes` wide (16: AVX-512F, 8: AVX2, 4: the
+  // baseline; a wider one only where the CPU has it). Every width gives the same bits; tests hold the
+  // narrower builds to that on a CPU that would pick the widest.
+  void limitLanes(int lanes);
+
   // Objects whose analytic sphere is used (their meshes are not part of the outer objects; the
   // caller must leave them out of its inner occlusion test too).
   const std::vector<bool>& usesAnalyticSphere() const { return analytic_; }

@@ -174,6 +174,13 @@ void expectOracle(const Light& light, float diameter, double bScaleTimesDistance
     // the local light, 5.9e-7 for the directional one. A capsule missing from the walk errs by
     // the depth of its penumbra there, up to 1.
     EXPECT_LT(worst, 1e-5);
+    // The narrower builds of the walk (8 and 4 lanes; the widest the CPU has ran above), the same bits.
+    for (const int lanes : {8, 4}) {
+      rt::OuterObjects narrow(o.scene, light, options);
+      narrow.limitLanes(lanes);
+      const std::vector<float> narrowS = attenuations(narrow, t, combine);
+      for (size_t i = 0; i < s.size(); ++i) ASSERT_EQ(narrowS[i], s[i]) << lanes << " lanes, ray " << i;
+    }
     // One ray at a time, the same bits.
     for (size_t i = 0; i < s.size(); i += 7)
       EXPECT_EQ(
