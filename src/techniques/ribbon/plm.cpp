@@ -351,7 +351,7 @@ std::vector<Edge> silhouetteEdges(const Scene& scene, const Light& light, const 
 
 void reserveRibbons(int mapSize, RibbonImage& ribbons) {
   resetInParallel(ribbons.texels, mapSize, mapSize, kNoRibbon);
-  const int tiles = (mapSize + kRibbonTile - 1) / kRibbonTile;
+  const int tiles = ribbonTilesPerRow(mapSize);
   ribbons.mayHoldRibbon.assign(static_cast<size_t>(tiles) * tiles, 0);
 }
 
@@ -728,7 +728,7 @@ void rasterizeRibbons(const std::vector<Edge>& edges, const Space& space, const 
         "NearestDepthAndFarthest)");
   // Every texel lies in one tile below, which writes it once: no serial pass over the whole image.
   constexpr int kTile = kRibbonTile;
-  const int tiles = (mapSize + kTile - 1) / kTile;
+  const int tiles = ribbonTilesPerRow(mapSize);
   const size_t tileCount = static_cast<size_t>(tiles) * tiles;
   if (out.texels.width() != mapSize || out.texels.height() != mapSize || out.mayHoldRibbon.size() != tileCount) {
     out.texels.resizeForOverwrite(mapSize, mapSize);
@@ -1245,7 +1245,7 @@ class PlmTechnique final : public ShadowTechnique {
     g_.resizeForOverwrite(n, n);
     ribbonAt_.resizeForOverwrite(n, n);
     const plm::Space space = space_;
-    const int tiles = (n + plm::kRibbonTile - 1) / plm::kRibbonTile;
+    const int tiles = plm::ribbonTilesPerRow(n);
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j) {
         std::vector<int>& covered = coveredInRow_[static_cast<size_t>(j)];

@@ -221,6 +221,11 @@ inline float farthestZeta(const LightMap& map, const Space& space, int i, int j)
 // farthestZeta of `count` texels of one row of the far layer from `lsFar` on, into `out`: the same
 // values, four at a time in SSE where the build has it (plm.cpp).
 void farthestZetaRow(const LightMap& map, const Space& space, const float* lsFar, int count, float* out);
+// The ribbons' tiles (rasterizeRibbons): a span lies within one row of one tile.
+inline constexpr int kRibbonTile = 32;
+// Tiles along a side of a mapSize x mapSize ribbon image (the last one may be partial).
+inline int ribbonTilesPerRow(int mapSize) { return (mapSize + kRibbonTile - 1) / kRibbonTile; }
+
 // rasterizeRibbons' output: the ribbon texel of every map texel, and per kRibbonTile tile (row-major)
 // whether it may hold a ribbon texel. A tile that held none after the last frame and that no ribbon
 // reaches in this one still holds kNoRibbon throughout, so rasterizeRibbons leaves it alone: a frame
@@ -264,9 +269,6 @@ inline constexpr float kHiddenProbeTexels = 1.5f;
 // fraction of the edge's zeta: float rounding of the two rasterizations of one surface stays well
 // inside it.
 inline constexpr float kBelowEdge = 1e-5f;
-
-// The ribbons' tiles (rasterizeRibbons): a span lies within one row of one tile.
-inline constexpr int kRibbonTile = 32;
 
 // One span of rasterizeRibbons: the texels [first, first + count) of one row (at most kRibbonTile)
 // that an edge may still take, and what its pass reads there.
