@@ -37,12 +37,19 @@ struct PlmOptions {
   DepthBias bias;                            //!< of the compares with g, c and b (shadow_map.h)
   float marginTexels = 2.0f;                 //!< added to every ribbon's half-width
   bool illuminationTable = true;             //!< V = f(l_g) through Appendix A's table (else V = l_g)
+  bool fitLowerLimit = true;                 //!< b fitted to sampled visibility (else b is left unset)
 
   static void describe(OptionFields<PlmOptions>& f) {
     f.nest(&PlmOptions::lightMap);
     f.nest(&PlmOptions::bias);
     f.add(&PlmOptions::marginTexels, ribbonMarginOption());
     f.add(&PlmOptions::illuminationTable, illuminationTableOption());
+    f.add(&PlmOptions::fitLowerLimit,
+          OptionDecl("fit_lower_limit")
+              .help("fit the geometry lower limit b to the visibility sampled along each ribbon texel's ray (16 rays "
+                    "per receiver probed; our step 3, see plm.cpp); false leaves b unset, so receivers below deeper "
+                    "geometry take the ribbon's penumbra and the umbra under stacked or folded occluders is lit: for "
+                    "measuring what the fit costs and what it repairs"));
   }
 };
 

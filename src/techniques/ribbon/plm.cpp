@@ -70,7 +70,8 @@
 // Cost: the fit of b traces rays (on `engine`, 121k triangles, about a third of prepare); the scene's
 // BVH for it is kept between prepares while every mesh's geometry is the same to the bit.
 // Parameters: map_size (texels), bias_constant (texels) and bias_slope (shadow_map.h), margin
-// (texels added to every ribbon's half-width), illumination_table (bool).
+// (texels added to every ribbon's half-width), illumination_table (bool), fit_lower_limit (bool: off
+// leaves b at zetaNone everywhere, the map of steps 1 and 2 alone).
 #include "techniques/ribbon/plm.h"
 #include "penumbra/techniques/ribbon.h"
 
@@ -1290,7 +1291,7 @@ class PlmTechnique final : public ShadowTechnique {
     });
     for (const std::vector<int>& covered : coveredInRow_)
       needLower.insert(needLower.end(), covered.begin(), covered.end());
-    if (!needLower.empty()) findLowerLimits(scene, light, needLower);
+    if (options_.fitLowerLimit && !needLower.empty()) findLowerLimits(scene, light, needLower);
     // The lit fast path of visibility() reads g alone (g_, filled with limits_ above, a quarter of its
     // size), and a class per texel of the 2x2 footprint of a bilinear fetch whose top-left texel it is
     // (clamped at the border as there): no ribbon in it, or one continuous ribbon (oneRibbon without
