@@ -813,6 +813,21 @@ LightMap randomDepthMap(int size) {
   return map;
 }
 
+// Query i of the random count tests below: uniforms in [0, 1) made from i, the footprint's centre
+// (s, t) in [lo, lo + span)^2 and the receiver plane (depth z in [2, 4), slopes in [-0.01, 0.01)).
+struct CountQuery {
+  CountQuery(uint32_t i, float lo, float span)
+      : i(i),
+        s(lo + span * u(1)),
+        t(lo + span * u(2)),
+        z(2.0f + 2.0f * u(3)),
+        dzds(0.02f * (u(4) - 0.5f)),
+        dzdt(0.02f * (u(5) - 0.5f)) {}
+  float u(uint32_t k) const { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); }
+  uint32_t i;
+  float s, t, z, dzds, dzdt;
+};
+
 // The lattices hold the strided texels: a count read from them is the strided count, for disks and
 // polygons, strides 2..9, footprints that leave the map, on a map of random depths.
 TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
@@ -822,9 +837,8 @@ TEST(BrabecCoverage, LatticeCountsAreTheStridedCounts) {
   const std::vector<Vec2> quad = {{-1.0f, -0.6f}, {0.9f, -1.0f}, {1.0f, 0.8f}, {-0.7f, 1.0f}};
   int compared = 0;
   for (uint32_t i = 0; i < 2000; ++i) {
-    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
-    const float s = -10.0f + 121.0f * u(1), t = -10.0f + 121.0f * u(2), z = 2.0f + 2.0f * u(3);
-    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f), radius = 1.0f + 60.0f * u(6);
+    const CountQuery q(i, -10.0f, 121.0f);
+    const float s = q.s, t = q.t, z = q.z, dzds = q.dzds, dzdt = q.dzdt, radius = 1.0f + 60.0f * q.u(6);
     const int stride = 2 + static_cast<int>(hashCombine(i, 7) % 8);
     const brabec::Coverage diskPlain = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride);
     const brabec::Coverage diskLattice = brabec::countBlocked(map, s, t, z, dzds, dzdt, radius, stride, &lattices);
@@ -851,9 +865,8 @@ TEST(BrabecCoverage, DiskCountsAreTheTexelByTexelCount) {
   auto multipleOf = [](int x, int k) { return ((x % k) + k) % k == 0; };
   int partial = 0;
   for (uint32_t i = 0; i < 600; ++i) {
-    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
-    const float s = -20.0f + 243.0f * u(1), t = -20.0f + 243.0f * u(2), z = 2.0f + 2.0f * u(3);
-    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f), radius = 0.5f + 100.0f * u(6);
+    const CountQuery q(i, -20.0f, 243.0f);
+    const float s = q.s, t = q.t, z = q.z, dzds = q.dzds, dzdt = q.dzdt, radius = 0.5f + 100.0f * q.u(6);
     const int stride = 1 + static_cast<int>(hashCombine(i, 7) % 9);
     brabec::Coverage expected;
     const float r2 = radius * radius;
@@ -890,10 +903,9 @@ TEST(BrabecCoverage, SegmentCountsAreTheSampleBySampleCount) {
   const LightMap map = randomDepthMap(203);
   int partial = 0, longer = 0;
   for (uint32_t i = 0; i < 600; ++i) {
-    auto u = [&](uint32_t k) { return static_cast<float>(hashCombine(i, k) >> 8) * (1.0f / 16777216.0f); };
-    const float s = -20.0f + 243.0f * u(1), t = -20.0f + 243.0f * u(2), z = 2.0f + 2.0f * u(3);
-    const float dzds = 0.02f * (u(4) - 0.5f), dzdt = 0.02f * (u(5) - 0.5f);
-    const float angle = 6.2831853f * u(6), length = 0.5f + 100.0f * u(7);
+    const CountQuery q(i, -20.0f, 243.0f);
+    const float s = q.s, t = q.t, z = q.z, dzds = q.dzds, dzdt = q.dzdt;
+    const float angle = 6.2831853f * q.u(6), length = 0.5f + 100.0f * q.u(7);
     const Vec2 half(length * std::cos(angle), length * std::sin(angle));
     brabec::Coverage expected;
     expected.total = static_cast<int>(std::ceil(2.0f * glm::length(half))) + 1;
