@@ -267,7 +267,7 @@ TEST(PlmRealScenes, WithoutTheFitOfBTheEnginesUmbraIsLit) {
   const std::string what = std::string("2CylinderEngine ") + kLightNames[0];
   const SceneSetup& s = setup(
       what, [] { return engineScene(0); }, kMeshImageSize);
-  const Measured fitted = measure(s, runTechnique("plm", s.scene, s.gbuffer));
+  const Measured fitted = measure(s, "plm");
   const Measured unfitted = measure(s, runTechnique("plm", s.scene, s.gbuffer, {"fit_lower_limit=false"}));
   const Measured hard = measure(s, "hard");
   print(what, "plm", fitted);
